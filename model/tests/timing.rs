@@ -1,0 +1,172 @@
+//! Frame timing, the CiA table and buffer sizing (000 §4, R3, R4).
+
+use canif_model::cia_table::{self, FLAGGED_CELL};
+use canif_model::frame::{CanId, Frame};
+use canif_model::sizing::{self, FrameTimeBasis};
+use canif_model::timing::{classic_bits, fd_bits, frame_duration, BitCount, BitRates, Stuffing};
+
+/// Covers: TIM-001, TIM-002
+#[test]
+fn classic_bit_counts() {
+    assert_eq!(
+        classic_bits(false, 0),
+        BitCount {
+            nominal: 47,
+            worst_case: 55
+        }
+    );
+    assert_eq!(
+        classic_bits(false, 8),
+        BitCount {
+            nominal: 111,
+            worst_case: 135
+        }
+    );
+    assert_eq!(
+        classic_bits(true, 0),
+        BitCount {
+            nominal: 67,
+            worst_case: 80
+        }
+    );
+    assert_eq!(
+        classic_bits(true, 8),
+        BitCount {
+            nominal: 131,
+            worst_case: 160
+        }
+    );
+    let frame = Frame::classic(CanId::Standard(0x123), &[0; 8]).unwrap();
+    assert_eq!(
+        frame_duration(&frame, BitRates::classic(500_000), Stuffing::Nominal),
+        222_000
+    );
+    assert_eq!(
+        frame_duration(&frame, BitRates::classic(500_000), Stuffing::WorstCase),
+        270_000
+    );
+    // A remote frame carries no data bytes, whatever it requests.
+    let remote = Frame::remote(CanId::Standard(0x123), 8).unwrap();
+    assert_eq!(
+        frame_duration(&remote, BitRates::classic(1_000_000), Stuffing::Nominal),
+        47_000
+    );
+}
+
+/// Covers: TIM-003, FD-BIT-004, FD-BIT-002
+#[test]
+fn fd_bit_counts_and_the_two_bit_rates() {
+    let empty = fd_bits(false, 0, false);
+    assert_eq!(empty.arbitration.nominal + empty.data.nominal, 62);
+    let full = fd_bits(false, 64, true);
+    assert_eq!(
+        full.arbitration,
+        BitCount {
+            nominal: 30,
+            worst_case: 34
+        }
+    );
+    assert_eq!(
+        full.data,
+        BitCount {
+            nominal: 549,
+            worst_case: 678
+        }
+    );
+    assert_eq!(
+        fd_bits(false, 20, true).data.nominal,
+        5 + 160 + 4 + 21 + 7,
+        "CRC-21 above 16 bytes"
+    );
+
+    let switched = Frame::fd(CanId::Standard(1), true, false, &[0; 64]).unwrap();
+    let plain = Frame::fd(CanId::Standard(1), false, false, &[0; 64]).unwrap();
+    let rates = BitRates {
+        nominal: 500_000,
+        data: 2_000_000,
+    };
+    assert_eq!(
+        frame_duration(&switched, rates, Stuffing::Nominal),
+        30 * 2_000 + 549 * 500
+    );
+    assert_eq!(
+        frame_duration(&plain, rates, Stuffing::Nominal),
+        579 * 2_000
+    );
+    // Equal rates: switching changes nothing.
+    let same = BitRates::classic(500_000);
+    assert_eq!(
+        frame_duration(&switched, same, Stuffing::Nominal),
+        frame_duration(&plain, same, Stuffing::Nominal)
+    );
+}
+
+/// Covers: TIM-004
+#[test]
+fn the_cia_table_as_data() {
+    assert_eq!(cia_table::cells().count(), 45);
+    assert_eq!(cia_table::frame_time(500_000, 8), Some(260_000), "≈ 260 µs");
+    assert_eq!(cia_table::frame_time(1_000_000, 0), Some(50_000), "≈ 50 µs");
+    assert_eq!(cia_table::frame_time(800_000, 8), None);
+    assert_eq!(cia_table::frame_time(50_000, 9), None);
+}
+
+/// Covers: TIM-005, ERR-R3
+#[test]
+fn every_cell_lies_between_nominal_and_worst_case() {
+    for cell in cia_table::cells() {
+        assert!(cia_table::within_model_bounds(&cell), "{cell:?}");
+    }
+    // The bound is real: a cell 10 % above the worst case would fail it.
+    let too_slow = cia_table::Cell {
+        bitrate: 500_000,
+        data_len: 8,
+        printed: 297_000,
+    };
+    assert!(!cia_table::within_model_bounds(&too_slow));
+}
+
+/// Covers: TIM-006, ERR-R3
+#[test]
+fn only_the_50_kbit_7_byte_cell_breaks_its_row() {
+    let flagged: Vec<_> = cia_table::inconsistent_cells()
+        .iter()
+        .map(|c| (c.bitrate, c.data_len, c.printed))
+        .collect();
+    assert_eq!(flagged, [(50_000, 7, 2_340_000)]);
+    assert_eq!(FLAGGED_CELL, (50_000, 7, 243));
+    assert_eq!(
+        cia_table::frame_time(50_000, 7),
+        Some(2_430_000),
+        "the corrected value is used"
+    );
+}
+
+/// Covers: TIM-007, ERR-R4
+#[test]
+fn the_manuals_sizing_examples() {
+    let slots = |bitrate: u32, cycle_us: u64, payload: u8| {
+        sizing::recommend(bitrate, cycle_us * 1_000, payload)
+            .unwrap()
+            .slots
+    };
+    assert_eq!(slots(500_000, 1_000, 8), 4);
+    assert_eq!(slots(500_000, 5_000, 8), 20);
+    assert_eq!(slots(1_000_000, 1_000, 0), 20);
+    assert_eq!(sizing::slots_needed(1_000, 1_000), 1);
+    assert_eq!(sizing::slots_needed(1_001, 1_000), 2);
+}
+
+/// Covers: TIM-008
+#[test]
+fn sizing_falls_back_to_the_nominal_frame_time_outside_the_table() {
+    let in_table = sizing::recommend(500_000, 1_000_000, 8).unwrap();
+    assert_eq!(in_table.basis, FrameTimeBasis::CiaTable);
+    let outside = sizing::recommend(800_000, 1_000_000, 8).unwrap();
+    assert_eq!(outside.basis, FrameTimeBasis::Nominal);
+    assert_eq!(outside.frame_time, 138_750);
+    assert_eq!(outside.slots, 8);
+    // The nominal basis never gives fewer slots than the worst case.
+    let worst = sizing::size(800_000, 1_000_000, 8, FrameTimeBasis::WorstCase).unwrap();
+    assert!(outside.slots >= worst.slots);
+}
