@@ -221,7 +221,7 @@ fn summary(catalogue: &Catalogue) {
 }
 
 fn spec_coverage(catalogue: &Catalogue, root: &Path) -> ExitCode {
-    let sources = match test_sources(root) {
+    let sources = match coverage::test_sources(root) {
         Ok(sources) if !sources.is_empty() => sources,
         Ok(_) => {
             eprintln!(
@@ -264,32 +264,6 @@ fn spec_coverage(catalogue: &Catalogue, root: &Path) -> ExitCode {
         println!("not covered: {}", result.uncovered.join(", "));
         ExitCode::from(1)
     }
-}
-
-/// The `*/tests/*.rs` files of the workspace.
-pub fn test_sources(root: &Path) -> std::io::Result<Vec<(String, String)>> {
-    let mut sources = Vec::new();
-    for member in std::fs::read_dir(root)? {
-        let tests = member?.path().join("tests");
-        let Ok(entries) = std::fs::read_dir(&tests) else {
-            continue;
-        };
-        let mut paths: Vec<_> = entries
-            .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.extension().is_some_and(|x| x == "rs"))
-            .collect();
-        paths.sort();
-        for path in paths {
-            let text = std::fs::read_to_string(&path)?;
-            let shown = path
-                .strip_prefix(root)
-                .unwrap_or(&path)
-                .display()
-                .to_string();
-            sources.push((shown, text));
-        }
-    }
-    Ok(sources)
 }
 
 fn profiles(catalogue: &Catalogue) -> ExitCode {

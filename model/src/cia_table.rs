@@ -1,6 +1,6 @@
 //! The frame-time table of 000/001 §4 ("Daten von CiA"), held as data.
 //!
-//! Source: 000 §4 "Tabelle für die Telegrammlaufzeiten bei 11 Bit Ident [ms]",
+//! Source: 000 §4 "Tabelle für die Telegrammlaufzeiten bei 11 Bit Ident \[ms\]",
 //! ruling R3: informative; the model's worst case bounds every cell, and the
 //! 50 kbit/s, 7-byte cell (2.34) breaks its row (2.43 fits).
 

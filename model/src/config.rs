@@ -66,9 +66,9 @@ pub struct InterfaceConfig {
     pub rx_slots: u8,
     pub filters: Vec<FilterRow>,
     pub synchronization: Synchronization,
-    /// Arbitration phase bit timing, reported in InfoData[1].
+    /// Arbitration phase bit timing, reported in `InfoData[1]`.
     pub nominal_timing: BitTiming,
-    /// Data phase bit timing, reported in InfoData[2] (CAN FD).
+    /// Data phase bit timing, reported in `InfoData[2]` (CAN FD).
     pub data_timing: BitTiming,
 }
 

@@ -2,7 +2,7 @@
 //!
 //! Source: 000 §8.3.3 (entries 0-2, 4-10), 001 §8.3.3 (adds 3 and 11-15).
 
-/// One bit timing register set as InfoData[1] and [2] report it: byte 0 jump
+/// One bit timing register set as `InfoData[1]` and `InfoData[2]` report it: byte 0 jump
 /// width, byte 1 time A, byte 2 time B, byte 3 prescaler.
 ///
 /// Requirements: INFO-003.
@@ -30,7 +30,7 @@ impl BitTiming {
     }
 }
 
-/// InfoData[0] status bits.
+/// `InfoData[0]` status bits.
 ///
 /// Requirements: INFO-002.
 pub mod status {
@@ -67,7 +67,7 @@ pub struct ControllerStatus {
 }
 
 impl ControllerStatus {
-    /// InfoData[0].
+    /// `InfoData[0]`.
     pub fn status_word(&self) -> u32 {
         [
             (self.bus_off, status::BUS_OFF),

@@ -183,7 +183,7 @@ fn device_waits_for_the_plc_to_release_the_rx_buffer() {
     device.cycle(&idle, 0).unwrap();
     // RxCounter, NoOfRxMessages and the messages; InfoData may move on meanwhile.
     let held = ..device.layout().info_data_start();
-    let first = device.inputs()[held.clone()].to_vec();
+    let first = device.inputs()[held].to_vec();
     assert_eq!(
         (
             inputs_of(&device).rx_counter(),
@@ -196,7 +196,7 @@ fn device_waits_for_the_plc_to_release_the_rx_buffer() {
     device.handle_received(std_frame(0x200, &[]), 20);
     for _ in 0..3 {
         device.cycle(&idle, 0).unwrap();
-        assert_eq!(&device.inputs()[held.clone()], &first[..]);
+        assert_eq!(&device.inputs()[held], &first[..]);
     }
     // Released: the new message goes in and RxCounter moves on.
     device

@@ -309,11 +309,13 @@ fn info_data_follows_the_rx_messages() {
     assert_eq!(image.info_data(16), None);
 }
 
-/// Covers: LAY-GEN-007, PROF-011
+/// The manual prints "11 bis 32" but its own examples use 4 and 10 (R2).
+///
+/// Covers: LAY-GEN-007, PROF-011, ERR-R2
 #[test]
 fn slot_counts_from_1_to_32() {
     let caps = caps();
-    for slots in [1u8, 11, 32] {
+    for slots in [1u8, 4, 10, 11, 32] {
         assert!(InterfaceConfig::new(FrameFormat::Base11, slots)
             .validate(&caps)
             .is_ok());

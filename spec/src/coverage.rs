@@ -13,6 +13,7 @@
 //! `#[test]`, `fn` or `proptest!` item, so it cannot float free.
 
 use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
 
 use crate::catalogue::Catalogue;
 
@@ -114,4 +115,35 @@ pub fn coverage(catalogue: &Catalogue, sources: &[(String, String)]) -> Coverage
         .map(|r| r.id.clone())
         .collect();
     result
+}
+
+/// The test sources of a workspace: every `<member>/tests/*.rs`, paths shown
+/// relative to `root`.
+pub fn test_sources(root: &Path) -> std::io::Result<Vec<(String, String)>> {
+    let mut members: Vec<_> = std::fs::read_dir(root)?
+        .filter_map(|entry| entry.ok().map(|entry| entry.path()))
+        .collect();
+    members.push(root.to_path_buf());
+    members.sort();
+    let mut sources = Vec::new();
+    for member in members {
+        let Ok(entries) = std::fs::read_dir(member.join("tests")) else {
+            continue;
+        };
+        let mut paths: Vec<_> = entries
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| p.extension().is_some_and(|x| x == "rs"))
+            .collect();
+        paths.sort();
+        for path in paths {
+            let text = std::fs::read_to_string(&path)?;
+            let shown = path
+                .strip_prefix(root)
+                .unwrap_or(&path)
+                .display()
+                .to_string();
+            sources.push((shown, text));
+        }
+    }
+    Ok(sources)
 }

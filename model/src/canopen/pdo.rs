@@ -19,7 +19,7 @@ pub fn analog_payload(channels: &[i16]) -> Vec<u8> {
 ///
 /// Requirements: PDO-002.
 pub fn parse_analog(payload: &[u8]) -> Option<Vec<i16>> {
-    if payload.len() < 4 || payload.len() > 8 || payload.len() % 2 != 0 {
+    if payload.len() < 4 || payload.len() > 8 || !payload.len().is_multiple_of(2) {
         return None;
     }
     Some(

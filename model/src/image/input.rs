@@ -54,7 +54,7 @@ impl<T: AsRef<[u8]>> InputImage<T> {
             .then(|| read_u16(self.buffer.as_ref(), field::TRANSACTION_NUMBER))
     }
 
-    /// Inputs.RxMessage[slot]; `None` past the last slot.
+    /// `Inputs.RxMessage[slot]`; `None` past the last slot.
     pub fn rx_message(&self, slot: usize) -> Option<MessageView<&[u8]>> {
         if slot >= self.layout.rx_slots {
             return None;
@@ -66,7 +66,7 @@ impl<T: AsRef<[u8]>> InputImage<T> {
         .ok()
     }
 
-    /// InfoData[index]; `None` without InfoData or past index 15.
+    /// `InfoData[index]`; `None` without InfoData or past index 15.
     pub fn info_data(&self, index: usize) -> Option<u32> {
         if !self.layout.info_data || index >= field::INFO_DATA_WORDS {
             return None;

@@ -110,19 +110,19 @@ impl ImageLayout {
             }
     }
 
-    /// Byte range of Outputs.TxMessage[slot].
+    /// Byte range of `Outputs.TxMessage[slot]`.
     pub fn tx_slot(&self, slot: usize) -> Field {
         let start = field::MESSAGES + slot * self.tx_message.size;
         start..start + self.tx_message.size
     }
 
-    /// Byte range of Inputs.RxMessage[slot].
+    /// Byte range of `Inputs.RxMessage[slot]`.
     pub fn rx_slot(&self, slot: usize) -> Field {
         let start = self.rx_messages_start() + slot * self.rx_message.size;
         start..start + self.rx_message.size
     }
 
-    /// Where InfoData[0] starts (equal to the end of the Rx messages).
+    /// Where `InfoData[0]` starts (equal to the end of the Rx messages).
     pub fn info_data_start(&self) -> usize {
         self.rx_messages_start() + self.rx_slots * self.rx_message.size
     }

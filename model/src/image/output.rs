@@ -47,7 +47,7 @@ impl<T: AsRef<[u8]>> OutputImage<T> {
         read_u16(self.buffer.as_ref(), field::NO_OF_MESSAGES)
     }
 
-    /// Outputs.TxMessage[slot]; `None` past the last slot.
+    /// `Outputs.TxMessage[slot]`; `None` past the last slot.
     pub fn tx_message(&self, slot: usize) -> Option<MessageView<&[u8]>> {
         if slot >= self.layout.tx_slots {
             return None;

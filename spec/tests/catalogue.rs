@@ -1,0 +1,160 @@
+//! The catalogue loads, is complete where the issue demands, and its loader
+//! names file, line and field for every kind of mistake.
+
+use canif_spec::{Catalogue, Status};
+
+fn files(overrides: &[(&str, &str)]) -> Vec<(String, String)> {
+    let base = [
+        ("spec/sources.yaml", "- {file: a.txt, title: A}\n"),
+        ("spec/capabilities.yaml", "- {name: ext29, description: x}\n- {name: base11, description: y}\n"),
+        ("spec/rulings.yaml", "- {id: R1, title: t}\n"),
+        (
+            "spec/requirements/x.yaml",
+            "area: X\ntitle: X\nrequirements:\n  - id: X-001\n    statement: s\n    source: {file: a.txt, section: '1'}\n    status: normative\n",
+        ),
+        (
+            "spec/profiles/p.yaml",
+            "name: p\ndevice: d\nsource: {file: a.txt, section: '2'}\ncapabilities: [base11]\nmax_slots: 32\nrx_queue_depth: 150\ntx_queue_depth: 64\ntimestamp_tolerance_ns: 1000\n",
+        ),
+    ];
+    base.iter()
+        .map(|(path, text)| {
+            let text = overrides
+                .iter()
+                .find(|(p, _)| p == path)
+                .map_or(*text, |(_, t)| *t);
+            (path.to_string(), text.to_string())
+        })
+        .collect()
+}
+
+fn errors(overrides: &[(&str, &str)]) -> Vec<String> {
+    match Catalogue::from_files(&files(overrides)) {
+        Ok(_) => Vec::new(),
+        Err(errors) => errors.0.iter().map(ToString::to_string).collect(),
+    }
+}
+
+#[test]
+fn the_minimal_catalogue_is_valid() {
+    assert_eq!(errors(&[]), Vec::<String>::new());
+}
+
+#[test]
+fn the_embedded_catalogue_loads_and_is_large() {
+    let catalogue = Catalogue::embedded().unwrap();
+    assert!(catalogue.requirements().count() > 80);
+    assert_eq!(catalogue.profiles.len(), 9);
+    for status in [Status::Normative, Status::Derived, Status::Assumption] {
+        assert!(catalogue.requirements().any(|r| r.status == status));
+    }
+}
+
+#[test]
+fn the_folder_on_disk_equals_the_embedded_catalogue() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let on_disk = Catalogue::load_dir(dir).unwrap();
+    let embedded = Catalogue::embedded().unwrap();
+    let ids = |c: &Catalogue| c.requirements().map(|r| r.id.clone()).collect::<Vec<_>>();
+    assert_eq!(ids(&on_disk), ids(&embedded));
+    assert_eq!(on_disk.profiles.len(), embedded.profiles.len());
+}
+
+#[test]
+fn every_ruling_r1_to_r8_is_an_erratum_entry() {
+    let catalogue = Catalogue::embedded().unwrap();
+    for n in 1..=8 {
+        let entry = catalogue
+            .requirement(&format!("ERR-R{n}"))
+            .unwrap_or_else(|| panic!("ERR-R{n} missing"));
+        assert!(
+            entry.is_erratum() && entry.corrected.is_some(),
+            "ERR-R{n} names the text and the correction"
+        );
+        assert!(entry.rulings.contains(&format!("R{n}")));
+    }
+}
+
+#[test]
+fn unknown_keys_name_file_line_and_field() {
+    let bad = "area: X\ntitle: X\nrequirements:\n  - id: X-001\n    statement: s\n    colour: red\n    source: {file: a.txt, section: '1'}\n    status: normative\n";
+    let errors = errors(&[("spec/requirements/x.yaml", bad)]);
+    assert_eq!(errors.len(), 1, "{errors:?}");
+    assert!(
+        errors[0].starts_with(
+            "spec/requirements/x.yaml:6: field `requirements[0].colour`: unknown field `colour`"
+        ),
+        "{}",
+        errors[0]
+    );
+}
+
+#[test]
+fn a_misspelt_status_names_its_line() {
+    let bad = "area: X\ntitle: X\nrequirements:\n  - id: X-001\n    statement: s\n    source: {file: a.txt, section: '1'}\n    status: normativ\n";
+    let errors = errors(&[("spec/requirements/x.yaml", bad)]);
+    assert!(errors[0].starts_with("spec/requirements/x.yaml:7: field `requirements[0].status`: unknown variant `normativ`"), "{errors:?}");
+}
+
+#[test]
+fn duplicates_unknown_names_and_dangling_references() {
+    let bad = "area: X\ntitle: X\nrequirements:\n  - id: X-001\n    statement: s\n    source: {file: a.txt, section: '1'}\n    status: normative\n    capabilities: [warp]\n    rulings: [R9]\n    related: [X-404]\n  - id: X-001\n    statement: s\n    source: {file: b.txt, section: '1'}\n    status: derived\n";
+    let errors = errors(&[("spec/requirements/x.yaml", bad)]);
+    let expect = [
+        "spec/requirements/x.yaml:8: field `X-001.capabilities`: unknown capability `warp`",
+        "spec/requirements/x.yaml:9: field `X-001.rulings`: unknown ruling `R9`",
+        "spec/requirements/x.yaml:10: field `X-001.related`: `X-404` names no requirement",
+        "spec/requirements/x.yaml:11: field `X-001.id`: duplicate id, first at spec/requirements/x.yaml:4",
+        "spec/requirements/x.yaml:13: field `X-001.source.file`: `b.txt` is not in sources.yaml",
+    ];
+    for expected in expect {
+        assert!(
+            errors.iter().any(|e| e.starts_with(expected)),
+            "missing {expected:?} in {errors:#?}"
+        );
+    }
+}
+
+#[test]
+fn profile_mistakes() {
+    let bad = "name: p\ndevice: d\nsource: {file: a.txt, section: '2'}\ncapabilities: [base11, fd]\nmax_slots: 40\nrx_queue_depth: 150\ntx_queue_depth: 8\ntimestamp_tolerance_ns: 1000\ntransaction_number_only_ext29: true\n";
+    let errors = errors(&[("spec/profiles/p.yaml", bad)]);
+    for expected in [
+        "spec/profiles/p.yaml:4: field `capabilities`: unknown capability `fd`",
+        "spec/profiles/p.yaml:5: field `max_slots`: 40 is outside 1..=32",
+        "spec/profiles/p.yaml:7: field `tx_queue_depth`",
+        "spec/profiles/p.yaml:9: field `transaction_number_only_ext29`",
+    ] {
+        assert!(
+            errors.iter().any(|e| e.starts_with(expected)),
+            "missing {expected:?} in {errors:#?}"
+        );
+    }
+}
+
+#[test]
+fn inspection_needs_a_reason_and_errata_both_texts() {
+    let bad = "area: X\ntitle: X\nrequirements:\n  - id: X-001\n    statement: s\n    source: {file: a.txt, section: '1'}\n    status: normative\n    verification: inspection\n  - id: X-002\n    statement: s\n    source: {file: a.txt, section: '1'}\n    status: derived\n    document_says: 'x'\n";
+    let errors = errors(&[("spec/requirements/x.yaml", bad)]);
+    assert!(
+        errors
+            .iter()
+            .any(|e| e.contains("X-001.reason") && e.contains("inspection needs a reason")),
+        "{errors:#?}"
+    );
+    assert!(
+        errors.iter().any(|e| e.contains("X-002.corrected")),
+        "{errors:#?}"
+    );
+}
+
+#[test]
+fn a_missing_folder_is_named() {
+    let error = Catalogue::load_dir(std::path::Path::new("/nonexistent/spec")).unwrap_err();
+    assert!(
+        error
+            .to_string()
+            .contains("/nonexistent/spec/sources.yaml: cannot read"),
+        "{error}"
+    );
+}
