@@ -144,6 +144,13 @@ fn spec(catalogue: &Catalogue, command: SpecCommand) -> ExitCode {
             if !r.rulings.is_empty() {
                 println!("  rulings: {}", r.rulings.join(", "));
             }
+            // Coverage is read from the tests where they are (the workspace), never kept by hand.
+            if let Ok(sources) = coverage::test_sources(Path::new(".")) {
+                let found = coverage::coverage(catalogue, &sources);
+                for (file, line) in found.covered_by.get(&r.id).into_iter().flatten() {
+                    println!("  covered by: {file}:{line}");
+                }
+            }
             for (label, text) in [
                 ("document says", &r.document_says),
                 ("corrected", &r.corrected),

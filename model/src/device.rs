@@ -18,7 +18,7 @@ use crate::config::{
 use crate::filter;
 use crate::frame::Frame;
 use crate::handshake;
-use crate::image::{ImageLayout, InputImage, MessageRepr, MessageView, OutputImage, SizeError};
+use crate::image::{ImageLayout, InputImage, MessageRepr, OutputImage, SizeError};
 use crate::info_data::{self, ControllerStatus};
 use crate::Nanos;
 
@@ -207,7 +207,8 @@ impl Device {
                     // Frames were checked for this layout when they were received.
                     let _ = message.emit(&mut view);
                 }
-                None => clear(&mut view),
+                // Slots past NoOfRxMessages are "don't care" (HS-RX-008); the reference zeroes them.
+                None => view.clear(),
             }
         }
         inputs.set_no_of_rx_messages(count as u16);
@@ -284,14 +285,4 @@ impl Device {
     pub fn handle_controller_status(&mut self, status: ControllerStatus) {
         self.status = status;
     }
-}
-
-/// Slots past NoOfRxMessages are "don't care" (G5); the reference device zeroes them.
-fn clear(view: &mut MessageView<&mut [u8]>) {
-    view.data_field_mut().fill(0);
-    view.set_raw_length(0);
-    view.set_cob_id_word(crate::cob_id::CobIdWord(0));
-    view.set_cob_id32(crate::cob_id::CobId32(0));
-    view.set_flags(0);
-    view.set_time_stamp(0);
 }

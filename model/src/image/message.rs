@@ -215,6 +215,11 @@ impl<T: AsRef<[u8]> + AsMut<[u8]>> MessageView<T> {
         self.buffer.as_mut()
     }
 
+    /// Zeroes every byte of the slot.
+    pub fn clear(&mut self) {
+        self.buf_mut().fill(0);
+    }
+
     pub fn set_transaction_number(&mut self, value: u16) {
         if let Some(f) = self.layout.transaction_number.clone() {
             write_u16(self.buf_mut(), f, value);
@@ -411,7 +416,7 @@ impl MessageRepr {
         if usize::from(frame.len()) > layout.max_data() && !frame.is_remote() {
             return Err(not_representable("too long"));
         }
-        view.buffer.as_mut().fill(0);
+        view.clear();
         view.set_transaction_number(self.transaction_number);
         match layout.length {
             LengthField::InCobIdWord => view.set_cob_id_word(CobIdWord::new(
