@@ -137,11 +137,6 @@ fn the_device_delivers_only_accepted_frames() {
     );
     rig.cycle(0);
     rig.cycle(0);
-    let ids: Vec<u32> = rig
-        .plc
-        .take_received()
-        .iter()
-        .map(|m| m.frame.id.raw())
-        .collect();
+    let ids = rig.received_ids();
     assert_eq!(ids, [0x400, 0x700]);
 }

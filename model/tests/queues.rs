@@ -94,12 +94,7 @@ fn full_local_queue_drops_new_frames_silently() {
     for _ in 0..6 {
         rig.cycle(0);
     }
-    let ids: Vec<u32> = rig
-        .plc
-        .take_received()
-        .iter()
-        .map(|m| m.frame.id.raw())
-        .collect();
+    let ids = rig.received_ids();
     assert_eq!(ids, [0, 1, 2, 3, 4], "the oldest survive, in order");
     // No indication in the image: InfoData is absent on this interface and no field counts losses.
     assert_eq!(rig.device.lost(), 3);

@@ -19,79 +19,18 @@ type Row = (
     usize,
 );
 
+#[rustfmt::skip]
 const MATRIX: [Row; 9] = [
-    (
-        "el6751-legacy",
-        true,
-        true,
-        false,
-        false,
-        true,
-        true,
-        false,
-        false,
-        150,
-    ),
-    (
-        "el6751-mdp",
-        true,
-        true,
-        false,
-        true,
-        true,
-        true,
-        false,
-        false,
-        150,
-    ),
-    (
-        "ccat-before-fw1.17",
-        false,
-        true,
-        false,
-        false,
-        false,
-        false,
-        false,
-        false,
-        512,
-    ),
-    (
-        "ccat", false, true, false, false, false, true, true, false, 512,
-    ),
-    (
-        "cx1500-m510",
-        true,
-        true,
-        false,
-        false,
-        false,
-        false,
-        false,
-        false,
-        150,
-    ),
-    (
-        "fc510x-before-fw2.14",
-        true,
-        false,
-        false,
-        false,
-        false,
-        false,
-        false,
-        false,
-        150,
-    ),
-    (
-        "fc510x", true, true, false, false, false, false, false, false, 150,
-    ),
-    (
-        "fc532x", true, true, true, false, false, true, true, true, 512,
-    ),
-    (
-        "cx-m530", true, true, true, false, false, true, true, true, 512,
-    ),
+    //                        base11 ext29  fd     fast   optim. TN     TS     Info   Rx queue
+    ("el6751-legacy",         true,  true,  false, false, true,  true,  false, false, 150),
+    ("el6751-mdp",            true,  true,  false, true,  true,  true,  false, false, 150),
+    ("ccat-before-fw1.17",    false, true,  false, false, false, false, false, false, 512),
+    ("ccat",                  false, true,  false, false, false, true,  true,  false, 512),
+    ("cx1500-m510",           true,  true,  false, false, false, false, false, false, 150),
+    ("fc510x-before-fw2.14",  true,  false, false, false, false, false, false, false, 150),
+    ("fc510x",                true,  true,  false, false, false, false, false, false, 150),
+    ("fc532x",                true,  true,  true,  false, false, true,  true,  true,  512),
+    ("cx-m530",               true,  true,  true,  false, false, true,  true,  true,  512),
 ];
 
 /// Covers: PROF-001, PROF-006, PROF-007, PROF-008, PROF-009, PROF-012, RXQ-001, RXQ-002

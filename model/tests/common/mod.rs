@@ -75,6 +75,15 @@ impl Rig {
         }
     }
 
+    /// Identifiers of the messages the PLC has read so far (drains them).
+    pub fn received_ids(&mut self) -> Vec<u32> {
+        self.plc
+            .take_received()
+            .iter()
+            .map(|m| m.frame.id.raw())
+            .collect()
+    }
+
     pub fn inputs(&self) -> InputImage<&[u8]> {
         InputImage::new_checked(self.device.inputs(), self.device.layout()).unwrap()
     }
