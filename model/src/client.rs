@@ -56,6 +56,12 @@ impl PlcClient {
         &self.outputs
     }
 
+    /// The output image for writing: for stimulus that departs from the sample
+    /// code on purpose, such as jumping the TxCounter (any change counts, G1).
+    pub fn outputs_mut(&mut self) -> &mut [u8] {
+        &mut self.outputs
+    }
+
     /// Messages read from the interface so far, in order; drains them.
     pub fn take_received(&mut self) -> Vec<MessageRepr> {
         std::mem::take(&mut self.received)

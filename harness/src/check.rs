@@ -1,0 +1,718 @@
+//! Runs the model beside the IUT on the same stimulus and reports the first
+//! difference against the requirements it breaks.
+
+use std::collections::VecDeque;
+
+use canif_model::client::PlcClient;
+use canif_model::config::{Capabilities, InterfaceConfig};
+use canif_model::device::Device;
+use canif_model::exchange::ProcessDataExchange;
+use canif_model::frame::Frame;
+use canif_model::image::{field, ImageLayout, InputImage, LengthField, MessageRepr, MessageView};
+use canif_model::Nanos;
+
+use crate::bus::{arbitration_key, duration, Nodes};
+use crate::iut::{Iut, IutKind};
+use crate::scenario::{Scenario, Step};
+
+/// How many cycles of history a failure shows.
+pub const CONTEXT_CYCLES: usize = 6;
+
+/// One non-conformance: where, what, and which requirements it breaks.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Failure {
+    pub requirements: Vec<String>,
+    pub scenario: String,
+    pub cycle: u64,
+    pub time: Nanos,
+    pub what: String,
+    pub expected: String,
+    pub actual: String,
+    /// The last cycles before the failure, oldest first.
+    pub context: Vec<String>,
+}
+
+/// How one scenario ended.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Outcome {
+    Pass,
+    Fail(Box<Failure>),
+    /// The IUT or the harness could not run the scenario (not a non-conformance).
+    Error(String),
+}
+
+/// What one scenario run produced.
+#[derive(Debug, Clone)]
+pub struct ScenarioRun {
+    pub scenario: String,
+    pub covers: Vec<String>,
+    pub outcome: Outcome,
+    pub cycles: u64,
+    pub frames_checked: u64,
+}
+
+/// Requirements a difference in each place can break; the scenario's own list
+/// narrows them to what it exercises.
+mod blame {
+    pub const TX_COUNTER: &[&str] = &[
+        "HS-TX-002",
+        "HS-TX-003",
+        "HS-TX-005",
+        "HS-TX-007",
+        "HS-TX-008",
+        "FQ-003",
+    ];
+    pub const RX_COUNTER: &[&str] = &[
+        "HS-RX-001",
+        "HS-RX-004",
+        "HS-RX-005",
+        "HS-RX-006",
+        "BQ-002",
+        "FQ-001",
+        "FQ-002",
+    ];
+    pub const RX_SET: &[&str] = &[
+        "HS-RX-001",
+        "HS-RX-002",
+        "HS-RX-004",
+        "HS-RX-007",
+        "BQ-002",
+        "RXQ-003",
+        "RXQ-004",
+        "RXQ-005",
+        "RXQ-006",
+        "FQ-004",
+        "FLT-001",
+        "FLT-002",
+        "FLT-003",
+        "FLT-004",
+        "FLT-005",
+        "FLT-006",
+        "FLT-007",
+        "FLT-008",
+        "FLT-009",
+    ];
+    pub const TRANSACTION_NUMBER: &[&str] = &["TN-002", "TN-003"];
+    pub const COB_WORD: &[&str] = &["LAY-11-002", "LAY-11-003", "LAY-11-004", "LAY-GEN-003"];
+    pub const COB_LOW: &[&str] = &["LAY-29-003", "LAY-GEN-003"];
+    pub const COB_RTR: &[&str] = &["LAY-29-004"];
+    pub const COB_FORMAT: &[&str] = &["LAY-29-005"];
+    pub const LENGTH: &[&str] = &["LAY-11-002", "LAY-29-002", "FD-LEN-005", "LAY-GEN-003"];
+    pub const FLAGS: &[&str] = &["FD-BIT-001", "FD-BIT-002", "FD-BIT-003"];
+    pub const TIME_STAMP: &[&str] = &["TS-001", "TS-003"];
+    pub const TX_MISSING: &[&str] = &[
+        "HS-TX-002",
+        "HS-TX-004",
+        "HS-TX-006",
+        "HS-TX-007",
+        "HS-TX-009",
+        "PDX-005",
+    ];
+    pub const TX_EXTRA: &[&str] = &["HS-TX-006", "HS-TX-009", "HS-TX-011", "PDX-004", "PDX-005"];
+    pub const TX_OTHER_FRAME: &[&str] = &["HS-TX-004", "HS-TX-006", "HS-TX-009"];
+    pub const TX_REMOTE: &[&str] = &["LAY-11-003", "LAY-29-004"];
+    pub const TX_FORMAT: &[&str] = &["LAY-29-005", "FD-BIT-001"];
+    pub const TX_FD_FLAGS: &[&str] = &["FD-BIT-001", "FD-BIT-002", "FD-BIT-003"];
+    pub const TX_LENGTH: &[&str] = &[
+        "FD-LEN-003",
+        "FD-LEN-004",
+        "ERR-R1",
+        "LAY-11-002",
+        "LAY-29-002",
+        "HS-TX-009",
+    ];
+    pub const TX_PADDING: &[&str] = &["FD-LEN-005"];
+    pub const TX_DATA: &[&str] = &["HS-TX-006", "LAY-GEN-003"];
+    pub const TX_INVALID: &[&str] = &["FD-LEN-003", "FD-LEN-004", "ERR-R1", "LAY-GEN-008"];
+    pub const CONFIRMATION: &[&str] = &["PDX-001", "PDX-002"];
+
+    pub fn info_data(index: usize) -> &'static [&'static str] {
+        match index {
+            0 => &["INFO-002"],
+            1 | 2 => &["INFO-003"],
+            3 => &["INFO-004"],
+            4..=6 => &["INFO-005", "INFO-007"],
+            11 | 15 => &["INFO-006"],
+            _ => &["INFO-005"],
+        }
+    }
+}
+
+fn blame(scenario: &Scenario, candidates: &[&str]) -> Vec<String> {
+    let narrowed: Vec<String> = candidates
+        .iter()
+        .filter(|id| scenario.covers.iter().any(|c| c == *id))
+        .map(|id| id.to_string())
+        .collect();
+    if narrowed.is_empty() {
+        scenario.covers.clone()
+    } else {
+        narrowed
+    }
+}
+
+/// A difference found, before it becomes a [`Failure`].
+struct Difference {
+    candidates: &'static [&'static str],
+    what: String,
+    expected: String,
+    actual: String,
+}
+
+fn hex(bytes: &[u8]) -> String {
+    bytes
+        .iter()
+        .map(|b| format!("{b:02X}"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+fn describe_slot(layout: &ImageLayout, bytes: &[u8]) -> String {
+    match MessageView::new_checked(bytes, layout.rx_message) {
+        Ok(view) => match MessageRepr::parse(&view) {
+            Ok(m) => format!("{} ts={} [{}]", m.frame, m.time_stamp, hex(bytes)),
+            Err(e) => format!("invalid ({e}) [{}]", hex(bytes)),
+        },
+        Err(_) => hex(bytes),
+    }
+}
+
+/// Compares two input images field by field, ignoring what the spec calls
+/// don't-care: Rx slots at and past NoOfRxMessages (HS-RX-008, FQ-005).
+fn compare_inputs(
+    layout: &ImageLayout,
+    expected: &[u8],
+    actual: &[u8],
+    was_on_bus: impl Fn(&Frame) -> bool,
+) -> Option<Difference> {
+    if expected.len() != actual.len() {
+        return Some(Difference {
+            candidates: &["LAY-GEN-004"],
+            what: "input image size".into(),
+            expected: format!("{} bytes", expected.len()),
+            actual: format!("{} bytes", actual.len()),
+        });
+    }
+    let header = [
+        ("Inputs.TxCounter", field::TX_COUNTER, blame::TX_COUNTER),
+        ("Inputs.RxCounter", field::RX_COUNTER, blame::RX_COUNTER),
+        (
+            "Inputs.NoOfRxMessages",
+            field::NO_OF_MESSAGES,
+            blame::RX_SET,
+        ),
+    ];
+    for (name, range, candidates) in header {
+        if expected[range.clone()] != actual[range.clone()] {
+            let value = |b: &[u8]| u16::from_le_bytes([b[range.start], b[range.start + 1]]);
+            return Some(Difference {
+                candidates,
+                what: name.into(),
+                expected: value(expected).to_string(),
+                actual: value(actual).to_string(),
+            });
+        }
+    }
+    if layout.transaction_number
+        && expected[field::TRANSACTION_NUMBER] != actual[field::TRANSACTION_NUMBER]
+    {
+        let value = |b: &[u8]| u16::from_le_bytes([b[6], b[7]]);
+        return Some(Difference {
+            candidates: blame::TRANSACTION_NUMBER,
+            what: "Inputs.TransactionNumber".into(),
+            expected: value(expected).to_string(),
+            actual: value(actual).to_string(),
+        });
+    }
+    let in_use = InputImage::new_checked(expected, *layout)
+        .map_or(0, |i| usize::from(i.no_of_rx_messages()));
+    let message = layout.rx_message;
+    for slot in 0..in_use.min(layout.rx_slots) {
+        let range = layout.rx_slot(slot);
+        let (e, a) = (&expected[range.clone()], &actual[range]);
+        if e == a {
+            continue;
+        }
+        let data_len = MessageView::new_checked(e, message).map_or(0, |v| {
+            MessageRepr::parse(&v).map_or(0, |m| m.frame.data().len())
+        });
+        let length_field = match &message.length {
+            LengthField::InCobIdWord => None,
+            LengthField::Word(f) | LengthField::Byte(f) => Some(f.clone()),
+        };
+        let cob = message.cob_id.clone();
+        let data = message.data.start..message.data.start + data_len;
+        let frame_of = |bytes: &[u8]| {
+            MessageView::new_checked(bytes, message)
+                .ok()
+                .and_then(|v| MessageRepr::parse(&v).ok())
+                .map(|m| m.frame)
+        };
+        let different_frame = match (frame_of(e), frame_of(a)) {
+            (Some(expected_frame), Some(actual_frame)) => {
+                expected_frame != actual_frame && was_on_bus(&actual_frame)
+            }
+            _ => false,
+        };
+        let candidates: &'static [&'static str] = if different_frame {
+            blame::RX_SET
+        } else if e[cob.clone()] != a[cob.clone()] {
+            if cob.len() == 2 {
+                blame::COB_WORD
+            } else {
+                let word = |b: &[u8]| {
+                    u32::from_le_bytes([
+                        b[cob.start],
+                        b[cob.start + 1],
+                        b[cob.start + 2],
+                        b[cob.start + 3],
+                    ])
+                };
+                let diff = word(e) ^ word(a);
+                if diff & 0x8000_0000 != 0 {
+                    blame::COB_FORMAT
+                } else if diff & 0x4000_0000 != 0 {
+                    blame::COB_RTR
+                } else {
+                    blame::COB_LOW
+                }
+            }
+        } else if length_field
+            .as_ref()
+            .is_some_and(|f| e[f.clone()] != a[f.clone()])
+        {
+            blame::LENGTH
+        } else if message
+            .flags
+            .as_ref()
+            .is_some_and(|f| e[f.clone()] != a[f.clone()])
+        {
+            blame::FLAGS
+        } else if e[data.clone()] != a[data.clone()] {
+            blame::RX_SET
+        } else if message
+            .time_stamp
+            .as_ref()
+            .is_some_and(|f| e[f.clone()] != a[f.clone()])
+        {
+            blame::TIME_STAMP
+        } else {
+            continue; // only don't-care bytes (data past the length) differ
+        };
+        return Some(Difference {
+            candidates,
+            what: format!("Inputs.RxMessage[{slot}]"),
+            expected: describe_slot(layout, e),
+            actual: describe_slot(layout, a),
+        });
+    }
+    if layout.info_data {
+        for index in 0..field::INFO_DATA_WORDS {
+            let at = layout.info_data_start() + 4 * index;
+            if expected[at..at + 4] != actual[at..at + 4] {
+                let word = |b: &[u8]| u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]);
+                return Some(Difference {
+                    candidates: blame::info_data(index),
+                    what: format!("InfoData[{index}]"),
+                    expected: format!("0x{:08X}", word(expected)),
+                    actual: format!("0x{:08X}", word(actual)),
+                });
+            }
+        }
+    }
+    None
+}
+
+fn compare_frames(expected: &Frame, actual: &Frame) -> &'static [&'static str] {
+    if expected.id != actual.id {
+        if expected.id.raw() == actual.id.raw() {
+            return blame::TX_FORMAT;
+        }
+        return blame::TX_OTHER_FRAME;
+    }
+    if expected.is_remote() != actual.is_remote() {
+        return blame::TX_REMOTE;
+    }
+    if expected.is_fd() != actual.is_fd() {
+        return blame::TX_FORMAT;
+    }
+    if expected.kind != actual.kind {
+        return blame::TX_FD_FLAGS;
+    }
+    if expected.len() != actual.len() {
+        return blame::TX_LENGTH;
+    }
+    if expected.is_fd() {
+        return blame::TX_PADDING;
+    }
+    blame::TX_DATA
+}
+
+/// Everything that runs in lockstep for one scenario.
+struct Lockstep<'a> {
+    scenario: &'a Scenario,
+    iut: Box<dyn Iut>,
+    model: Device,
+    layout: ImageLayout,
+    nodes: Nodes,
+    /// The frame on the bus: its end, whether the IUT sent it.
+    on_bus: Option<(Nanos, Frame, bool)>,
+    iut_pending: Option<Frame>,
+    now: Nanos,
+    cycle: u64,
+    frames: u64,
+    history: VecDeque<String>,
+    bus_log: Vec<String>,
+    /// Frames other nodes sent lately: a slot holding one of them carries a real
+    /// frame (the wrong one), anything else is a frame the IUT encoded wrongly.
+    recent_rx: VecDeque<Frame>,
+}
+
+/// How many received frames the oracle remembers (bounded memory).
+const RECENT_RX: usize = 4_096;
+
+impl Lockstep<'_> {
+    fn fail(&self, difference: Difference) -> Outcome {
+        Outcome::Fail(Box::new(Failure {
+            requirements: blame(self.scenario, difference.candidates),
+            scenario: self.scenario.name.clone(),
+            cycle: self.cycle,
+            time: self.now,
+            what: difference.what,
+            expected: difference.expected,
+            actual: difference.actual,
+            context: self.history.iter().cloned().collect(),
+        }))
+    }
+
+    /// Asks both devices for their next frame when the controller is free.
+    fn poll(&mut self) -> Result<(), Outcome> {
+        if self.iut_pending.is_some() {
+            return Ok(());
+        }
+        let expected = self.model.poll_transmit(self.now);
+        let actual = self.iut.poll_transmit(self.now);
+        let difference = match (expected, actual) {
+            (None, None) => return Ok(()),
+            (Some(e), Some(Ok(a))) if e == a => {
+                self.iut_pending = Some(a);
+                return Ok(());
+            }
+            (Some(e), Some(Ok(a))) => Difference {
+                candidates: compare_frames(&e, &a),
+                what: "frame handed to the controller".into(),
+                expected: e.to_string(),
+                actual: a.to_string(),
+            },
+            (e, Some(Err(invalid))) => Difference {
+                candidates: blame::TX_INVALID,
+                what: "frame handed to the controller".into(),
+                expected: e.map_or("no frame".into(), |f| f.to_string()),
+                actual: format!("invalid frame: {}", invalid.0),
+            },
+            (Some(e), None) => Difference {
+                candidates: blame::TX_MISSING,
+                what: "frame handed to the controller".into(),
+                expected: e.to_string(),
+                actual: "no frame".into(),
+            },
+            (None, Some(Ok(a))) => Difference {
+                candidates: blame::TX_EXTRA,
+                what: "frame handed to the controller".into(),
+                expected: "no frame".into(),
+                actual: a.to_string(),
+            },
+        };
+        Err(self.fail(difference))
+    }
+
+    /// Runs the bus up to `until`: completes frames, starts the next winner.
+    fn run_bus(&mut self, until: Nanos) -> Result<(), Outcome> {
+        loop {
+            self.poll()?;
+            if self.on_bus.is_none() {
+                let node = self
+                    .nodes
+                    .best_ready(self.now)
+                    .map(|(i, f)| (i, arbitration_key(f)));
+                let iut = self.iut_pending.as_ref().map(arbitration_key);
+                let start = match (node, iut) {
+                    (Some((i, n)), Some(k)) if n < k => Some((self.nodes.take(i), false)),
+                    (Some((i, _)), None) => Some((self.nodes.take(i), false)),
+                    (_, Some(_)) => self.iut_pending.take().map(|f| (f, true)),
+                    (None, None) => None,
+                };
+                if let Some((frame, from_iut)) = start {
+                    let end = self.now + duration(&frame, self.scenario.bit_rates);
+                    self.on_bus = Some((end, frame, from_iut));
+                }
+            }
+            let next = [
+                self.on_bus.as_ref().map(|(end, _, _)| *end),
+                self.nodes.next_ready_after(self.now),
+                self.iut.poll_timeout().filter(|t| *t > self.now),
+            ]
+            .into_iter()
+            .flatten()
+            .min();
+            match next {
+                Some(t) if t <= until => {
+                    self.now = t;
+                    if let Some((end, frame, from_iut)) = self.on_bus.take() {
+                        if end == t {
+                            self.complete(frame, from_iut, end);
+                        } else {
+                            self.on_bus = Some((end, frame, from_iut));
+                        }
+                    }
+                }
+                _ => {
+                    self.now = until;
+                    return Ok(());
+                }
+            }
+        }
+    }
+
+    fn complete(&mut self, frame: Frame, from_iut: bool, end: Nanos) {
+        self.frames += 1;
+        if from_iut {
+            self.iut.transmit_complete();
+            self.model.handle_transmit_complete();
+            self.bus_log.push(format!("tx {frame}"));
+        } else {
+            self.iut.receive(&frame, end);
+            self.model.handle_received(frame, end);
+            self.recent_rx.push_back(frame);
+            if self.recent_rx.len() > RECENT_RX {
+                self.recent_rx.pop_front();
+            }
+            self.bus_log.push(format!("rx {frame}"));
+        }
+    }
+
+    fn remember(&mut self, outputs: &[u8], inputs: &[u8]) {
+        let header = |b: &[u8]| {
+            (
+                u16::from_le_bytes([b[0], b[1]]),
+                u16::from_le_bytes([b[2], b[3]]),
+                u16::from_le_bytes([b[4], b[5]]),
+            )
+        };
+        let (otx, orx, on) = header(outputs);
+        let (itx, irx, inn) = header(inputs);
+        let tn = if self.layout.transaction_number {
+            format!(" tn={}", u16::from_le_bytes([inputs[6], inputs[7]]))
+        } else {
+            String::new()
+        };
+        let bus = if self.bus_log.is_empty() {
+            String::new()
+        } else {
+            format!(" | bus: {}", self.bus_log.join(", "))
+        };
+        self.bus_log.clear();
+        self.history.push_back(format!(
+            "cycle {:>5} t={:>9.3} ms  out[tx={otx} rx={orx} n={on}]  in[tx={itx} rx={irx} n={inn}{tn}]{bus}",
+            self.cycle,
+            self.now as f64 / 1e6
+        ));
+        if self.history.len() > CONTEXT_CYCLES {
+            self.history.pop_front();
+        }
+    }
+}
+
+/// Runs one scenario against an IUT beside the model.
+pub fn run_scenario(
+    kind: &IutKind,
+    caps: &Capabilities,
+    scenario: &Scenario,
+    steps: impl Iterator<Item = Step>,
+) -> ScenarioRun {
+    let run = |outcome, cycles, frames| ScenarioRun {
+        scenario: scenario.name.clone(),
+        covers: scenario.covers.clone(),
+        outcome,
+        cycles,
+        frames_checked: frames,
+    };
+    let model = match Device::new(caps, scenario.interface.clone()) {
+        Ok(model) => model,
+        Err(e) => {
+            return run(
+                Outcome::Error(format!(
+                    "the model refuses the scenario's configuration: {e}"
+                )),
+                0,
+                0,
+            )
+        }
+    };
+    let iut = match kind.build(caps, &scenario.interface) {
+        Ok(iut) => iut,
+        Err(e) => {
+            return run(
+                Outcome::Error(format!(
+                    "the IUT refuses a configuration the profile allows: {e}"
+                )),
+                0,
+                0,
+            )
+        }
+    };
+    let layout = model.layout();
+    let mut plc = PlcClient::new(layout);
+    let mut exchange = ProcessDataExchange::new(scenario.exchange, model.inputs());
+    let mut state = Lockstep {
+        scenario,
+        iut,
+        model,
+        layout,
+        nodes: Nodes::default(),
+        on_bus: None,
+        iut_pending: None,
+        now: 0,
+        cycle: 0,
+        frames: 0,
+        history: VecDeque::new(),
+        bus_log: Vec::new(),
+        recent_rx: VecDeque::new(),
+    };
+    let mut outputs = plc.outputs().to_vec();
+    let mut increment_at: Option<(u64, u16)> = None;
+    for (k, step) in steps.enumerate() {
+        let k = k as u64;
+        let t = k * scenario.cycle_time;
+        if let Err(outcome) = state.run_bus(t) {
+            return run(outcome, k, state.frames);
+        }
+        state.cycle = k;
+        for message in step.send {
+            if plc.send(message).is_err() {
+                return run(
+                    Outcome::Error(format!(
+                        "scenario bug: a message that does not fit {}",
+                        layout.tx_message.name
+                    )),
+                    k,
+                    state.frames,
+                );
+            }
+        }
+        if let Some(status) = step.status {
+            state.iut.controller_status(&status);
+            state.model.handle_controller_status(status);
+        }
+        if !step.plc_busy {
+            let seen_tx = InputImage::new_checked(exchange.plc_inputs(), layout)
+                .map_or(0, |i| i.tx_counter());
+            if let Some((since, counter)) = increment_at {
+                if seen_tx == counter {
+                    let delay = k - since;
+                    let wanted = u64::from(scenario.exchange.confirmation_cycles());
+                    if scenario.check_confirmation_delay && delay != wanted {
+                        let difference = Difference {
+                            candidates: blame::CONFIRMATION,
+                            what: "cycles until the PLC sees TxCounter confirmed".into(),
+                            expected: wanted.to_string(),
+                            actual: delay.to_string(),
+                        };
+                        return run(state.fail(difference), k, state.frames);
+                    }
+                    increment_at = None;
+                }
+            }
+            match plc.task(exchange.plc_inputs()) {
+                Ok(o) => outputs = o.to_vec(),
+                Err(e) => {
+                    return run(
+                        Outcome::Error(format!("the PLC cannot read the IUT's input image: {e}")),
+                        k,
+                        state.frames,
+                    )
+                }
+            }
+            if !scenario.declared_lengths.is_empty() {
+                declare_lengths(&layout, &scenario.declared_lengths, plc.outputs_mut());
+                outputs = plc.outputs().to_vec();
+            }
+            if let Some(counter) = step.set_tx_counter {
+                plc.outputs_mut()[..2].copy_from_slice(&counter.to_le_bytes());
+                outputs[..2].copy_from_slice(&counter.to_le_bytes());
+            }
+            let written = u16::from_le_bytes([outputs[0], outputs[1]]);
+            if increment_at.is_none() && written != seen_tx {
+                increment_at = Some((k, written));
+            }
+        }
+        let expected = match state.model.cycle(&outputs, t) {
+            Ok(inputs) => inputs.to_vec(),
+            Err(e) => return run(Outcome::Error(format!("harness bug: {e}")), k, state.frames),
+        };
+        let actual = match state.iut.cycle(&outputs, t) {
+            Ok(inputs) => inputs,
+            Err(e) => {
+                return run(
+                    Outcome::Error(format!("the IUT rejected the output image: {}", e.0)),
+                    k,
+                    state.frames,
+                )
+            }
+        };
+        state.remember(&outputs, &actual);
+        let recent = &state.recent_rx;
+        if let Some(difference) =
+            compare_inputs(&layout, &expected, &actual, |f| recent.contains(f))
+        {
+            return run(state.fail(difference), k, state.frames);
+        }
+        if actual.len() != layout.input_size() {
+            return run(
+                Outcome::Error("input image of the wrong size".into()),
+                k,
+                state.frames,
+            );
+        }
+        exchange.device_cycle_done(&actual);
+        for (offset, frame) in step.bus {
+            state.nodes.schedule(t + offset, frame);
+        }
+    }
+    let cycles = state.cycle + 1;
+    run(Outcome::Pass, cycles, state.frames)
+}
+
+/// Rewrites the dataLength of FD Tx messages to the length the PLC means (not a
+/// valid size) and fills the bytes past it with junk the device must not send.
+fn declare_lengths(layout: &ImageLayout, lengths: &[(u16, u8)], outputs: &mut [u8]) {
+    let message = layout.tx_message;
+    let (Some(tn), LengthField::Byte(length)) =
+        (message.transaction_number.clone(), &message.length)
+    else {
+        return;
+    };
+    for slot in 0..layout.tx_slots {
+        let at = layout.tx_slot(slot).start;
+        let number = u16::from_le_bytes([outputs[at + tn.start], outputs[at + tn.start + 1]]);
+        let Some(&(_, declared)) = lengths.iter().find(|(n, _)| *n == number) else {
+            continue;
+        };
+        let current = outputs[at + length.start];
+        if current == declared {
+            continue;
+        }
+        outputs[at + length.start] = declared;
+        let data = at + message.data.start;
+        for byte in
+            &mut outputs[data + usize::from(declared)..data + usize::from(current.max(declared))]
+        {
+            *byte = 0xEE;
+        }
+    }
+}
+
+/// The interface configuration a scenario needs, checked against the profile.
+pub fn allowed(caps: &Capabilities, config: &InterfaceConfig) -> bool {
+    config.validate(caps).is_ok()
+}

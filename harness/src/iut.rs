@@ -1,0 +1,249 @@
+//! The implementation under test, as the harness sees it: a process-image side
+//! (one exchange per cycle) and a CAN-controller side (received frames in,
+//! transmissions out, one at a time, completions back).
+
+use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig, QueueMode, Synchronization};
+use canif_model::device::Device;
+use canif_model::filter::{FilterAction, FilterMatch};
+use canif_model::frame::{CanId, Frame};
+use canif_model::info_data::ControllerStatus;
+use canif_model::Nanos;
+use canif_softdevice::{CanFrame, Fault, FilterRule, Format, Offer, Queue, Settings, SoftDevice};
+
+/// A frame an IUT put on the bus that is no valid CAN frame (e.g. 36 FD bytes).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct InvalidFrame(pub String);
+
+/// Something went wrong with the IUT itself (not a non-conformance).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct IutError(pub String);
+
+/// What the harness needs from an implementation under test.
+pub trait Iut {
+    /// One CAN interface cycle with this output image at `now`; the new input image.
+    fn cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError>;
+    /// The controller received `frame`, whose last bit ended at `end_of_reception`.
+    fn receive(&mut self, frame: &Frame, end_of_reception: Nanos);
+    /// The next frame the controller starts sending at `now`, if any.
+    fn poll_transmit(&mut self, now: Nanos) -> Option<Result<Frame, InvalidFrame>>;
+    /// When a held frame (Distributed Clocks) becomes due.
+    fn poll_timeout(&self) -> Option<Nanos>;
+    /// The frame it started is on the bus.
+    fn transmit_complete(&mut self);
+    /// The controller's status and counters changed.
+    fn controller_status(&mut self, status: &ControllerStatus);
+}
+
+/// Which implementation to run.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum IutKind {
+    SoftDevice { faults: Vec<Fault> },
+    Model,
+}
+
+impl IutKind {
+    /// Builds the IUT for a configuration; `Err` when it refuses the configuration.
+    pub fn build(
+        &self,
+        caps: &Capabilities,
+        config: &InterfaceConfig,
+    ) -> Result<Box<dyn Iut>, String> {
+        match self {
+            IutKind::Model => Ok(Box::new(ModelIut(
+                Device::new(caps, config.clone()).map_err(|e| e.to_string())?,
+            ))),
+            IutKind::SoftDevice { faults } => {
+                let mut device =
+                    SoftDevice::new(soft_settings(caps, config)).map_err(|e| e.to_string())?;
+                for fault in faults {
+                    device.inject(*fault);
+                }
+                Ok(Box::new(SoftDeviceIut(device)))
+            }
+        }
+    }
+
+    pub fn name(&self) -> String {
+        match self {
+            IutKind::Model => "model".into(),
+            IutKind::SoftDevice { faults } if faults.is_empty() => "softdevice".into(),
+            IutKind::SoftDevice { faults } => {
+                format!(
+                    "softdevice+{}",
+                    faults
+                        .iter()
+                        .map(|f| f.name())
+                        .collect::<Vec<_>>()
+                        .join("+")
+                )
+            }
+        }
+    }
+}
+
+/// The reference model as an IUT: it conforms by definition; useful to check the harness.
+pub struct ModelIut(pub Device);
+
+impl Iut for ModelIut {
+    fn cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError> {
+        self.0
+            .cycle(outputs, now)
+            .map(<[u8]>::to_vec)
+            .map_err(|e| IutError(e.to_string()))
+    }
+    fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) {
+        self.0.handle_received(*frame, end_of_reception);
+    }
+    fn poll_transmit(&mut self, now: Nanos) -> Option<Result<Frame, InvalidFrame>> {
+        self.0.poll_transmit(now).map(Ok)
+    }
+    fn poll_timeout(&self) -> Option<Nanos> {
+        self.0.poll_timeout()
+    }
+    fn transmit_complete(&mut self) {
+        self.0.handle_transmit_complete();
+    }
+    fn controller_status(&mut self, status: &ControllerStatus) {
+        self.0.handle_controller_status(*status);
+    }
+}
+
+/// The soft device behind the IUT interface; frames are translated here, so the
+/// soft device itself never sees a model type.
+pub struct SoftDeviceIut(pub SoftDevice);
+
+impl Iut for SoftDeviceIut {
+    fn cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError> {
+        self.0
+            .sync_manager_event(outputs, now)
+            .map(<[u8]>::to_vec)
+            .map_err(|e| IutError(e.to_string()))
+    }
+    fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) {
+        self.0.rx_interrupt(to_soft(frame), end_of_reception);
+    }
+    fn poll_transmit(&mut self, now: Nanos) -> Option<Result<Frame, InvalidFrame>> {
+        self.0.controller_idle(now).map(|f| from_soft(&f))
+    }
+    fn poll_timeout(&self) -> Option<Nanos> {
+        self.0.next_release()
+    }
+    fn transmit_complete(&mut self) {
+        self.0.tx_done_interrupt();
+    }
+    fn controller_status(&mut self, status: &ControllerStatus) {
+        self.0.set_controller_word(0, status.status_word());
+        self.0.set_controller_word(3, status.transceiver_delay);
+        for (index, value) in [
+            (7, status.ack_errors),
+            (8, status.bit_errors),
+            (9, status.crc_errors),
+            (10, status.form_errors),
+            (11, u32::from(status.core_running)),
+            (12, status.stuff_errors),
+            (13, status.receive_error_counter),
+            (14, status.transmit_error_counter),
+        ] {
+            self.0.set_controller_word(index, value);
+        }
+    }
+}
+
+fn to_soft(frame: &Frame) -> CanFrame {
+    let mut soft = CanFrame {
+        id: frame.id.raw(),
+        extended: frame.id.is_extended(),
+        len: usize::from(frame.len()),
+        ..CanFrame::default()
+    };
+    match frame.kind {
+        canif_model::frame::FrameKind::Classic { rtr } => soft.remote = rtr,
+        canif_model::frame::FrameKind::Fd { brs, esi } => {
+            soft.fd = true;
+            soft.brs = brs;
+            soft.esi = esi;
+        }
+    }
+    soft.data[..frame.data().len()].copy_from_slice(frame.data());
+    soft
+}
+
+fn from_soft(soft: &CanFrame) -> Result<Frame, InvalidFrame> {
+    let id = if soft.extended {
+        CanId::extended(soft.id)
+    } else {
+        CanId::standard(soft.id)
+    };
+    let id = id.ok_or_else(|| InvalidFrame(format!("identifier 0x{:X} out of range", soft.id)))?;
+    let frame = if soft.fd {
+        Frame::fd(id, soft.brs, soft.esi, &soft.data[..soft.len.min(64)])
+    } else if soft.remote {
+        Frame::remote(id, soft.len as u8)
+    } else {
+        Frame::classic(id, &soft.data[..soft.len.min(64)])
+    };
+    frame.map_err(|e| {
+        InvalidFrame(format!(
+            "{e} ({} data bytes{})",
+            soft.len,
+            if soft.fd { ", FD" } else { "" }
+        ))
+    })
+}
+
+/// The soft device's settings for a model configuration and profile.
+pub fn soft_settings(caps: &Capabilities, config: &InterfaceConfig) -> Settings {
+    Settings {
+        offer: Offer {
+            std11: caps.base11,
+            ext29: caps.ext29,
+            fd: caps.fd,
+            fast: caps.fast_queue,
+            optimized: caps.optimized_queue,
+            transaction_number: caps.transaction_number,
+            transaction_number_29bit_only: caps.transaction_number_only_ext29,
+            time_stamp: caps.time_stamp,
+            filters: caps.filters,
+            info_data: caps.info_data,
+            distributed_clocks: caps.distributed_clocks,
+            max_slots: caps.max_slots,
+        },
+        format: match config.format {
+            FrameFormat::Base11 => Format::Std11,
+            FrameFormat::Extended29 => Format::Ext29,
+            FrameFormat::Fd => Format::Fd,
+        },
+        queue: match config.queue {
+            QueueMode::Standard => Queue::Buffered,
+            QueueMode::Optimized => Queue::Optimized,
+            QueueMode::Fast => Queue::Fast,
+        },
+        transaction_number: config.transaction_number,
+        time_stamp: config.time_stamp,
+        tx_slots: config.tx_slots,
+        rx_slots: config.rx_slots,
+        filters: config
+            .filters
+            .iter()
+            .map(|row| {
+                let accept = row.action == FilterAction::Accept;
+                match row.matches {
+                    FilterMatch::Range { from, to } => FilterRule::Range {
+                        accept,
+                        low: from,
+                        high: to,
+                    },
+                    FilterMatch::CodeMask { code, mask } => FilterRule::Mask { accept, code, mask },
+                }
+            })
+            .collect(),
+        dc_sync1_shift: match config.synchronization {
+            Synchronization::Sm2 => None,
+            Synchronization::DistributedClocks { sync1_shift } => Some(sync1_shift),
+        },
+        rx_fifo_depth: caps.rx_queue_depth,
+        tx_fifo_depth: caps.tx_queue_depth,
+        nominal_timing: config.nominal_timing.to_word().to_le_bytes(),
+        data_timing: config.data_timing.to_word().to_le_bytes(),
+    }
+}

@@ -1,0 +1,21 @@
+//! # canif-harness — judging an implementation against the model
+//!
+//! The harness owns the PLC side (the reference client of 001 §6 writes the
+//! output image and reads the input image, once per task cycle, with the LRW or
+//! separate-input-update timing) and the bus side (a simulated CAN bus in
+//! virtual time plays the other nodes). It runs the reference model beside the
+//! implementation under test on the same stimulus and reports the first
+//! difference of each scenario against the requirement ids it breaks.
+
+#![forbid(unsafe_code)]
+
+pub mod bus;
+pub mod check;
+pub mod iut;
+pub mod report;
+pub mod scenario;
+pub mod suite;
+
+pub use check::{Failure, Outcome, ScenarioRun};
+pub use iut::{Iut, IutKind};
+pub use suite::{run_profile, Options, ProfileRun, Verdict};

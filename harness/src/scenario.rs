@@ -1,0 +1,729 @@
+//! Stimulus: what the PLC does and what the other nodes send, cycle by cycle.
+//! Scripted scenarios target requirement families; generated ones mix
+//! everything from a seed. Steps are produced lazily, so a long run holds
+//! bounded memory.
+
+use canif_model::config::{FrameFormat, InterfaceConfig, QueueMode, Synchronization};
+use canif_model::dlc::FD_DATA_SIZES;
+use canif_model::exchange::ExchangeMode;
+use canif_model::filter::{manual_example, FilterRow};
+use canif_model::frame::{CanId, Frame};
+use canif_model::image::MessageRepr;
+use canif_model::info_data::ControllerStatus;
+use canif_model::timing::BitRates;
+use canif_model::Nanos;
+
+/// One PLC task cycle of stimulus.
+#[derive(Debug, Clone, Default)]
+pub struct Step {
+    /// Messages the PLC program queues before its task.
+    pub send: Vec<MessageRepr>,
+    /// The PLC skips its task (outputs stay as they were).
+    pub plc_busy: bool,
+    /// After its task the PLC writes this TxCounter (a jump: any change counts, G1).
+    pub set_tx_counter: Option<u16>,
+    /// Frames other nodes want to send, ready at this offset into the cycle.
+    pub bus: Vec<(Nanos, Frame)>,
+    pub status: Option<ControllerStatus>,
+}
+
+/// A small deterministic generator (xorshift64*), so a seed gives the same run byte for byte.
+#[derive(Debug, Clone)]
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
+    }
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    pub fn below(&mut self, n: u64) -> u64 {
+        if n == 0 {
+            0
+        } else {
+            self.next_u64() % n
+        }
+    }
+    pub fn chance(&mut self, percent: u64) -> bool {
+        self.below(100) < percent
+    }
+}
+
+/// How a scenario's steps come about.
+#[derive(Debug, Clone)]
+pub enum Steps {
+    Scripted(Vec<Step>),
+    /// Random PLC and bus behaviour for `cycles` cycles from `seed`, then a drain.
+    Generated {
+        cycles: u64,
+        seed: u64,
+        load_percent: u64,
+    },
+    /// One frame received and read every cycle, long enough for RxCounter to wrap.
+    RxWrap {
+        cycles: u64,
+    },
+}
+
+/// A scenario: an interface, the exchange and bus timing, and the stimulus.
+#[derive(Debug, Clone)]
+pub struct Scenario {
+    pub name: String,
+    /// The requirements it exercises; failures are attributed within these.
+    pub covers: Vec<String>,
+    pub interface: InterfaceConfig,
+    pub exchange: ExchangeMode,
+    pub bit_rates: BitRates,
+    pub cycle_time: Nanos,
+    pub check_confirmation_delay: bool,
+    /// FD Tx messages whose dataLength the PLC writes as this (not a valid
+    /// size), keyed by transaction number; the bytes past it hold junk.
+    pub declared_lengths: Vec<(u16, u8)>,
+    pub steps: Steps,
+}
+
+impl Scenario {
+    pub fn steps(&self) -> Box<dyn Iterator<Item = Step> + '_> {
+        match &self.steps {
+            Steps::Scripted(steps) => Box::new(steps.iter().cloned()),
+            Steps::Generated {
+                cycles,
+                seed,
+                load_percent,
+            } => {
+                let mut gen = Generator::new(self, *seed, *load_percent);
+                let cycles = *cycles;
+                Box::new((0..cycles + 200).map(move |k| {
+                    if k < cycles {
+                        gen.step()
+                    } else {
+                        Step::default()
+                    }
+                }))
+            }
+            Steps::RxWrap { cycles } => {
+                let offset = self.cycle_time / 2;
+                Box::new((0..*cycles).map(move |k| Step {
+                    bus: vec![(
+                        offset,
+                        Frame::classic(CanId::Standard((k % 0x7FF) as u16), &[k as u8]).unwrap(),
+                    )],
+                    ..Step::default()
+                }))
+            }
+        }
+    }
+}
+
+/// Ids every scenario on an interface of this shape exercises.
+fn layout_ids(config: &InterfaceConfig) -> Vec<&'static str> {
+    let mut ids = vec![
+        "LAY-GEN-001",
+        "LAY-GEN-002",
+        "LAY-GEN-003",
+        "LAY-GEN-004",
+        "LAY-GEN-007",
+        "PDX-003",
+        "PDX-002",
+    ];
+    match config.format {
+        FrameFormat::Base11 => ids.extend([
+            "LAY-11-001",
+            "LAY-11-002",
+            "LAY-11-003",
+            "LAY-11-004",
+            "LAY-GEN-005",
+        ]),
+        FrameFormat::Extended29 => ids.extend([
+            "LAY-29-001",
+            "LAY-29-002",
+            "LAY-29-003",
+            "LAY-29-004",
+            "LAY-29-005",
+        ]),
+        FrameFormat::Fd => ids.extend([
+            "LAY-FD-001",
+            "LAY-FD-002",
+            "FD-001",
+            "FD-BIT-001",
+            "FD-BIT-002",
+            "FD-BIT-003",
+            "FD-BIT-004",
+        ]),
+    }
+    if config.transaction_number || config.format == FrameFormat::Fd {
+        ids.extend(["LAY-GEN-006", "TN-001", "TN-002", "TN-003"]);
+    } else if config.format != FrameFormat::Fd {
+        ids.push("LAY-GEN-005");
+    }
+    if config.time_stamp {
+        ids.extend(["TS-001", "TS-003"]);
+    }
+    match config.queue {
+        QueueMode::Fast => ids.extend(["FQ-003"]),
+        QueueMode::Optimized => ids.extend(["BQ-001"]),
+        QueueMode::Standard => {}
+    }
+    ids
+}
+
+fn scenario(name: &str, config: &InterfaceConfig, covers: &[&str], steps: Steps) -> Scenario {
+    let mut ids: Vec<String> = layout_ids(config)
+        .into_iter()
+        .chain(covers.iter().copied())
+        .map(String::from)
+        .collect();
+    ids.sort();
+    ids.dedup();
+    let fd = config.format == FrameFormat::Fd;
+    Scenario {
+        name: name.to_string(),
+        covers: ids,
+        interface: config.clone(),
+        exchange: ExchangeMode::SeparateInputUpdate,
+        bit_rates: if fd {
+            BitRates {
+                nominal: 500_000,
+                data: 2_000_000,
+            }
+        } else {
+            BitRates::classic(500_000)
+        },
+        cycle_time: 1_000_000,
+        check_confirmation_delay: false,
+        declared_lengths: Vec::new(),
+        steps,
+    }
+}
+
+/// A message the interface can carry, from the generator.
+fn random_frame(rng: &mut Rng, format: FrameFormat) -> Frame {
+    let extended = format != FrameFormat::Base11 && rng.chance(50);
+    let id = if extended {
+        CanId::Extended(rng.below(0x2000_0000) as u32)
+    } else {
+        CanId::Standard(rng.below(0x800) as u16)
+    };
+    if format == FrameFormat::Fd && rng.chance(60) {
+        let size = usize::from(FD_DATA_SIZES[rng.below(16) as usize]);
+        let data: Vec<u8> = (0..size).map(|_| rng.next_u64() as u8).collect();
+        return Frame::fd(id, rng.chance(50), rng.chance(20), &data).unwrap();
+    }
+    if rng.chance(10) {
+        return Frame::remote(id, rng.below(9) as u8).unwrap();
+    }
+    let len = rng.below(9) as usize;
+    let data: Vec<u8> = (0..len).map(|_| rng.next_u64() as u8).collect();
+    Frame::classic(id, &data).unwrap()
+}
+
+struct Generator {
+    rng: Rng,
+    format: FrameFormat,
+    slots: u64,
+    cycle_time: Nanos,
+    load_percent: u64,
+    tn: u16,
+}
+
+impl Generator {
+    fn new(scenario: &Scenario, seed: u64, load_percent: u64) -> Self {
+        Generator {
+            rng: Rng::new(seed),
+            format: scenario.interface.format,
+            slots: u64::from(scenario.interface.tx_slots),
+            cycle_time: scenario.cycle_time,
+            load_percent,
+            tn: 0,
+        }
+    }
+
+    fn step(&mut self) -> Step {
+        let rng = &mut self.rng;
+        let mut step = Step {
+            plc_busy: rng.chance(15),
+            ..Step::default()
+        };
+        for _ in 0..rng.below(self.slots + 3) {
+            self.tn = self.tn.wrapping_add(1);
+            let frame = random_frame(rng, self.format);
+            step.send.push(MessageRepr {
+                transaction_number: self.tn,
+                frame,
+                time_stamp: 0,
+            });
+        }
+        // Up to the load: about one frame per 250 µs at 100 %.
+        let frames = rng.below(self.cycle_time / 250_000 * self.load_percent / 100 + 1);
+        for _ in 0..frames {
+            step.bus
+                .push((rng.below(self.cycle_time), random_frame(rng, self.format)));
+        }
+        step
+    }
+}
+
+fn message(frame: Frame, transaction_number: u16) -> MessageRepr {
+    MessageRepr {
+        transaction_number,
+        frame,
+        time_stamp: 0,
+    }
+}
+
+fn std(id: u16, data: &[u8]) -> Frame {
+    Frame::classic(CanId::Standard(id), data).unwrap()
+}
+
+fn idle(cycles: usize) -> Vec<Step> {
+    vec![Step::default(); cycles]
+}
+
+/// PLC batches of every size around the slot count, with transaction numbers.
+pub fn tx_batches(config: &InterfaceConfig, seed: u64) -> Scenario {
+    let mut rng = Rng::new(seed ^ 0x7458);
+    let slots = usize::from(config.tx_slots);
+    let mut tn = 0u16;
+    let mut steps = Vec::new();
+    for cycle in 0..40 {
+        let mut step = Step::default();
+        for _ in 0..(cycle % (slots + 3)) {
+            tn = tn.wrapping_add(1);
+            step.send
+                .push(message(random_frame(&mut rng, config.format), tn));
+        }
+        steps.push(step);
+    }
+    steps.extend(idle(60));
+    let covers = [
+        "HS-TX-001",
+        "HS-TX-002",
+        "HS-TX-004",
+        "HS-TX-006",
+        "HS-TX-007",
+        "HS-TX-009",
+        "HS-TX-011",
+        "ERR-R5",
+        "FD-LEN-001",
+        "FD-LEN-003",
+        "FD-LEN-004",
+        "FD-LEN-005",
+        "ERR-R1",
+    ];
+    scenario("tx-batches", config, &covers, Steps::Scripted(steps))
+}
+
+/// More to send than the bus carries: the send queue fills and acknowledges wait.
+pub fn tx_backpressure(config: &InterfaceConfig) -> Scenario {
+    let slots = usize::from(config.tx_slots);
+    let mut steps = Vec::new();
+    let mut seq = 0u16;
+    for _ in 0..30 {
+        let mut step = Step::default();
+        for _ in 0..slots {
+            seq = seq.wrapping_add(1);
+            step.send
+                .push(message(std(seq & 0x7FF, &seq.to_le_bytes().repeat(4)), seq));
+        }
+        steps.push(step);
+    }
+    steps.extend(idle(400));
+    let mut scenario = scenario(
+        "tx-backpressure",
+        config,
+        &["HS-TX-006", "HS-TX-008", "HS-TX-007"],
+        Steps::Scripted(steps),
+    );
+    scenario.bit_rates = BitRates {
+        nominal: 125_000,
+        data: scenario.bit_rates.data.min(2_000_000),
+    };
+    scenario
+}
+
+/// The PLC jumps its TxCounter to 0xFFFE, then counts on across the wrap.
+pub fn tx_counter_jump(config: &InterfaceConfig) -> Scenario {
+    let mut steps = Vec::new();
+    for i in 0..8u16 {
+        let mut step = Step {
+            send: vec![message(std(0x100 + i, &[i as u8]), i)],
+            ..Step::default()
+        };
+        if i == 0 {
+            step.set_tx_counter = Some(0xFFFE);
+        }
+        steps.push(step);
+        steps.push(Step::default());
+    }
+    steps.extend(idle(10));
+    scenario(
+        "tx-counter-jump",
+        config,
+        &["HS-TX-003", "HS-TX-005"],
+        Steps::Scripted(steps),
+    )
+}
+
+/// Confirmation delay with an LRW telegram (two cycles).
+pub fn lrw_exchange(config: &InterfaceConfig) -> Scenario {
+    let mut scenario = tx_batches(config, 7);
+    scenario.name = "lrw-exchange".into();
+    scenario.exchange = ExchangeMode::Lrw;
+    scenario.check_confirmation_delay = true;
+    scenario.covers.push("PDX-001".into());
+    scenario.covers.retain(|id| id != "PDX-002");
+    scenario
+}
+
+/// Separate input update: the confirmation comes one cycle later.
+pub fn separate_input_update(config: &InterfaceConfig) -> Scenario {
+    let mut scenario = tx_batches(config, 8);
+    scenario.name = "separate-input-update".into();
+    scenario.check_confirmation_delay = true;
+    scenario
+}
+
+/// Frames from other nodes; the PLC is busy now and then.
+pub fn rx_handshake(config: &InterfaceConfig, seed: u64) -> Scenario {
+    let mut rng = Rng::new(seed ^ 0x5278);
+    let slots = u64::from(config.rx_slots);
+    let mut steps = Vec::new();
+    for cycle in 0..50u64 {
+        let mut step = Step {
+            plc_busy: cycle % 7 == 3 || cycle % 11 == 5,
+            ..Step::default()
+        };
+        for _ in 0..rng.below(2 * slots + 1).min(3) {
+            let mut frame = random_frame(&mut rng, config.format);
+            if config.format == FrameFormat::Base11 && rng.chance(10) {
+                frame = Frame::classic(CanId::Extended(0x1234_5678), &[1]).unwrap();
+                // RXQ-005
+            }
+            step.bus.push((rng.below(800_000), frame));
+        }
+        steps.push(step);
+    }
+    steps.extend(idle(30));
+    let covers = [
+        "HS-RX-001",
+        "HS-RX-002",
+        "HS-RX-003",
+        "HS-RX-004",
+        "HS-RX-006",
+        "HS-RX-007",
+        "BQ-002",
+        "RXQ-005",
+        "FQ-001",
+        "FQ-002",
+        "FD-LEN-005",
+    ];
+    scenario("rx-handshake", config, &covers, Steps::Scripted(steps))
+}
+
+/// The PLC stops reading while the bus is full: the local queue overflows.
+pub fn rx_overflow(config: &InterfaceConfig) -> Scenario {
+    let mut steps = Vec::new();
+    let mut seq = 0u32;
+    for cycle in 0..100u64 {
+        let mut step = Step {
+            plc_busy: cycle < 40,
+            ..Step::default()
+        };
+        if cycle < 40 {
+            for i in 0..25u64 {
+                seq += 1;
+                step.bus.push((i * 40_000, std((seq % 0x7FF) as u16, &[])));
+            }
+        }
+        steps.push(step);
+    }
+    let mut scenario = scenario(
+        "rx-overflow",
+        config,
+        &["RXQ-003", "RXQ-004", "RXQ-006", "HS-RX-007", "FQ-004"],
+        Steps::Scripted(steps),
+    );
+    scenario.bit_rates = BitRates {
+        nominal: 1_000_000,
+        data: 2_000_000,
+    };
+    scenario
+}
+
+/// 65,540 deliveries: RxCounter passes 0xFFFF → 0.
+pub fn rx_wrap(config: &InterfaceConfig) -> Scenario {
+    scenario(
+        "rx-counter-wrap",
+        config,
+        &["HS-RX-005", "HS-TX-005"],
+        Steps::RxWrap { cycles: 65_540 },
+    )
+}
+
+/// Remote frames both ways.
+pub fn remote_frames(config: &InterfaceConfig) -> Scenario {
+    let ext = config.format != FrameFormat::Base11;
+    let mut steps = Vec::new();
+    for len in 0..=8u8 {
+        let id = if ext && len % 2 == 1 {
+            CanId::Extended(0x0ABC_0000 | u32::from(len))
+        } else {
+            CanId::Standard(0x700 + u16::from(len))
+        };
+        let frame = Frame::remote(id, len).unwrap();
+        steps.push(Step {
+            send: vec![message(frame, u16::from(len))],
+            bus: vec![(100_000, frame)],
+            ..Step::default()
+        });
+    }
+    steps.extend(idle(10));
+    scenario(
+        "remote-frames",
+        config,
+        &["LAY-11-003", "LAY-29-004", "GRD-001"],
+        Steps::Scripted(steps),
+    )
+}
+
+/// Filters: first match, default by kind, and 001 §7's table.
+pub fn filters(config: &InterfaceConfig, table: Vec<FilterRow>, name: &str) -> Scenario {
+    let mut config = config.clone();
+    config.filters = table;
+    let ids: [u32; 14] = [
+        0x000,
+        0x0FF,
+        0x100,
+        0x150,
+        0x1FF,
+        0x200,
+        0x3FF,
+        0x400,
+        0x450,
+        0x4FF,
+        0x700,
+        0x701,
+        0x900,
+        0x1FFF_FFFF,
+    ];
+    let mut steps = Vec::new();
+    for (i, id) in ids.iter().enumerate() {
+        let id = if *id > 0x7FF || (config.format != FrameFormat::Base11 && i % 2 == 1) {
+            CanId::Extended(*id)
+        } else {
+            CanId::Standard(*id as u16)
+        };
+        if config.format == FrameFormat::Base11 && id.is_extended() {
+            continue;
+        }
+        steps.push(Step {
+            bus: vec![(50_000, Frame::classic(id, &[i as u8]).unwrap())],
+            ..Step::default()
+        });
+    }
+    steps.extend(idle(10));
+    let covers = [
+        "FLT-001", "FLT-002", "FLT-003", "FLT-004", "FLT-005", "FLT-006", "FLT-007", "FLT-009",
+    ];
+    scenario(name, &config, &covers, Steps::Scripted(steps))
+}
+
+/// A table where first-match and last-match disagree.
+pub fn first_match_table() -> Vec<FilterRow> {
+    vec![
+        FilterRow::accept_range(0x100, 0x1FF),
+        FilterRow::reject_range(0x000, 0x7FF),
+        FilterRow::accept_code_mask(0x400, 0x700),
+    ]
+}
+
+pub fn manual_table() -> Vec<FilterRow> {
+    manual_example().to_vec()
+}
+
+/// CAN FD: every Tx length 0..=64, every Rx size, with BRS and ESI.
+pub fn fd_lengths(config: &InterfaceConfig) -> Scenario {
+    let mut steps = Vec::new();
+    for len in 0..=64u8 {
+        let data: Vec<u8> = (0..len).map(|i| i ^ 0x5A).collect();
+        let size = canif_model::dlc::fd_round_up(len).unwrap();
+        let mut padded = data.clone();
+        padded.resize(usize::from(size), 0);
+        let id = if len % 3 == 0 {
+            CanId::Extended(0x1000 + u32::from(len))
+        } else {
+            CanId::Standard(u16::from(len))
+        };
+        let tx = Frame::fd(id, len % 2 == 0, len % 5 == 0, &padded).unwrap();
+        let mut step = Step {
+            send: vec![message(tx, u16::from(len) + 1)],
+            ..Step::default()
+        };
+        if let Some(&rx_size) = FD_DATA_SIZES.get(usize::from(len % 16)) {
+            let rx_data: Vec<u8> = (0..rx_size).map(|i| i.wrapping_mul(7)).collect();
+            step.bus.push((
+                300_000,
+                Frame::fd(
+                    CanId::Standard(0x300 + u16::from(len)),
+                    len % 2 == 1,
+                    len % 4 == 0,
+                    &rx_data,
+                )
+                .unwrap(),
+            ));
+        }
+        steps.push(step);
+    }
+    steps.extend(idle(20));
+    let covers = [
+        "FD-LEN-001",
+        "FD-LEN-003",
+        "FD-LEN-004",
+        "FD-LEN-005",
+        "ERR-R1",
+        "FD-LEN-002",
+        "TS-001",
+    ];
+    let mut scenario = scenario("fd-lengths", config, &covers, Steps::Scripted(steps));
+    // The PLC gives the real byte count (000 §8.3.1); the device rounds up.
+    scenario.declared_lengths = (0..=64u8).map(|len| (u16::from(len) + 1, len)).collect();
+    scenario
+}
+
+/// InfoData: controller status changes while frames wait in the receive FIFO.
+pub fn info_data(config: &InterfaceConfig) -> Scenario {
+    let mut steps = Vec::new();
+    for cycle in 0..30u32 {
+        let status = ControllerStatus {
+            bus_off: cycle % 10 == 9,
+            error_passive: cycle % 4 == 1,
+            node_active: cycle % 10 != 9,
+            warning_limit: cycle % 3 == 0,
+            overload: cycle % 7 == 0,
+            bus_idle: cycle % 2 == 0,
+            transceiver_delay: cycle,
+            ack_errors: cycle,
+            bit_errors: cycle * 2,
+            crc_errors: cycle * 3,
+            form_errors: cycle * 4,
+            stuff_errors: cycle * 5,
+            receive_error_counter: cycle % 128,
+            transmit_error_counter: (cycle * 9) % 256,
+            core_running: cycle % 10 != 9,
+        };
+        let bus = (0..3u16)
+            .map(|i| (u64::from(i) * 200_000, std(0x400 + i, &[cycle as u8])))
+            .collect();
+        let send = if cycle % 3 == 0 {
+            vec![message(std(0x10, &[1, 2, 3]), cycle as u16)]
+        } else {
+            Vec::new()
+        };
+        steps.push(Step {
+            status: Some(status),
+            bus,
+            send,
+            plc_busy: cycle % 5 < 3,
+            ..Step::default()
+        });
+    }
+    steps.extend(idle(20));
+    let covers = [
+        "INFO-001", "INFO-002", "INFO-003", "INFO-004", "INFO-005", "INFO-006", "INFO-007",
+        "INFO-008",
+    ];
+    scenario("info-data", config, &covers, Steps::Scripted(steps))
+}
+
+/// Fast CAN Queue: bursts past the slot count, the PLC sometimes late.
+pub fn fast_queue(config: &InterfaceConfig) -> Scenario {
+    let slots = u64::from(config.rx_slots);
+    let mut steps = Vec::new();
+    for cycle in 0..40u64 {
+        let burst = (cycle % (2 * slots + 2)).min(18);
+        let bus = (0..burst)
+            .map(|i| (i * 50_000, std(((cycle * 32 + i) % 0x7FF) as u16, &[])))
+            .collect();
+        steps.push(Step {
+            bus,
+            plc_busy: cycle % 6 == 2,
+            ..Step::default()
+        });
+    }
+    steps.extend(idle(10));
+    let mut scenario = scenario(
+        "fast-queue",
+        config,
+        &["FQ-001", "FQ-002", "FQ-004", "HS-RX-002", "HS-RX-007"],
+        Steps::Scripted(steps),
+    );
+    scenario.bit_rates = BitRates::classic(1_000_000);
+    scenario
+}
+
+/// Distributed Clocks: the first Tx message of each batch waits for SYNC1.
+pub fn distributed_clocks(config: &InterfaceConfig) -> Scenario {
+    let mut config = config.clone();
+    config.synchronization = Synchronization::DistributedClocks {
+        sync1_shift: 300_000,
+    };
+    let mut steps = Vec::new();
+    for cycle in 0..20u16 {
+        let send = (0..(cycle % 4))
+            .map(|i| message(std(0x200 + i, &[cycle as u8]), 0))
+            .collect();
+        steps.push(Step {
+            send,
+            ..Step::default()
+        });
+    }
+    steps.extend(idle(10));
+    scenario(
+        "distributed-clocks",
+        &config,
+        &["PDX-004", "PDX-005"],
+        Steps::Scripted(steps),
+    )
+}
+
+/// Random PLC behaviour and bus load from a seed.
+pub fn generated(config: &InterfaceConfig, seed: u64, cycles: u64, load_percent: u64) -> Scenario {
+    let covers = [
+        "HS-TX-001",
+        "HS-TX-002",
+        "HS-TX-004",
+        "HS-TX-006",
+        "HS-TX-007",
+        "HS-TX-008",
+        "HS-TX-009",
+        "HS-TX-011",
+        "HS-RX-001",
+        "HS-RX-002",
+        "HS-RX-003",
+        "HS-RX-004",
+        "HS-RX-006",
+        "HS-RX-007",
+        "BQ-002",
+        "FQ-001",
+        "FQ-002",
+        "FQ-004",
+        "RXQ-003",
+        "RXQ-004",
+        "FD-LEN-003",
+        "FD-LEN-005",
+    ];
+    scenario(
+        &format!("generated-{seed}"),
+        config,
+        &covers,
+        Steps::Generated {
+            cycles,
+            seed,
+            load_percent,
+        },
+    )
+}

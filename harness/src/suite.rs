@@ -1,0 +1,433 @@
+//! One profile's conformance run: the interfaces it offers, the scenarios on
+//! each, the configurations it must refuse, and a verdict per requirement.
+
+use std::collections::BTreeMap;
+
+use canif_model::config::{
+    Capabilities, ConfigError, FrameFormat, InterfaceConfig, QueueMode, Synchronization,
+};
+use canif_model::filter::FilterRow;
+use canif_spec::{Catalogue, Profile, Verification};
+
+use crate::check::{run_scenario, Failure, Outcome, ScenarioRun};
+use crate::iut::IutKind;
+use crate::scenario::{self, Scenario};
+
+/// What to run.
+#[derive(Debug, Clone)]
+pub struct Options {
+    pub seed: u64,
+    /// Generated scenarios per interface.
+    pub cases: u64,
+    /// Cycles of each generated scenario.
+    pub generated_cycles: u64,
+    /// Include the 65,540-cycle RxCounter wrap.
+    pub counter_wrap: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            seed: 1,
+            cases: 4,
+            generated_cycles: 200,
+            counter_wrap: true,
+        }
+    }
+}
+
+/// A requirement's verdict on one profile.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Verdict {
+    Pass,
+    /// Indexes into [`ProfileRun::failures`].
+    Fail(Vec<usize>),
+    Error(String),
+    /// The profile lacks a capability the requirement needs.
+    NotApplicable(String),
+    /// Nothing in a run against an IUT checks it (the model's tests do, or inspection).
+    NotTestable(String),
+}
+
+impl Verdict {
+    pub fn label(&self) -> &'static str {
+        match self {
+            Verdict::Pass => "pass",
+            Verdict::Fail(_) => "fail",
+            Verdict::Error(_) => "error",
+            Verdict::NotApplicable(_) => "not applicable",
+            Verdict::NotTestable(_) => "not testable",
+        }
+    }
+}
+
+/// Everything one profile's run produced.
+#[derive(Debug, Clone)]
+pub struct ProfileRun {
+    pub profile: String,
+    pub runs: Vec<ScenarioRun>,
+    pub failures: Vec<Failure>,
+    pub verdicts: BTreeMap<String, Verdict>,
+}
+
+impl ProfileRun {
+    pub fn frames_checked(&self) -> u64 {
+        self.runs.iter().map(|r| r.frames_checked).sum()
+    }
+    pub fn cycles(&self) -> u64 {
+        self.runs.iter().map(|r| r.cycles).sum()
+    }
+}
+
+fn interface(format: FrameFormat, queue: QueueMode, caps: &Capabilities) -> InterfaceConfig {
+    let mut config = InterfaceConfig::new(format, 8.min(caps.max_slots));
+    config.queue = queue;
+    let tn_allowed = caps.transaction_number
+        && queue == QueueMode::Standard
+        && !(caps.transaction_number_only_ext29 && format == FrameFormat::Base11);
+    config.transaction_number = format == FrameFormat::Fd || tn_allowed;
+    config.time_stamp = format == FrameFormat::Fd
+        || (config.transaction_number && caps.time_stamp && format == FrameFormat::Extended29);
+    config
+}
+
+/// The scenarios for a profile: each interface it offers with what fits it.
+pub fn scenarios(caps: &Capabilities, options: &Options) -> Vec<Scenario> {
+    let mut list = Vec::new();
+    let seed = options.seed;
+    let generated = |list: &mut Vec<Scenario>, config: &InterfaceConfig, salt: u64| {
+        for case in 0..options.cases {
+            list.push(scenario::generated(
+                config,
+                seed.wrapping_mul(1_000).wrapping_add(salt * 100 + case),
+                options.generated_cycles,
+                100,
+            ));
+        }
+    };
+    let classic = if caps.base11 {
+        Some(FrameFormat::Base11)
+    } else if caps.ext29 {
+        Some(FrameFormat::Extended29)
+    } else {
+        None
+    };
+    if let Some(format) = classic {
+        let config = interface(format, QueueMode::Standard, caps);
+        list.extend([
+            scenario::tx_batches(&config, seed),
+            scenario::tx_backpressure(&config),
+            scenario::tx_counter_jump(&config),
+            scenario::separate_input_update(&config),
+            scenario::lrw_exchange(&config),
+            scenario::rx_handshake(&config, seed),
+            scenario::rx_overflow(&config),
+            scenario::remote_frames(&config),
+        ]);
+        if options.counter_wrap {
+            list.push(scenario::rx_wrap(&config));
+        }
+        generated(&mut list, &config, 1);
+    }
+    if caps.ext29 && classic != Some(FrameFormat::Extended29) {
+        let config = interface(FrameFormat::Extended29, QueueMode::Standard, caps);
+        list.extend([
+            scenario::tx_batches(&config, seed + 1),
+            scenario::rx_handshake(&config, seed + 1),
+            scenario::remote_frames(&config),
+        ]);
+        generated(&mut list, &config, 2);
+    }
+    if caps.filters {
+        let format = if caps.ext29 {
+            FrameFormat::Extended29
+        } else {
+            FrameFormat::Base11
+        };
+        let config = interface(format, QueueMode::Standard, caps);
+        list.push(scenario::filters(
+            &config,
+            scenario::first_match_table(),
+            "filters-first-match",
+        ));
+        list.push(scenario::filters(
+            &config,
+            Vec::<FilterRow>::new(),
+            "filters-none",
+        ));
+        if caps.ext29 {
+            list.push(scenario::filters(
+                &config,
+                scenario::manual_table(),
+                "filters-manual-example",
+            ));
+        }
+    }
+    if caps.fd {
+        let config = interface(FrameFormat::Fd, QueueMode::Standard, caps);
+        list.extend([
+            scenario::tx_batches(&config, seed + 2),
+            scenario::fd_lengths(&config),
+            scenario::rx_handshake(&config, seed + 2),
+        ]);
+        if caps.info_data {
+            list.push(scenario::info_data(&config));
+        }
+        generated(&mut list, &config, 3);
+    }
+    if caps.optimized_queue {
+        let config = interface(FrameFormat::Base11, QueueMode::Optimized, caps);
+        list.extend([
+            scenario::tx_batches(&config, seed + 3),
+            scenario::rx_handshake(&config, seed + 3),
+            scenario::rx_overflow(&config),
+        ]);
+        generated(&mut list, &config, 4);
+    }
+    if caps.fast_queue {
+        let config = interface(FrameFormat::Base11, QueueMode::Fast, caps);
+        list.extend([
+            scenario::tx_batches(&config, seed + 4),
+            scenario::fast_queue(&config),
+        ]);
+        if caps.distributed_clocks {
+            list.push(scenario::distributed_clocks(&config));
+        }
+        generated(&mut list, &config, 5);
+    }
+    for scenario in &mut list {
+        scenario.name = format!("{} [{}]", scenario.name, describe(&scenario.interface));
+    }
+    list
+}
+
+/// A short name for an interface configuration.
+pub fn describe(config: &InterfaceConfig) -> String {
+    let mut parts = vec![match config.format {
+        FrameFormat::Base11 => "11-bit",
+        FrameFormat::Extended29 => "29-bit",
+        FrameFormat::Fd => "FD",
+    }
+    .to_string()];
+    match config.queue {
+        QueueMode::Standard => {}
+        QueueMode::Optimized => parts.push("optimized".into()),
+        QueueMode::Fast => parts.push("fast".into()),
+    }
+    if config.transaction_number && config.format != FrameFormat::Fd {
+        parts.push("TN".into());
+    }
+    if config.time_stamp && config.format != FrameFormat::Fd {
+        parts.push("TS".into());
+    }
+    if !config.filters.is_empty() {
+        parts.push("filters".into());
+    }
+    if let Synchronization::DistributedClocks { .. } = config.synchronization {
+        parts.push("DC".into());
+    }
+    parts.join(", ")
+}
+
+fn refusal_ids(error: &ConfigError) -> &'static [&'static str] {
+    use ConfigError::*;
+    match error {
+        FormatNotOffered(_) => &["PROF-002", "PROF-006", "PROF-007", "PROF-009"],
+        QueueModeNotOffered(_) => &["PROF-002"],
+        QueueModeNeedsBase11(_) => &["BQ-003", "PROF-003"],
+        QueueModeWithoutTransactionNumber(_) => &["BQ-005", "PROF-003"],
+        FiltersNotAllowed(_) => &["BQ-004"],
+        FiltersNotOffered => &["PROF-002"],
+        InvalidFilter { .. } => &["FLT-010"],
+        TransactionNumberNotOffered => &["PROF-002", "PROF-008"],
+        TransactionNumberOnlyExt29 => &["PROF-005", "TN-004"],
+        TimeStampNotOffered => &["PROF-004", "PROF-008"],
+        TimeStampNeedsExt29WithTransactionNumber => &["PROF-004", "TS-002"],
+        FdStructuresCarryTransactionNumberAndTimeStamp => &["LAY-FD-001"],
+        SlotCount { .. } => &["PROF-011", "LAY-GEN-007"],
+        DistributedClocksNotOffered | DistributedClocksNeedsFastQueue => &["PDX-005"],
+    }
+}
+
+/// Requirements the refusal check exercises.
+pub const REFUSAL_IDS: &[&str] = &[
+    "PROF-001",
+    "PROF-002",
+    "PROF-003",
+    "PROF-004",
+    "PROF-005",
+    "PROF-006",
+    "PROF-007",
+    "PROF-008",
+    "PROF-009",
+    "PROF-011",
+    "PROF-012",
+    "BQ-003",
+    "BQ-004",
+    "BQ-005",
+    "FLT-010",
+    "TN-004",
+    "TS-002",
+    "LAY-FD-001",
+    "LAY-GEN-007",
+    "PDX-005",
+];
+
+/// Every configuration in a grid: the IUT must accept exactly what the model accepts.
+pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
+    let mut checked = 0;
+    for format in [
+        FrameFormat::Base11,
+        FrameFormat::Extended29,
+        FrameFormat::Fd,
+    ] {
+        for queue in [QueueMode::Standard, QueueMode::Optimized, QueueMode::Fast] {
+            for (tn, ts) in [(false, false), (true, false), (false, true), (true, true)] {
+                for filters in [
+                    vec![],
+                    vec![FilterRow::accept_range(0x100, 0x1FF)],
+                    vec![FilterRow::accept_range(0x200, 0x100)],
+                ] {
+                    for slots in [0u8, 1, 32, 33] {
+                        for dc in [false, true] {
+                            let mut config = InterfaceConfig::new(format, slots);
+                            config.queue = queue;
+                            config.transaction_number = tn;
+                            config.time_stamp = ts;
+                            config.filters = filters.clone();
+                            if dc {
+                                config.synchronization = Synchronization::DistributedClocks {
+                                    sync1_shift: 100_000,
+                                };
+                            }
+                            checked += 1;
+                            let expected = config.validate(caps);
+                            let actual = kind.build(caps, &config).map(|_| ());
+                            if expected.is_ok() != actual.is_ok() {
+                                let requirements = match &expected {
+                                    Err(e) => {
+                                        refusal_ids(e).iter().map(|s| s.to_string()).collect()
+                                    }
+                                    Ok(()) => vec!["PROF-001".to_string(), "PROF-002".to_string()],
+                                };
+                                let failure = Failure {
+                                    requirements,
+                                    scenario: "configuration refusals".into(),
+                                    cycle: 0,
+                                    time: 0,
+                                    what: format!(
+                                        "configuration {} with {slots} slots",
+                                        describe(&config)
+                                    ),
+                                    expected: match expected {
+                                        Ok(()) => "accepted".into(),
+                                        Err(e) => format!("refused: {e}"),
+                                    },
+                                    actual: match actual {
+                                        Ok(()) => "accepted".into(),
+                                        Err(e) => format!("refused: {e}"),
+                                    },
+                                    context: Vec::new(),
+                                };
+                                return ScenarioRun {
+                                    scenario: "configuration refusals".into(),
+                                    covers: ids(REFUSAL_IDS),
+                                    outcome: Outcome::Fail(Box::new(failure)),
+                                    cycles: checked,
+                                    frames_checked: 0,
+                                };
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    ScenarioRun {
+        scenario: "configuration refusals".into(),
+        covers: ids(REFUSAL_IDS),
+        outcome: Outcome::Pass,
+        cycles: checked,
+        frames_checked: 0,
+    }
+}
+
+fn ids(list: &[&str]) -> Vec<String> {
+    list.iter().map(|s| s.to_string()).collect()
+}
+
+/// Runs every scenario of a profile against an IUT and judges each requirement.
+pub fn run_profile(
+    catalogue: &Catalogue,
+    profile: &Profile,
+    kind: &IutKind,
+    options: &Options,
+    mut progress: impl FnMut(&ScenarioRun),
+) -> ProfileRun {
+    let caps = profile.model_capabilities();
+    let mut runs = vec![check_refusals(kind, &caps)];
+    progress(&runs[0]);
+    for scenario in scenarios(&caps, options) {
+        let run = run_scenario(kind, &caps, &scenario, scenario.steps());
+        progress(&run);
+        runs.push(run);
+    }
+    judge(catalogue, profile, runs)
+}
+
+/// Verdicts from scenario runs.
+pub fn judge(catalogue: &Catalogue, profile: &Profile, runs: Vec<ScenarioRun>) -> ProfileRun {
+    let mut failures = Vec::new();
+    let mut failed: BTreeMap<String, Vec<usize>> = BTreeMap::new();
+    let mut errors: BTreeMap<String, String> = BTreeMap::new();
+    for run in &runs {
+        match &run.outcome {
+            Outcome::Fail(failure) => {
+                for id in &failure.requirements {
+                    failed.entry(id.clone()).or_default().push(failures.len());
+                }
+                failures.push(failure.as_ref().clone());
+            }
+            Outcome::Error(message) => {
+                for id in &run.covers {
+                    errors
+                        .entry(id.clone())
+                        .or_insert_with(|| format!("{}: {message}", run.scenario));
+                }
+            }
+            Outcome::Pass => {}
+        }
+    }
+    let mut verdicts = BTreeMap::new();
+    for requirement in catalogue.requirements() {
+        let missing: Vec<&str> = requirement
+            .capabilities
+            .iter()
+            .filter(|c| !profile.has(c))
+            .map(String::as_str)
+            .collect();
+        let checked = runs.iter().any(|r| r.covers.contains(&requirement.id));
+        let verdict = if !missing.is_empty() {
+            Verdict::NotApplicable(format!("{} lacks {}", profile.name, missing.join(", ")))
+        } else if let Some(indexes) = failed.get(&requirement.id) {
+            Verdict::Fail(indexes.clone())
+        } else if let Some(message) = errors.get(&requirement.id) {
+            Verdict::Error(message.clone())
+        } else if checked {
+            Verdict::Pass
+        } else if requirement.verification == Verification::Inspection {
+            Verdict::NotTestable(requirement.reason.clone().unwrap_or_default())
+        } else {
+            Verdict::NotTestable(
+                "checked by the model's own tests, not by a run against an IUT".into(),
+            )
+        };
+        verdicts.insert(requirement.id.clone(), verdict);
+    }
+    ProfileRun {
+        profile: profile.name.clone(),
+        runs,
+        failures,
+        verdicts,
+    }
+}

@@ -1,0 +1,581 @@
+//! A software EL6751: the device side of the CAN interface, firmware style.
+//!
+//! * [`SoftDevice::sync_manager_event`] — the CAN interface cycle, run when the
+//!   process-data telegram arrives (003).
+//! * [`SoftDevice::rx_interrupt`] — the controller received a frame.
+//! * [`SoftDevice::controller_idle`] — the controller may start the next frame.
+//! * [`SoftDevice::tx_done_interrupt`] — the frame it started is on the bus.
+//!
+//! Written from the manual (000/001 §6, 003) independently of `canif-model`.
+
+#![forbid(unsafe_code)]
+
+mod fault;
+mod frame;
+mod settings;
+
+pub use fault::Fault;
+pub use frame::CanFrame;
+pub use settings::{FilterRule, Format, Offer, Queue, Settings, SettingsError};
+
+use std::collections::VecDeque;
+
+/// Byte offsets of one message structure. Names follow the PLC types of the manual.
+#[derive(Clone, Copy, Debug)]
+struct MsgGeometry {
+    size: usize,
+    tn: Option<usize>,
+    len16: Option<usize>,
+    len8: Option<usize>,
+    flags: Option<usize>,
+    cob: usize,
+    cob_wide: bool,
+    data: usize,
+    data_cap: usize,
+    ts: Option<usize>,
+}
+
+impl MsgGeometry {
+    fn tx(format: Format, tn: bool) -> Self {
+        let shift = if tn { 2 } else { 0 };
+        match format {
+            // COB ID word (length bits 0-3, RTR bit 4, id bits 5-15), then 8 bytes.
+            Format::Std11 => MsgGeometry {
+                size: 10 + shift,
+                tn: tn.then_some(0),
+                len16: None,
+                len8: None,
+                flags: None,
+                cob: shift,
+                cob_wide: false,
+                data: shift + 2,
+                data_cap: 8,
+                ts: None,
+            },
+            // Length UINT, COB ID UDINT, 8 bytes.
+            Format::Ext29 => MsgGeometry {
+                size: 14 + shift,
+                tn: tn.then_some(0),
+                len16: Some(shift),
+                len8: None,
+                flags: None,
+                cob: shift + 2,
+                cob_wide: true,
+                data: shift + 6,
+                data_cap: 8,
+                ts: None,
+            },
+            // CANFDTXQUEUE.
+            Format::Fd => MsgGeometry {
+                size: 72,
+                tn: Some(0),
+                len16: None,
+                len8: Some(2),
+                flags: Some(3),
+                cob: 4,
+                cob_wide: true,
+                data: 8,
+                data_cap: 64,
+                ts: None,
+            },
+        }
+    }
+
+    fn rx(format: Format, ts: bool) -> Self {
+        match format {
+            Format::Std11 => MsgGeometry {
+                size: 10,
+                tn: None,
+                len16: None,
+                len8: None,
+                flags: None,
+                cob: 0,
+                cob_wide: false,
+                data: 2,
+                data_cap: 8,
+                ts: None,
+            },
+            Format::Ext29 => MsgGeometry {
+                size: if ts { 22 } else { 14 },
+                tn: None,
+                len16: Some(0),
+                len8: None,
+                flags: None,
+                cob: 2,
+                cob_wide: true,
+                data: 6,
+                data_cap: 8,
+                ts: ts.then_some(14),
+            },
+            // CANFDTSRXQUEUE.
+            Format::Fd => MsgGeometry {
+                size: 78,
+                tn: None,
+                len16: None,
+                len8: Some(0),
+                flags: Some(1),
+                cob: 2,
+                cob_wide: true,
+                data: 6,
+                data_cap: 64,
+                ts: Some(70),
+            },
+        }
+    }
+}
+
+fn get16(b: &[u8], at: usize) -> u16 {
+    u16::from_le_bytes([b[at], b[at + 1]])
+}
+fn put16(b: &mut [u8], at: usize, v: u16) {
+    b[at..at + 2].copy_from_slice(&v.to_le_bytes());
+}
+fn get32(b: &[u8], at: usize) -> u32 {
+    u32::from_le_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]])
+}
+fn put32(b: &mut [u8], at: usize, v: u32) {
+    b[at..at + 4].copy_from_slice(&v.to_le_bytes());
+}
+
+#[derive(Clone, Copy, Debug)]
+struct TxJob {
+    frame: CanFrame,
+    tn: u16,
+    release_at: u64,
+    first_in_batch: bool,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct RxJob {
+    frame: CanFrame,
+    stamp: u64,
+}
+
+/// Why the cycle task could not run.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ImageSizeError {
+    pub expected: usize,
+    pub got: usize,
+}
+
+impl std::fmt::Display for ImageSizeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "output image of {} bytes, expected {}",
+            self.got, self.expected
+        )
+    }
+}
+
+impl std::error::Error for ImageSizeError {}
+
+/// The soft device.
+#[derive(Debug, Clone)]
+pub struct SoftDevice {
+    settings: Settings,
+    faults: Vec<Fault>,
+    tx_geo: MsgGeometry,
+    rx_geo: MsgGeometry,
+    rx_base: usize,
+    info_base: usize,
+    input: Vec<u8>,
+    send_fifo: VecDeque<TxJob>,
+    on_wire: Option<TxJob>,
+    last_tn: u16,
+    recv_fifo: VecDeque<RxJob>,
+    deferred_tx: Option<u16>,
+    controller: [u32; 16],
+}
+
+impl SoftDevice {
+    /// Starts the device with `settings`; refuses what the device does not offer.
+    pub fn new(settings: Settings) -> Result<Self, SettingsError> {
+        settings.check()?;
+        let has_tn = settings.transaction_number || settings.format == Format::Fd;
+        let tx_geo = MsgGeometry::tx(settings.format, has_tn);
+        let rx_geo = MsgGeometry::rx(
+            settings.format,
+            settings.time_stamp || settings.format == Format::Fd,
+        );
+        let rx_base = if has_tn { 8 } else { 6 };
+        let info_base = rx_base + usize::from(settings.rx_slots) * rx_geo.size;
+        let input_len = info_base + if settings.offer.info_data { 64 } else { 0 };
+        let mut controller = [0u32; 16];
+        controller[0] = 1 << 2; // node active
+        controller[11] = 1; // CAN core running
+        Ok(SoftDevice {
+            tx_geo,
+            rx_geo,
+            rx_base,
+            info_base,
+            input: vec![0; input_len],
+            send_fifo: VecDeque::new(),
+            on_wire: None,
+            last_tn: 0,
+            recv_fifo: VecDeque::new(),
+            deferred_tx: None,
+            controller,
+            faults: Vec::new(),
+            settings,
+        })
+    }
+
+    /// Switches a fault on (for the suite's self-check).
+    pub fn inject(&mut self, fault: Fault) {
+        if !self.faults.contains(&fault) {
+            self.faults.push(fault);
+        }
+    }
+
+    fn has(&self, fault: Fault) -> bool {
+        self.faults.contains(&fault)
+    }
+
+    pub fn output_len(&self) -> usize {
+        6 + usize::from(self.settings.tx_slots) * self.tx_geo.size
+    }
+
+    pub fn input_len(&self) -> usize {
+        self.input.len()
+    }
+
+    pub fn inputs(&self) -> &[u8] {
+        &self.input
+    }
+
+    fn bump(&self, counter: u16) -> u16 {
+        if self.has(Fault::CounterDoesNotWrap) {
+            counter.saturating_add(1)
+        } else {
+            counter.wrapping_add(1)
+        }
+    }
+
+    /// The CAN interface cycle (003): Tx, then Rx, then transaction number, then status.
+    pub fn sync_manager_event(&mut self, output: &[u8], now: u64) -> Result<&[u8], ImageSizeError> {
+        if output.len() != self.output_len() {
+            return Err(ImageSizeError {
+                expected: self.output_len(),
+                got: output.len(),
+            });
+        }
+        self.transmit_side(output, now);
+        self.receive_side(get16(output, 2));
+        let tn = self.last_tn;
+        if self.rx_base == 8 {
+            put16(&mut self.input, 6, tn);
+        }
+        if self.settings.offer.info_data {
+            self.controller[1] = u32::from_le_bytes(self.settings.nominal_timing);
+            self.controller[2] = u32::from_le_bytes(self.settings.data_timing);
+            self.controller[4] = 0;
+            self.controller[5] =
+                (self.send_fifo.len() + usize::from(self.on_wire.is_some())) as u32;
+            self.controller[6] = if self.has(Fault::ReceiveFifoNotReported) {
+                0
+            } else {
+                self.recv_fifo.len() as u32
+            };
+            for (i, word) in self.controller.iter().enumerate() {
+                put32(&mut self.input, self.info_base + 4 * i, *word);
+            }
+        }
+        Ok(&self.input)
+    }
+
+    fn transmit_side(&mut self, output: &[u8], now: u64) {
+        if self.deferred_tx.take().is_some() {
+            // Fault AckBeforeAccept: the batch acknowledged last cycle is only read now.
+            self.copy_batch(output, now);
+        }
+        let requested = get16(output, 0);
+        let acknowledged = get16(&self.input, 0);
+        if requested == acknowledged {
+            return;
+        }
+        let mut count = usize::from(get16(output, 4)).min(usize::from(self.settings.tx_slots));
+        if self.has(Fault::SendsOneMoreThanAsked) {
+            count = (count + 1).min(usize::from(self.settings.tx_slots));
+        }
+        let busy = self.send_fifo.len() + usize::from(self.on_wire.is_some());
+        if self.has(Fault::AckBeforeAccept) {
+            put16(&mut self.input, 0, requested);
+            self.deferred_tx = Some(requested);
+            return;
+        }
+        if busy > 0 && busy + count > self.settings.tx_fifo_depth {
+            return; // no room: acknowledge later
+        }
+        self.copy_batch_n(output, now, count);
+        put16(&mut self.input, 0, requested);
+    }
+
+    fn copy_batch(&mut self, output: &[u8], now: u64) {
+        let count = usize::from(get16(output, 4)).min(usize::from(self.settings.tx_slots));
+        self.copy_batch_n(output, now, count);
+    }
+
+    fn copy_batch_n(&mut self, output: &[u8], now: u64, count: usize) {
+        let release_at = self.settings.dc_sync1_shift.map_or(0, |shift| now + shift);
+        let mut batch: Vec<TxJob> = (0..count)
+            .map(|i| {
+                let at = 6 + i * self.tx_geo.size;
+                let slot = &output[at..at + self.tx_geo.size];
+                let tn = self.tx_geo.tn.map_or(0, |o| get16(slot, o));
+                TxJob {
+                    frame: self.decode_tx(slot),
+                    tn,
+                    release_at: if i == 0 { release_at } else { 0 },
+                    first_in_batch: i == 0,
+                }
+            })
+            .collect();
+        if self.has(Fault::SendsBatchReversed) {
+            batch.reverse();
+        }
+        self.send_fifo.extend(batch);
+    }
+
+    fn decode_tx(&self, slot: &[u8]) -> CanFrame {
+        let g = self.tx_geo;
+        let mut frame = CanFrame::default();
+        if g.cob_wide {
+            let cob = get32(slot, g.cob);
+            frame.extended = cob & 0x8000_0000 != 0;
+            frame.remote = cob & 0x4000_0000 != 0;
+            frame.id = if frame.extended {
+                cob & 0x1FFF_FFFF
+            } else {
+                cob & 0x7FF
+            };
+        } else {
+            let word = get16(slot, g.cob);
+            frame.id = u32::from(word >> 5);
+            let rtr_bit = if self.has(Fault::RtrBitMisplaced) {
+                3
+            } else {
+                4
+            };
+            frame.remote = word & (1 << rtr_bit) != 0;
+            frame.len = (word & 0xF) as usize;
+        }
+        if let Some(o) = g.len16 {
+            frame.len = usize::from(get16(slot, o));
+        }
+        if let Some(o) = g.len8 {
+            frame.len = usize::from(slot[o]);
+        }
+        let flags = g.flags.map_or(0, |o| slot[o]);
+        frame.fd = flags & 1 != 0;
+        if frame.fd {
+            frame.brs = flags & 2 != 0;
+            frame.esi = flags & 4 != 0;
+            frame.remote = false;
+            let wanted = frame.len.min(64);
+            let wire = if self.has(Fault::FdLengthRoundsDown) {
+                frame::FD_SIZES
+                    .iter()
+                    .rev()
+                    .copied()
+                    .find(|&s| s <= wanted)
+                    .unwrap_or(0)
+            } else if self.has(Fault::FdLength32As36) && (25..=32).contains(&wanted) {
+                36
+            } else {
+                frame::FD_SIZES
+                    .iter()
+                    .copied()
+                    .find(|&s| s >= wanted)
+                    .unwrap_or(64)
+            };
+            let pad = if self.has(Fault::FdPaddingFf) {
+                0xFF
+            } else {
+                0x00
+            };
+            for i in 0..wire {
+                frame.data[i] = if i < wanted { slot[g.data + i] } else { pad };
+            }
+            frame.len = wire;
+        } else {
+            frame.len = frame.len.min(8);
+            if !frame.remote {
+                frame.data[..frame.len].copy_from_slice(&slot[g.data..g.data + frame.len]);
+            }
+        }
+        frame
+    }
+
+    fn receive_side(&mut self, plc_rx_counter: u16) {
+        let fast = self.settings.queue == Queue::Fast;
+        let free = plc_rx_counter == get16(&self.input, 2);
+        let may_fill = if fast {
+            !self.has(Fault::FastQueueWaitsForAck) || free
+        } else {
+            free || self.has(Fault::OverwritesUnacknowledgedRx)
+        };
+        if !may_fill {
+            return;
+        }
+        if self.recv_fifo.is_empty() {
+            if self.has(Fault::RxCounterCountsEmptyCycles) {
+                put16(&mut self.input, 4, 0);
+                let next = self.bump(get16(&self.input, 2));
+                put16(&mut self.input, 2, next);
+            }
+            return;
+        }
+        let count = self
+            .recv_fifo
+            .len()
+            .min(usize::from(self.settings.rx_slots));
+        for i in 0..usize::from(self.settings.rx_slots) {
+            let at = self.rx_base + i * self.rx_geo.size;
+            let size = self.rx_geo.size;
+            let job = if i < count {
+                self.recv_fifo.pop_front()
+            } else {
+                None
+            };
+            let slot_bytes = match job {
+                Some(job) => self.encode_rx(&job),
+                None => vec![0; size],
+            };
+            self.input[at..at + size].copy_from_slice(&slot_bytes);
+        }
+        if fast {
+            self.recv_fifo.clear();
+        }
+        put16(&mut self.input, 4, count as u16);
+        let next = self.bump(get16(&self.input, 2));
+        put16(&mut self.input, 2, next);
+    }
+
+    fn encode_rx(&self, job: &RxJob) -> Vec<u8> {
+        let g = self.rx_geo;
+        let f = &job.frame;
+        let mut slot = vec![0u8; g.size];
+        if g.cob_wide {
+            let mut cob = f.id;
+            if f.extended && !self.has(Fault::ExtendedFlagMissing) {
+                cob |= 0x8000_0000;
+            }
+            if f.remote {
+                cob |= 0x4000_0000;
+            }
+            put32(&mut slot, g.cob, cob);
+        } else {
+            let word =
+                ((f.id as u16) << 5) | if f.remote { 1 << 4 } else { 0 } | (f.len as u16 & 0xF);
+            if self.has(Fault::CobIdWordBigEndian) {
+                slot[g.cob..g.cob + 2].copy_from_slice(&word.to_be_bytes());
+            } else {
+                put16(&mut slot, g.cob, word);
+            }
+        }
+        if let Some(o) = g.len16 {
+            put16(&mut slot, o, f.len as u16);
+        }
+        if let Some(o) = g.len8 {
+            slot[o] = f.len as u8;
+        }
+        if let Some(o) = g.flags {
+            let (brs, esi) = if self.has(Fault::BrsEsiSwapped) {
+                (f.esi, f.brs)
+            } else {
+                (f.brs, f.esi)
+            };
+            slot[o] = u8::from(f.fd) | (u8::from(brs) << 1) | (u8::from(esi) << 2);
+        }
+        if !f.remote {
+            let n = f.len.min(g.data_cap);
+            slot[g.data..g.data + n].copy_from_slice(&f.data[..n]);
+        }
+        if let Some(o) = g.ts {
+            let stamp = if self.has(Fault::TimeStampInMicroseconds) {
+                job.stamp / 1_000
+            } else {
+                job.stamp
+            };
+            slot[o..o + 8].copy_from_slice(&stamp.to_le_bytes());
+        }
+        slot
+    }
+
+    /// Receive interrupt: a frame ended at `stamp` (device clock, ns).
+    /// Returns whether it was stored.
+    pub fn rx_interrupt(&mut self, frame: CanFrame, stamp: u64) -> bool {
+        let fits = match self.settings.format {
+            Format::Std11 => !frame.extended && !frame.fd,
+            Format::Ext29 => !frame.fd,
+            Format::Fd => true,
+        };
+        if !fits
+            || !settings::filter_passes(
+                &self.settings.filters,
+                frame.id,
+                self.has(Fault::FilterLastMatchWins),
+            )
+        {
+            return false;
+        }
+        let room = if self.settings.queue == Queue::Fast {
+            usize::from(self.settings.rx_slots)
+        } else {
+            self.settings.rx_fifo_depth
+        };
+        if self.recv_fifo.len() >= room {
+            if self.has(Fault::HeadDropWhenFull) && self.settings.queue != Queue::Fast {
+                self.recv_fifo.pop_front();
+            } else {
+                return false;
+            }
+        }
+        self.recv_fifo.push_back(RxJob { frame, stamp });
+        true
+    }
+
+    /// The controller is idle at `now`: the next frame to put on the bus, if any.
+    pub fn controller_idle(&mut self, now: u64) -> Option<CanFrame> {
+        if self.on_wire.is_some() {
+            return None;
+        }
+        let job = *self.send_fifo.front()?;
+        if job.release_at > now {
+            return None;
+        }
+        self.send_fifo.pop_front();
+        self.on_wire = Some(job);
+        if self.has(Fault::TransactionNumberOnHandover) {
+            self.last_tn = job.tn;
+        }
+        Some(job.frame)
+    }
+
+    /// When the first frame of a batch may go (Distributed Clocks, SYNC1).
+    pub fn next_release(&self) -> Option<u64> {
+        match (&self.on_wire, self.send_fifo.front()) {
+            (None, Some(job)) if job.release_at > 0 => Some(job.release_at),
+            _ => None,
+        }
+    }
+
+    /// Transmit-done interrupt: the frame on the wire was acknowledged.
+    pub fn tx_done_interrupt(&mut self) {
+        if let Some(job) = self.on_wire.take() {
+            let keep_first = self.has(Fault::TransactionNumberOfFirstFrame) && !job.first_in_batch;
+            if !keep_first && !self.has(Fault::TransactionNumberOnHandover) {
+                self.last_tn = job.tn;
+            }
+        }
+    }
+
+    /// Controller status words for InfoData (0: status bits, 3: transceiver delay,
+    /// 7-10, 12-14: error counters, 11: core running).
+    pub fn set_controller_word(&mut self, index: usize, value: u32) {
+        if let Some(word) = self.controller.get_mut(index) {
+            *word = value;
+        }
+    }
+}
