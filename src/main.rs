@@ -3,11 +3,16 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+use canif_harness::report::RunReport;
+use canif_harness::suite::{run_profile, Options};
+use canif_harness::{IutKind, Outcome};
 use canif_model::frame::{CanId, Frame};
 use canif_model::sizing::{self, FrameTimeBasis};
 use canif_model::timing::{frame_bits, frame_duration, BitRates, Stuffing};
+use canif_softdevice::Fault;
 use canif_spec::{coverage, Catalogue, Status, Verification};
 use clap::{Parser, Subcommand};
+use std::io::{IsTerminal, Write as _};
 
 #[derive(Parser)]
 #[command(
@@ -25,6 +30,34 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Certify an implementation on the simulated bus against the model, per profile.
+    Run {
+        /// softdevice (the built-in soft EL6751) or model (the reference itself).
+        #[arg(long, default_value = "softdevice")]
+        iut: String,
+        /// Switch on a soft-device fault (repeatable; see `canif faults`).
+        #[arg(long)]
+        fault: Vec<String>,
+        /// A profile name (see `canif profiles`) or `all`.
+        #[arg(long, default_value = "all")]
+        profile: String,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Generated scenarios per interface.
+        #[arg(long, default_value_t = 4)]
+        cases: u64,
+        /// Virtual seconds of generated traffic per scenario (a soak run).
+        #[arg(long)]
+        duration: Option<f64>,
+        /// Leave out the 65,540-cycle RxCounter wrap.
+        #[arg(long)]
+        no_counter_wrap: bool,
+        /// Where to write junit.xml, report.json and summary.md.
+        #[arg(long, default_value = "reports/latest")]
+        report: PathBuf,
+    },
+    /// The soft device's deliberate faults.
+    Faults,
     /// The requirement catalogue.
     Spec {
         #[command(subcommand)]
@@ -98,6 +131,30 @@ fn main() -> ExitCode {
         }
     };
     match cli.command {
+        Command::Run {
+            iut,
+            fault,
+            profile,
+            seed,
+            cases,
+            duration,
+            no_counter_wrap,
+            report,
+        } => {
+            let options = Options {
+                seed,
+                cases: if duration.is_some() { 1 } else { cases },
+                generated_cycles: duration.map_or(200, |s| (s * 1000.0).max(1.0) as u64),
+                counter_wrap: !no_counter_wrap,
+            };
+            run(&catalogue, &iut, &fault, &profile, &options, &report)
+        }
+        Command::Faults => {
+            for fault in Fault::ALL {
+                println!("{:<36} {}", fault.name(), fault.description());
+            }
+            ExitCode::SUCCESS
+        }
         Command::Spec { command } => spec(&catalogue, command),
         Command::Profiles => profiles(&catalogue),
         Command::Size {
@@ -388,4 +445,122 @@ fn frame_time(
         println!("  CiA table  {:>9.2} µs (000 §4)", cell as f64 / 1000.0);
     }
     ExitCode::SUCCESS
+}
+
+fn run(
+    catalogue: &Catalogue,
+    iut: &str,
+    faults: &[String],
+    profile: &str,
+    options: &Options,
+    report_dir: &Path,
+) -> ExitCode {
+    let mut chosen = Vec::new();
+    for name in faults {
+        match Fault::from_name(name) {
+            Some(fault) => chosen.push(fault),
+            None => {
+                eprintln!("unknown fault `{name}`; `canif faults` lists them");
+                return ExitCode::from(2);
+            }
+        }
+    }
+    let kind = match iut {
+        "softdevice" => IutKind::SoftDevice { faults: chosen },
+        "model" if chosen.is_empty() => IutKind::Model,
+        "model" => {
+            eprintln!("--fault applies to the soft device only");
+            return ExitCode::from(2);
+        }
+        other => {
+            eprintln!("unknown IUT `{other}`: use softdevice or model");
+            return ExitCode::from(2);
+        }
+    };
+    let profiles: Vec<_> = if profile == "all" {
+        catalogue.profiles.iter().collect()
+    } else {
+        match catalogue.profile(profile) {
+            Some(p) => vec![p],
+            None => {
+                let names: Vec<_> = catalogue.profiles.iter().map(|p| p.name.as_str()).collect();
+                eprintln!("unknown profile `{profile}`; known: {}", names.join(", "));
+                return ExitCode::from(2);
+            }
+        }
+    };
+    let started = std::time::Instant::now();
+    let terminal = std::io::stderr().is_terminal();
+    let mut results = Vec::new();
+    for (n, p) in profiles.iter().enumerate() {
+        let mut done = 0;
+        let result = run_profile(catalogue, p, &kind, options, |scenario_run| {
+            done += 1;
+            if terminal {
+                eprint!(
+                    "\r\x1b[2K[{}/{}] {}: {} ({} scenarios)",
+                    n + 1,
+                    profiles.len(),
+                    p.name,
+                    scenario_run.scenario,
+                    done
+                );
+                let _ = std::io::stderr().flush();
+            }
+        });
+        let failed = result
+            .runs
+            .iter()
+            .filter(|r| matches!(r.outcome, Outcome::Fail(_)))
+            .count();
+        let errors = result
+            .runs
+            .iter()
+            .filter(|r| matches!(r.outcome, Outcome::Error(_)))
+            .count();
+        if terminal {
+            eprint!("\r\x1b[2K");
+        }
+        eprintln!(
+            "[{}/{}] {:<22} {} scenarios, {} cycles, {} frames checked: {}",
+            n + 1,
+            profiles.len(),
+            p.name,
+            result.runs.len(),
+            result.cycles(),
+            result.frames_checked(),
+            match (failed, errors) {
+                (0, 0) => "conforms".to_string(),
+                (f, 0) => format!("{f} scenario(s) FAIL"),
+                (f, e) => format!("{f} fail, {e} ERROR"),
+            }
+        );
+        results.push(result);
+    }
+    let report = RunReport {
+        iut: kind.name(),
+        seed: options.seed,
+        bus: "simulated bus (virtual time)".into(),
+        profiles: results,
+        wall_time_ms: started.elapsed().as_millis(),
+    };
+    if let Err(error) = report.write(catalogue, report_dir) {
+        eprintln!(
+            "cannot write the reports to {}: {error}",
+            report_dir.display()
+        );
+        return ExitCode::from(2);
+    }
+    let totals = report.totals();
+    println!(
+        "{}: {} pass, {} fail, {} error, {} not applicable, {} not testable — reports in {}",
+        report.iut,
+        totals.pass,
+        totals.fail,
+        totals.error,
+        totals.not_applicable,
+        totals.not_testable,
+        report_dir.display()
+    );
+    ExitCode::from(report.exit_code())
 }

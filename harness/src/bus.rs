@@ -2,6 +2,9 @@
 //! timing gives them, and among frames waiting when the bus goes idle the
 //! lowest arbitration field wins.
 
+use std::cmp::Reverse;
+use std::collections::{BinaryHeap, HashMap};
+
 use canif_model::frame::{CanId, Frame, FrameKind};
 use canif_model::timing::{frame_duration, BitRates, Stuffing};
 use canif_model::Nanos;
@@ -26,39 +29,59 @@ pub fn duration(frame: &Frame, rates: BitRates) -> Nanos {
 }
 
 /// Other nodes' frames waiting for the bus, each ready from a given time.
+/// Frames not yet ready wait by time; ready ones by arbitration key (then by
+/// order of scheduling), so each arbitration costs O(log n).
 #[derive(Debug, Default)]
 pub struct Nodes {
-    waiting: Vec<(Nanos, Frame)>,
+    later: BinaryHeap<Reverse<(Nanos, u64)>>,
+    ready: BinaryHeap<Reverse<(u64, u64)>>,
+    frames: HashMap<u64, Frame>,
+    sequence: u64,
 }
 
 impl Nodes {
     pub fn schedule(&mut self, ready_at: Nanos, frame: Frame) {
-        self.waiting.push((ready_at, frame));
+        self.sequence += 1;
+        self.frames.insert(self.sequence, frame);
+        self.later.push(Reverse((ready_at, self.sequence)));
     }
 
-    /// The frame that wins arbitration among those ready at `now`.
-    pub fn best_ready(&self, now: Nanos) -> Option<(usize, &Frame)> {
-        self.waiting
-            .iter()
-            .enumerate()
-            .filter(|(_, (ready, _))| *ready <= now)
-            .min_by_key(|(i, (_, frame))| (arbitration_key(frame), *i))
-            .map(|(i, (_, frame))| (i, frame))
+    fn mature(&mut self, now: Nanos) {
+        while let Some(Reverse((ready_at, sequence))) = self.later.peek().copied() {
+            if ready_at > now {
+                break;
+            }
+            self.later.pop();
+            let key = self.frames.get(&sequence).map_or(u64::MAX, arbitration_key);
+            self.ready.push(Reverse((key, sequence)));
+        }
     }
 
-    pub fn take(&mut self, index: usize) -> Frame {
-        self.waiting.remove(index).1
+    /// The arbitration key of the frame that would win at `now`, if any is ready.
+    pub fn best_key(&mut self, now: Nanos) -> Option<u64> {
+        self.mature(now);
+        self.ready.peek().map(|Reverse((key, _))| *key)
+    }
+
+    /// Takes the winner at `now`.
+    pub fn take_best(&mut self, now: Nanos) -> Option<Frame> {
+        self.mature(now);
+        let Reverse((_, sequence)) = self.ready.pop()?;
+        self.frames.remove(&sequence)
     }
 
     pub fn next_ready_after(&self, now: Nanos) -> Option<Nanos> {
-        self.waiting
-            .iter()
-            .map(|(ready, _)| *ready)
-            .filter(|ready| *ready > now)
-            .min()
+        self.later
+            .peek()
+            .map(|Reverse((ready_at, _))| *ready_at)
+            .filter(|t| *t > now)
+    }
+
+    pub fn len(&self) -> usize {
+        self.later.len() + self.ready.len()
     }
 
     pub fn is_empty(&self) -> bool {
-        self.waiting.is_empty()
+        self.len() == 0
     }
 }

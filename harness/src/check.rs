@@ -361,12 +361,27 @@ struct Lockstep<'a> {
     now: Nanos,
     cycle: u64,
     frames: u64,
-    history: VecDeque<String>,
-    bus_log: Vec<String>,
+    /// The last cycles' image headers and the frames around them (bounded),
+    /// formatted only when a failure needs them.
+    history: VecDeque<CycleRecord>,
+    bus_log: VecDeque<(u64, bool, Frame)>,
     /// Frames other nodes sent lately: a slot holding one of them carries a real
     /// frame (the wrong one), anything else is a frame the IUT encoded wrongly.
     recent_rx: VecDeque<Frame>,
 }
+
+/// What one cycle looked like, kept raw until a failure shows it.
+#[derive(Debug, Clone, Copy)]
+struct CycleRecord {
+    cycle: u64,
+    now: Nanos,
+    outputs: [u16; 3],
+    inputs: [u16; 3],
+    transaction_number: Option<u16>,
+}
+
+/// How many frames of bus history a failure can show.
+const BUS_LOG: usize = 256;
 
 /// How many received frames the oracle remembers (bounded memory).
 const RECENT_RX: usize = 4_096;
@@ -381,7 +396,7 @@ impl Lockstep<'_> {
             what: difference.what,
             expected: difference.expected,
             actual: difference.actual,
-            context: self.history.iter().cloned().collect(),
+            context: self.context(),
         }))
     }
 
@@ -431,14 +446,13 @@ impl Lockstep<'_> {
         loop {
             self.poll()?;
             if self.on_bus.is_none() {
-                let node = self
-                    .nodes
-                    .best_ready(self.now)
-                    .map(|(i, f)| (i, arbitration_key(f)));
+                let node = self.nodes.best_key(self.now);
                 let iut = self.iut_pending.as_ref().map(arbitration_key);
                 let start = match (node, iut) {
-                    (Some((i, n)), Some(k)) if n < k => Some((self.nodes.take(i), false)),
-                    (Some((i, _)), None) => Some((self.nodes.take(i), false)),
+                    (Some(n), Some(k)) if n < k => {
+                        self.nodes.take_best(self.now).map(|f| (f, false))
+                    }
+                    (Some(_), None) => self.nodes.take_best(self.now).map(|f| (f, false)),
                     (_, Some(_)) => self.iut_pending.take().map(|f| (f, true)),
                     (None, None) => None,
                 };
@@ -479,7 +493,7 @@ impl Lockstep<'_> {
         if from_iut {
             self.iut.transmit_complete();
             self.model.handle_transmit_complete();
-            self.bus_log.push(format!("tx {frame}"));
+            self.log(true, frame);
         } else {
             self.iut.receive(&frame, end);
             self.model.handle_received(frame, end);
@@ -487,39 +501,53 @@ impl Lockstep<'_> {
             if self.recent_rx.len() > RECENT_RX {
                 self.recent_rx.pop_front();
             }
-            self.bus_log.push(format!("rx {frame}"));
+            self.log(false, frame);
+        }
+    }
+
+    fn log(&mut self, from_iut: bool, frame: Frame) {
+        self.bus_log.push_back((self.cycle, from_iut, frame));
+        if self.bus_log.len() > BUS_LOG {
+            self.bus_log.pop_front();
         }
     }
 
     fn remember(&mut self, outputs: &[u8], inputs: &[u8]) {
-        let header = |b: &[u8]| {
-            (
-                u16::from_le_bytes([b[0], b[1]]),
-                u16::from_le_bytes([b[2], b[3]]),
-                u16::from_le_bytes([b[4], b[5]]),
-            )
-        };
-        let (otx, orx, on) = header(outputs);
-        let (itx, irx, inn) = header(inputs);
-        let tn = if self.layout.transaction_number {
-            format!(" tn={}", u16::from_le_bytes([inputs[6], inputs[7]]))
-        } else {
-            String::new()
-        };
-        let bus = if self.bus_log.is_empty() {
-            String::new()
-        } else {
-            format!(" | bus: {}", self.bus_log.join(", "))
-        };
-        self.bus_log.clear();
-        self.history.push_back(format!(
-            "cycle {:>5} t={:>9.3} ms  out[tx={otx} rx={orx} n={on}]  in[tx={itx} rx={irx} n={inn}{tn}]{bus}",
-            self.cycle,
-            self.now as f64 / 1e6
-        ));
+        let header = |b: &[u8]| [0, 2, 4].map(|at| u16::from_le_bytes([b[at], b[at + 1]]));
+        self.history.push_back(CycleRecord {
+            cycle: self.cycle,
+            now: self.now,
+            outputs: header(outputs),
+            inputs: header(inputs),
+            transaction_number: self
+                .layout
+                .transaction_number
+                .then(|| u16::from_le_bytes([inputs[6], inputs[7]])),
+        });
         if self.history.len() > CONTEXT_CYCLES {
             self.history.pop_front();
         }
+    }
+
+    /// The remembered cycles as text, each with the frames that ended on the bus
+    /// since the cycle before.
+    fn context(&self) -> Vec<String> {
+        self.history
+            .iter()
+            .map(|r| {
+                let [otx, orx, on] = r.outputs;
+                let [itx, irx, inn] = r.inputs;
+                let tn = r.transaction_number.map_or(String::new(), |tn| format!(" tn={tn}"));
+                let frames: Vec<String> = self
+                    .bus_log
+                    .iter()
+                    .filter(|(cycle, _, _)| *cycle + 1 == r.cycle)
+                    .map(|(_, from_iut, f)| format!("{} {f}", if *from_iut { "tx" } else { "rx" }))
+                    .collect();
+                let bus = if frames.is_empty() { String::new() } else { format!(" | bus: {}", frames.join(", ")) };
+                format!("cycle {:>5} t={:>9.3} ms  out[tx={otx} rx={orx} n={on}]  in[tx={itx} rx={irx} n={inn}{tn}]{bus}", r.cycle, r.now as f64 / 1e6)
+            })
+            .collect()
     }
 }
 
@@ -576,7 +604,7 @@ pub fn run_scenario(
         cycle: 0,
         frames: 0,
         history: VecDeque::new(),
-        bus_log: Vec::new(),
+        bus_log: VecDeque::new(),
         recent_rx: VecDeque::new(),
     };
     let mut outputs = plc.outputs().to_vec();

@@ -1,1 +1,293 @@
-pub fn placeholder() {}
+//! Reports of a run: JUnit XML for CI, JSON for tools, Markdown for people.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use canif_spec::Catalogue;
+use serde_json::{json, Value};
+
+use crate::check::{Failure, Outcome};
+use crate::suite::{ProfileRun, Verdict};
+
+/// What a whole run produced, and how it was asked for.
+#[derive(Debug, Clone)]
+pub struct RunReport {
+    pub iut: String,
+    pub seed: u64,
+    pub bus: String,
+    pub profiles: Vec<ProfileRun>,
+    pub wall_time_ms: u128,
+}
+
+/// Counts of verdicts over every requirement × profile.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Totals {
+    pub pass: usize,
+    pub fail: usize,
+    pub error: usize,
+    pub not_applicable: usize,
+    pub not_testable: usize,
+}
+
+impl RunReport {
+    pub fn totals(&self) -> Totals {
+        let mut totals = Totals::default();
+        for verdict in self.profiles.iter().flat_map(|p| p.verdicts.values()) {
+            match verdict {
+                Verdict::Pass => totals.pass += 1,
+                Verdict::Fail(_) => totals.fail += 1,
+                Verdict::Error(_) => totals.error += 1,
+                Verdict::NotApplicable(_) => totals.not_applicable += 1,
+                Verdict::NotTestable(_) => totals.not_testable += 1,
+            }
+        }
+        totals
+    }
+
+    /// 0 when everything conforms, 1 on any failure, 2 on any error.
+    pub fn exit_code(&self) -> u8 {
+        let totals = self.totals();
+        if totals.error > 0 {
+            2
+        } else if totals.fail > 0 {
+            1
+        } else {
+            0
+        }
+    }
+
+    /// Writes `junit.xml`, `report.json` and `summary.md` into `dir`.
+    pub fn write(&self, catalogue: &Catalogue, dir: &Path) -> std::io::Result<()> {
+        std::fs::create_dir_all(dir)?;
+        std::fs::write(dir.join("junit.xml"), self.junit(catalogue))?;
+        std::fs::write(
+            dir.join("report.json"),
+            serde_json::to_string_pretty(&self.json(catalogue)).unwrap_or_default(),
+        )?;
+        std::fs::write(dir.join("summary.md"), self.summary(catalogue))?;
+        Ok(())
+    }
+
+    /// One testsuite per profile, one testcase per requirement.
+    pub fn junit(&self, catalogue: &Catalogue) -> String {
+        let mut xml = String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+        let totals = self.totals();
+        let _ = writeln!(
+            xml,
+            "<testsuites name=\"canif {}\" tests=\"{}\" failures=\"{}\" errors=\"{}\" skipped=\"{}\">",
+            escape(&self.iut),
+            totals.pass + totals.fail + totals.error + totals.not_applicable + totals.not_testable,
+            totals.fail,
+            totals.error,
+            totals.not_applicable + totals.not_testable
+        );
+        for profile in &self.profiles {
+            let count =
+                |f: fn(&Verdict) -> bool| profile.verdicts.values().filter(|v| f(v)).count();
+            let _ = writeln!(
+                xml,
+                "  <testsuite name=\"{}\" tests=\"{}\" failures=\"{}\" errors=\"{}\" skipped=\"{}\">",
+                escape(&profile.profile),
+                profile.verdicts.len(),
+                count(|v| matches!(v, Verdict::Fail(_))),
+                count(|v| matches!(v, Verdict::Error(_))),
+                count(|v| matches!(v, Verdict::NotApplicable(_) | Verdict::NotTestable(_)))
+            );
+            for requirement in catalogue.requirements() {
+                let Some(verdict) = profile.verdicts.get(&requirement.id) else {
+                    continue;
+                };
+                let name = format!("{}: {}", requirement.id, requirement.statement);
+                let _ = write!(
+                    xml,
+                    "    <testcase classname=\"{}\" name=\"{}\"",
+                    escape(&profile.profile),
+                    escape(&name)
+                );
+                match verdict {
+                    Verdict::Pass => xml.push_str("/>\n"),
+                    Verdict::Fail(indexes) => {
+                        let first = &profile.failures[indexes[0]];
+                        let _ = writeln!(
+                            xml,
+                            ">\n      <failure message=\"{}\">{}</failure>\n    </testcase>",
+                            escape(&headline(first)),
+                            escape(
+                                &indexes
+                                    .iter()
+                                    .map(|i| details(&profile.failures[*i]))
+                                    .collect::<Vec<_>>()
+                                    .join("\n\n")
+                            )
+                        );
+                    }
+                    Verdict::Error(message) => {
+                        let _ = writeln!(
+                            xml,
+                            ">\n      <error message=\"{}\"/>\n    </testcase>",
+                            escape(message)
+                        );
+                    }
+                    Verdict::NotApplicable(reason) | Verdict::NotTestable(reason) => {
+                        let _ = writeln!(
+                            xml,
+                            ">\n      <skipped message=\"{}: {}\"/>\n    </testcase>",
+                            verdict.label(),
+                            escape(reason)
+                        );
+                    }
+                }
+            }
+            xml.push_str("  </testsuite>\n");
+        }
+        xml.push_str("</testsuites>\n");
+        xml
+    }
+
+    pub fn json(&self, catalogue: &Catalogue) -> Value {
+        let totals = self.totals();
+        json!({
+            "harness_version": env!("CARGO_PKG_VERSION"),
+            "iut": self.iut,
+            "bus": self.bus,
+            "seed": self.seed,
+            "wall_time_ms": self.wall_time_ms as u64,
+            "totals": {
+                "pass": totals.pass, "fail": totals.fail, "error": totals.error,
+                "not_applicable": totals.not_applicable, "not_testable": totals.not_testable,
+            },
+            "profiles": self.profiles.iter().map(|p| json!({
+                "profile": p.profile,
+                "cycles": p.cycles(),
+                "frames_checked": p.frames_checked(),
+                "verdicts": catalogue.requirements().filter_map(|r| p.verdicts.get(&r.id).map(|v| (r.id.clone(), verdict_json(v)))).collect::<serde_json::Map<_, _>>(),
+                "failures": p.failures.iter().map(failure_json).collect::<Vec<_>>(),
+                "scenarios": p.runs.iter().map(|r| json!({
+                    "scenario": r.scenario,
+                    "outcome": match &r.outcome { Outcome::Pass => "pass".to_string(), Outcome::Fail(_) => "fail".into(), Outcome::Error(e) => format!("error: {e}") },
+                    "cycles": r.cycles,
+                    "frames_checked": r.frames_checked,
+                })).collect::<Vec<_>>(),
+            })).collect::<Vec<_>>(),
+        })
+    }
+
+    pub fn summary(&self, catalogue: &Catalogue) -> String {
+        let totals = self.totals();
+        let mut md = format!(
+            "# canif conformance run\n\nIUT `{}` on {}, seed {}, {} ms.\n\n**{}**: {} pass, {} fail, {} error, {} not applicable, {} not testable by a run.\n\n",
+            self.iut,
+            self.bus,
+            self.seed,
+            self.wall_time_ms,
+            match self.exit_code() {
+                0 => "CONFORMS",
+                1 => "DOES NOT CONFORM",
+                _ => "ERROR",
+            },
+            totals.pass,
+            totals.fail,
+            totals.error,
+            totals.not_applicable,
+            totals.not_testable
+        );
+        md.push_str("| profile | pass | fail | error | n/a | not testable | cycles | frames checked |\n|---|---|---|---|---|---|---|---|\n");
+        for p in &self.profiles {
+            let count = |label: &str| p.verdicts.values().filter(|v| v.label() == label).count();
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {} | {} | {} | {} |",
+                p.profile,
+                count("pass"),
+                count("fail"),
+                count("error"),
+                count("not applicable"),
+                count("not testable"),
+                p.cycles(),
+                p.frames_checked()
+            );
+        }
+        for p in &self.profiles {
+            for failure in &p.failures {
+                let _ = write!(md, "\n## {} — {}\n\n", p.profile, headline(failure));
+                for id in &failure.requirements {
+                    if let Some(r) = catalogue.requirement(id) {
+                        let _ = writeln!(md, "- **{id}**: {}", r.statement);
+                    }
+                }
+                let _ = write!(md, "\n```\n{}\n```\n", details(failure));
+            }
+            for run in &p.runs {
+                if let Outcome::Error(message) = &run.outcome {
+                    let _ = write!(
+                        md,
+                        "\n## {} — error in {}\n\n{message}\n",
+                        p.profile, run.scenario
+                    );
+                }
+            }
+        }
+        md
+    }
+}
+
+fn verdict_json(verdict: &Verdict) -> Value {
+    match verdict {
+        Verdict::Pass => json!({"verdict": "pass"}),
+        Verdict::Fail(indexes) => json!({"verdict": "fail", "failures": indexes}),
+        Verdict::Error(message) => json!({"verdict": "error", "reason": message}),
+        Verdict::NotApplicable(reason) | Verdict::NotTestable(reason) => {
+            json!({"verdict": verdict.label(), "reason": reason})
+        }
+    }
+}
+
+fn failure_json(failure: &Failure) -> Value {
+    json!({
+        "requirements": failure.requirements,
+        "scenario": failure.scenario,
+        "cycle": failure.cycle,
+        "time_ns": failure.time,
+        "what": failure.what,
+        "expected": failure.expected,
+        "actual": failure.actual,
+        "context": failure.context,
+    })
+}
+
+/// One line: where and what.
+pub fn headline(failure: &Failure) -> String {
+    format!(
+        "{} at cycle {}: {} differs ({})",
+        failure.scenario,
+        failure.cycle,
+        failure.what,
+        failure.requirements.join(", ")
+    )
+}
+
+/// Expected and actual, and the cycles before.
+pub fn details(failure: &Failure) -> String {
+    format!(
+        "{}\n  expected: {}\n  actual:   {}\n  at t = {:.6} ms\ncycles before:\n  {}",
+        headline(failure),
+        failure.expected,
+        failure.actual,
+        failure.time as f64 / 1e6,
+        failure.context.join("\n  ")
+    )
+}
+
+fn escape(text: &str) -> String {
+    text.chars()
+        .map(|c| match c {
+            '&' => "&amp;".to_string(),
+            '<' => "&lt;".to_string(),
+            '>' => "&gt;".to_string(),
+            '"' => "&quot;".to_string(),
+            '\'' => "&apos;".to_string(),
+            c if (c as u32) < 0x20 && c != '\n' && c != '\t' => format!("&#{};", c as u32),
+            c => c.to_string(),
+        })
+        .collect()
+}

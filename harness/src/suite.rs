@@ -431,3 +431,16 @@ pub fn judge(catalogue: &Catalogue, profile: &Profile, runs: Vec<ScenarioRun>) -
         verdicts,
     }
 }
+
+/// Every requirement the scenarios and checks of a run exercise on a device
+/// with these capabilities: exactly what [`judge`] can call pass or fail.
+pub fn checked_ids(caps: &Capabilities, options: &Options) -> Vec<String> {
+    let mut ids: Vec<String> = scenarios(caps, options)
+        .into_iter()
+        .flat_map(|s| s.covers)
+        .collect();
+    ids.extend(REFUSAL_IDS.iter().map(|s| s.to_string()));
+    ids.sort();
+    ids.dedup();
+    ids
+}
