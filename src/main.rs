@@ -58,6 +58,11 @@ enum Command {
     },
     /// The soft device's deliberate faults.
     Faults,
+    /// The suite's power: run every fault on every profile; exit 1 if one goes uncaught.
+    SelfCheck {
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// The requirement catalogue.
     Spec {
         #[command(subcommand)]
@@ -149,6 +154,7 @@ fn main() -> ExitCode {
             };
             run(&catalogue, &iut, &fault, &profile, &options, &report)
         }
+        Command::SelfCheck { seed } => self_check(&catalogue, seed),
         Command::Faults => {
             for fault in Fault::ALL {
                 println!("{:<36} {}", fault.name(), fault.description());
@@ -300,6 +306,14 @@ fn spec_coverage(catalogue: &Catalogue, root: &Path) -> ExitCode {
         }
     };
     let result = coverage::coverage(catalogue, &sources);
+    let in_runs = canif_harness::suite::checked_ids(
+        &canif_model::config::Capabilities::everything(),
+        &Options::default(),
+    );
+    println!(
+        "{:<8} {:>9} {:>13}  title",
+        "area", "by tests", "in IUT runs"
+    );
     for area in &catalogue.areas {
         let needing: Vec<_> = area
             .requirements
@@ -310,14 +324,22 @@ fn spec_coverage(catalogue: &Catalogue, root: &Path) -> ExitCode {
             .iter()
             .filter(|r| result.covered_by.contains_key(&r.id))
             .count();
+        let run = area
+            .requirements
+            .iter()
+            .filter(|r| in_runs.contains(&r.id))
+            .count();
         println!(
-            "{:<8} {:>3}/{:<3} normative+derived covered  {}",
+            "{:<8} {:>4}/{:<4} {:>7}/{:<5}  {}",
             area.area,
             covered,
             needing.len(),
+            run,
+            area.requirements.len(),
             area.title
         );
     }
+    println!("(by tests: normative and derived requirements named by a test's Covers: line; in IUT runs: any requirement a `canif run` scenario checks)");
     for problem in &result.problems {
         println!("{}:{}: {}", problem.file, problem.line, problem.message);
     }
@@ -563,4 +585,53 @@ fn run(
         report_dir.display()
     );
     ExitCode::from(report.exit_code())
+}
+
+fn self_check(catalogue: &Catalogue, seed: u64) -> ExitCode {
+    let options = Options {
+        seed,
+        cases: 2,
+        generated_cycles: 150,
+        counter_wrap: false,
+    };
+    let rows = canif_harness::suite::kill_matrix(catalogue, &options, |fault| {
+        eprintln!("running {fault} on every profile")
+    });
+    let mut uncaught = 0;
+    println!("| fault | caught on | requirements that failed |\n|---|---|---|");
+    for row in &rows {
+        let caught: Vec<&str> = row
+            .caught
+            .iter()
+            .filter(|(_, ids)| !ids.is_empty())
+            .map(|(p, _)| p.as_str())
+            .collect();
+        let mut ids: Vec<&str> = row
+            .caught
+            .iter()
+            .flat_map(|(_, ids)| ids.iter().map(String::as_str))
+            .collect();
+        ids.sort();
+        ids.dedup();
+        if caught.is_empty() {
+            uncaught += 1;
+        }
+        println!(
+            "| {} | {}/{} profiles | {} |",
+            row.fault.name(),
+            caught.len(),
+            row.caught.len(),
+            if ids.is_empty() {
+                "NOT CAUGHT".to_string()
+            } else {
+                ids.join(", ")
+            }
+        );
+    }
+    println!(
+        "\n{} of {} faults caught",
+        rows.len() - uncaught,
+        rows.len()
+    );
+    ExitCode::from(u8::from(uncaught > 0))
 }

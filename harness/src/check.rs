@@ -62,15 +62,27 @@ mod blame {
         "HS-TX-008",
         "FQ-003",
     ];
-    pub const RX_COUNTER: &[&str] = &[
-        "HS-RX-001",
-        "HS-RX-004",
-        "HS-RX-005",
-        "HS-RX-006",
-        "BQ-002",
-        "FQ-001",
-        "FQ-002",
+    /// The device filled a buffer the PLC had not released.
+    pub const RX_UNRELEASED: &[&str] = &["HS-RX-001", "HS-RX-004"];
+    /// RxCounter moved with nothing new.
+    pub const RX_EMPTY_DELIVERY: &[&str] = &["HS-RX-006"];
+    /// A frame came in that should not have (or one was held back that should not).
+    pub const RX_ADMISSION: &[&str] = &[
+        "RXQ-005", "FLT-001", "FLT-002", "FLT-003", "FLT-004", "FLT-005", "FLT-006", "FLT-007",
+        "FLT-008", "FLT-009",
     ];
+    /// Nothing delivered although there was something and the buffer was free.
+    pub const RX_WITHHELD_FAST: &[&str] = &["FQ-001", "FQ-002"];
+    pub const RX_WITHHELD: &[&str] = &[
+        "BQ-002",
+        "HS-RX-001",
+        "FLT-001",
+        "FLT-005",
+        "FLT-006",
+        "FLT-008",
+    ];
+    /// Both moved, to different values.
+    pub const RX_COUNTING: &[&str] = &["HS-RX-005", "HS-RX-006"];
     pub const RX_SET: &[&str] = &[
         "HS-RX-001",
         "HS-RX-002",
@@ -99,7 +111,7 @@ mod blame {
     pub const COB_FORMAT: &[&str] = &["LAY-29-005"];
     pub const LENGTH: &[&str] = &["LAY-11-002", "LAY-29-002", "FD-LEN-005", "LAY-GEN-003"];
     pub const FLAGS: &[&str] = &["FD-BIT-001", "FD-BIT-002", "FD-BIT-003"];
-    pub const TIME_STAMP: &[&str] = &["TS-001", "TS-003"];
+    pub const TIME_STAMP: &[&str] = &["TS-001", "TS-003", "TS-004"];
     pub const TX_MISSING: &[&str] = &[
         "HS-TX-002",
         "HS-TX-004",
@@ -138,6 +150,8 @@ mod blame {
     }
 }
 
+/// The requirements a difference breaks: those of the differing field that the
+/// scenario exercises, or, when it exercises none of them, the field's own.
 fn blame(scenario: &Scenario, candidates: &[&str]) -> Vec<String> {
     let narrowed: Vec<String> = candidates
         .iter()
@@ -145,7 +159,7 @@ fn blame(scenario: &Scenario, candidates: &[&str]) -> Vec<String> {
         .map(|id| id.to_string())
         .collect();
     if narrowed.is_empty() {
-        scenario.covers.clone()
+        candidates.iter().map(|id| id.to_string()).collect()
     } else {
         narrowed
     }
@@ -177,6 +191,15 @@ fn describe_slot(layout: &ImageLayout, bytes: &[u8]) -> String {
     }
 }
 
+/// What the Rx handshake looked like going into the cycle (both devices agreed
+/// until now, so one previous RxCounter serves both).
+#[derive(Debug, Clone, Copy)]
+struct RxState {
+    before: u16,
+    plc_released: u16,
+    fast: bool,
+}
+
 /// Compares two input images field by field, ignoring what the spec calls
 /// don't-care: Rx slots at and past NoOfRxMessages (HS-RX-008, FQ-005).
 fn compare_inputs(
@@ -184,6 +207,8 @@ fn compare_inputs(
     expected: &[u8],
     actual: &[u8],
     was_on_bus: impl Fn(&Frame) -> bool,
+    time_stamp_tolerance: Nanos,
+    rx: RxState,
 ) -> Option<Difference> {
     if expected.len() != actual.len() {
         return Some(Difference {
@@ -193,25 +218,45 @@ fn compare_inputs(
             actual: format!("{} bytes", actual.len()),
         });
     }
-    let header = [
-        ("Inputs.TxCounter", field::TX_COUNTER, blame::TX_COUNTER),
-        ("Inputs.RxCounter", field::RX_COUNTER, blame::RX_COUNTER),
-        (
-            "Inputs.NoOfRxMessages",
-            field::NO_OF_MESSAGES,
-            blame::RX_SET,
-        ),
-    ];
-    for (name, range, candidates) in header {
-        if expected[range.clone()] != actual[range.clone()] {
-            let value = |b: &[u8]| u16::from_le_bytes([b[range.start], b[range.start + 1]]);
-            return Some(Difference {
-                candidates,
-                what: name.into(),
-                expected: value(expected).to_string(),
-                actual: value(actual).to_string(),
-            });
-        }
+    let value = |b: &[u8], at: usize| u16::from_le_bytes([b[at], b[at + 1]]);
+    if expected[field::TX_COUNTER] != actual[field::TX_COUNTER] {
+        return Some(Difference {
+            candidates: blame::TX_COUNTER,
+            what: "Inputs.TxCounter".into(),
+            expected: value(expected, 0).to_string(),
+            actual: value(actual, 0).to_string(),
+        });
+    }
+    if expected[field::RX_COUNTER] != actual[field::RX_COUNTER] {
+        let (expected_rx, actual_rx) = (value(expected, 2), value(actual, 2));
+        let (model_moved, iut_moved) = (expected_rx != rx.before, actual_rx != rx.before);
+        let released = rx.fast || rx.plc_released == rx.before;
+        let candidates = match (model_moved, iut_moved) {
+            (false, true) if !released => blame::RX_UNRELEASED,
+            (false, true) if value(actual, 4) == 0 => blame::RX_EMPTY_DELIVERY,
+            (false, true) => blame::RX_ADMISSION,
+            (true, false) if rx.before == u16::MAX => blame::RX_COUNTING,
+            (true, false) if rx.fast => blame::RX_WITHHELD_FAST,
+            (true, false) => blame::RX_WITHHELD,
+            _ => blame::RX_COUNTING,
+        };
+        return Some(Difference {
+            candidates,
+            what: "Inputs.RxCounter".into(),
+            expected: format!(
+                "{expected_rx} (was {}, Outputs.RxCounter {})",
+                rx.before, rx.plc_released
+            ),
+            actual: actual_rx.to_string(),
+        });
+    }
+    if expected[field::NO_OF_MESSAGES] != actual[field::NO_OF_MESSAGES] {
+        return Some(Difference {
+            candidates: blame::RX_SET,
+            what: "Inputs.NoOfRxMessages".into(),
+            expected: value(expected, 4).to_string(),
+            actual: value(actual, 4).to_string(),
+        });
     }
     if layout.transaction_number
         && expected[field::TRANSACTION_NUMBER] != actual[field::TRANSACTION_NUMBER]
@@ -290,11 +335,10 @@ fn compare_inputs(
             blame::FLAGS
         } else if e[data.clone()] != a[data.clone()] {
             blame::RX_SET
-        } else if message
-            .time_stamp
-            .as_ref()
-            .is_some_and(|f| e[f.clone()] != a[f.clone()])
-        {
+        } else if message.time_stamp.as_ref().is_some_and(|f| {
+            let stamp = |b: &[u8]| u64::from_le_bytes(b[f.clone()].try_into().unwrap_or([0; 8]));
+            stamp(e).abs_diff(stamp(a)) > time_stamp_tolerance
+        }) {
             blame::TIME_STAMP
         } else {
             continue; // only don't-care bytes (data past the length) differ
@@ -413,12 +457,20 @@ impl Lockstep<'_> {
                 self.iut_pending = Some(a);
                 return Ok(());
             }
-            (Some(e), Some(Ok(a))) => Difference {
-                candidates: compare_frames(&e, &a),
-                what: "frame handed to the controller".into(),
-                expected: e.to_string(),
-                actual: a.to_string(),
-            },
+            (Some(e), Some(Ok(a))) => {
+                // A frame the model still holds is a real message sent out of turn.
+                let queued_later = self.model.send_queue().any(|f| *f == a);
+                Difference {
+                    candidates: if queued_later {
+                        blame::TX_OTHER_FRAME
+                    } else {
+                        compare_frames(&e, &a)
+                    },
+                    what: "frame handed to the controller".into(),
+                    expected: e.to_string(),
+                    actual: a.to_string(),
+                }
+            }
             (e, Some(Err(invalid))) => Difference {
                 candidates: blame::TX_INVALID,
                 what: "frame handed to the controller".into(),
@@ -674,6 +726,12 @@ pub fn run_scenario(
                 increment_at = Some((k, written));
             }
         }
+        let rx_state = RxState {
+            before: InputImage::new_checked(state.model.inputs(), layout)
+                .map_or(0, |i| i.rx_counter()),
+            plc_released: u16::from_le_bytes([outputs[2], outputs[3]]),
+            fast: scenario.interface.queue == canif_model::config::QueueMode::Fast,
+        };
         let expected = match state.model.cycle(&outputs, t) {
             Ok(inputs) => inputs.to_vec(),
             Err(e) => return run(Outcome::Error(format!("harness bug: {e}")), k, state.frames),
@@ -690,9 +748,14 @@ pub fn run_scenario(
         };
         state.remember(&outputs, &actual);
         let recent = &state.recent_rx;
-        if let Some(difference) =
-            compare_inputs(&layout, &expected, &actual, |f| recent.contains(f))
-        {
+        if let Some(difference) = compare_inputs(
+            &layout,
+            &expected,
+            &actual,
+            |f| recent.contains(f),
+            scenario.time_stamp_tolerance,
+            rx_state,
+        ) {
             return run(state.fail(difference), k, state.frames);
         }
         if actual.len() != layout.input_size() {

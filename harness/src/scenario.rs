@@ -83,6 +83,9 @@ pub struct Scenario {
     /// FD Tx messages whose dataLength the PLC writes as this (not a valid
     /// size), keyed by transaction number; the bytes past it hold junk.
     pub declared_lengths: Vec<(u16, u8)>,
+    /// How far a receive time stamp may be from the end of reception (the
+    /// profile's timestamp_tolerance_ns, TS-004).
+    pub time_stamp_tolerance: Nanos,
     pub steps: Steps,
 }
 
@@ -161,7 +164,7 @@ fn layout_ids(config: &InterfaceConfig) -> Vec<&'static str> {
         ids.push("LAY-GEN-005");
     }
     if config.time_stamp {
-        ids.extend(["TS-001", "TS-003"]);
+        ids.extend(["TS-001", "TS-003", "TS-004"]);
     }
     match config.queue {
         QueueMode::Fast => ids.extend(["FQ-003"]),
@@ -219,6 +222,7 @@ fn scenario(name: &str, config: &InterfaceConfig, covers: &[&str], steps: Steps)
         cycle_time: 1_000_000,
         check_confirmation_delay: false,
         declared_lengths: Vec::new(),
+        time_stamp_tolerance: 0,
         steps,
     }
 }

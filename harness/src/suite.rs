@@ -367,7 +367,8 @@ pub fn run_profile(
     let caps = profile.model_capabilities();
     let mut runs = vec![check_refusals(kind, &caps)];
     progress(&runs[0]);
-    for scenario in scenarios(&caps, options) {
+    for mut scenario in scenarios(&caps, options) {
+        scenario.time_stamp_tolerance = profile.timestamp_tolerance_ns;
         let run = run_scenario(kind, &caps, &scenario, scenario.steps());
         progress(&run);
         runs.push(run);
@@ -443,4 +444,48 @@ pub fn checked_ids(caps: &Capabilities, options: &Options) -> Vec<String> {
     ids.sort();
     ids.dedup();
     ids
+}
+
+/// One row of the kill matrix: a fault and what it broke on each profile.
+#[derive(Debug, Clone)]
+pub struct KillRow {
+    pub fault: canif_softdevice::Fault,
+    /// Profile name → requirement ids that failed (empty: not caught there).
+    pub caught: Vec<(String, Vec<String>)>,
+}
+
+/// Runs the soft device with each fault on every profile.
+pub fn kill_matrix(
+    catalogue: &Catalogue,
+    options: &Options,
+    mut progress: impl FnMut(&str),
+) -> Vec<KillRow> {
+    canif_softdevice::Fault::ALL
+        .into_iter()
+        .map(|fault| {
+            progress(fault.name());
+            let options = Options {
+                counter_wrap: fault == canif_softdevice::Fault::CounterDoesNotWrap,
+                ..options.clone()
+            };
+            let kind = IutKind::SoftDevice {
+                faults: vec![fault],
+            };
+            let caught = catalogue
+                .profiles
+                .iter()
+                .map(|profile| {
+                    let run = run_profile(catalogue, profile, &kind, &options, |_| {});
+                    let failed = run
+                        .verdicts
+                        .iter()
+                        .filter(|(_, v)| matches!(v, Verdict::Fail(_)))
+                        .map(|(id, _)| id.clone())
+                        .collect();
+                    (profile.name.clone(), failed)
+                })
+                .collect();
+            KillRow { fault, caught }
+        })
+        .collect()
 }

@@ -116,6 +116,11 @@ impl Device {
         self.send_queue.len() + usize::from(self.in_flight.is_some())
     }
 
+    /// The accepted messages waiting to be sent, in sending order.
+    pub fn send_queue(&self) -> impl Iterator<Item = &Frame> + '_ {
+        self.send_queue.iter().map(|pending| &pending.frame)
+    }
+
     /// Messages received and not yet in the image.
     pub fn queued_rx(&self) -> usize {
         self.rx_queue.len()
