@@ -20,7 +20,7 @@ fn main() {
     let profile = catalogue.profile("el6751-mdp").unwrap();
     let caps = profile.model_capabilities();
     let config = InterfaceConfig::new(FrameFormat::Base11, 32);
-    let mut soak = scenario::generated(&config, 42, 60_000, 400);
+    let mut soak = scenario::generated(&config, 42, 60_000, 100);
     soak.bit_rates = BitRates::classic(1_000_000);
     for (label, kind) in [("softdevice", &softdevice), ("model", &IutKind::Model)] {
         let started = Instant::now();

@@ -253,7 +253,12 @@ struct Generator {
     format: FrameFormat,
     slots: u64,
     cycle_time: Nanos,
+    bit_rates: BitRates,
     load_percent: u64,
+    /// Bus time still free to offer: a cycle's share of the load is added each
+    /// cycle, every frame offered (PLC or node) spends its duration. Offering
+    /// no more than the bus carries keeps every backlog, and memory, bounded.
+    budget: Nanos,
     tn: u16,
 }
 
@@ -264,31 +269,49 @@ impl Generator {
             format: scenario.interface.format,
             slots: u64::from(scenario.interface.tx_slots),
             cycle_time: scenario.cycle_time,
+            bit_rates: scenario.bit_rates,
             load_percent,
+            budget: 0,
             tn: 0,
         }
     }
 
+    fn affordable(&mut self, frame: &Frame) -> bool {
+        let cost = crate::bus::duration(frame, self.bit_rates);
+        if cost > self.budget {
+            return false;
+        }
+        self.budget -= cost;
+        true
+    }
+
     fn step(&mut self) -> Step {
-        let rng = &mut self.rng;
+        let share = self.cycle_time * self.load_percent / 100;
+        // Quiet cycles save up for a burst of at most four cycles' worth.
+        self.budget = (self.budget + share).min(4 * share);
         let mut step = Step {
-            plc_busy: rng.chance(15),
+            plc_busy: self.rng.chance(15),
             ..Step::default()
         };
-        for _ in 0..rng.below(self.slots + 3) {
+        for _ in 0..self.rng.below(self.slots + 3) {
+            let frame = random_frame(&mut self.rng, self.format);
+            if !self.affordable(&frame) {
+                break;
+            }
             self.tn = self.tn.wrapping_add(1);
-            let frame = random_frame(rng, self.format);
             step.send.push(MessageRepr {
                 transaction_number: self.tn,
                 frame,
                 time_stamp: 0,
             });
         }
-        // Up to the load: about one frame per 250 µs at 100 %.
-        let frames = rng.below(self.cycle_time / 250_000 * self.load_percent / 100 + 1);
-        for _ in 0..frames {
-            step.bus
-                .push((rng.below(self.cycle_time), random_frame(rng, self.format)));
+        for _ in 0..self.rng.below(2 * self.slots) {
+            let frame = random_frame(&mut self.rng, self.format);
+            if !self.affordable(&frame) {
+                break;
+            }
+            let at = self.rng.below(self.cycle_time);
+            step.bus.push((at, frame));
         }
         step
     }

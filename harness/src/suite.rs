@@ -101,7 +101,7 @@ pub fn scenarios(caps: &Capabilities, options: &Options) -> Vec<Scenario> {
                 config,
                 seed.wrapping_mul(1_000).wrapping_add(salt * 100 + case),
                 options.generated_cycles,
-                100,
+                95,
             ));
         }
     };
