@@ -778,7 +778,7 @@ pub fn run_scenario(
 
 /// Rewrites the dataLength of FD Tx messages to the length the PLC means (not a
 /// valid size) and fills the bytes past it with junk the device must not send.
-fn declare_lengths(layout: &ImageLayout, lengths: &[(u16, u8)], outputs: &mut [u8]) {
+pub fn declare_lengths(layout: &ImageLayout, lengths: &[(u16, u8)], outputs: &mut [u8]) {
     let message = layout.tx_message;
     let (Some(tn), LengthField::Byte(length)) =
         (message.transaction_number.clone(), &message.length)

@@ -33,8 +33,29 @@ pub struct MarkerProblem {
     pub message: String,
 }
 
-/// Reads the `Covers:` markers of one source file.
+/// Reads the `Covers:` markers of one source file, or the `@ID` tags of a
+/// Gherkin feature (tags with a `-` name requirements; others are capabilities
+/// and run modes).
 pub fn markers(file: &str, text: &str) -> (Vec<Marker>, Vec<MarkerProblem>) {
+    if file.ends_with(".feature") {
+        let found = text
+            .lines()
+            .enumerate()
+            .filter(|(_, line)| line.trim_start().starts_with('@'))
+            .map(|(index, line)| Marker {
+                file: file.into(),
+                line: index + 1,
+                ids: line
+                    .split_whitespace()
+                    .filter_map(|tag| tag.strip_prefix('@'))
+                    .filter(|tag| tag.contains('-'))
+                    .map(String::from)
+                    .collect(),
+            })
+            .filter(|marker| !marker.ids.is_empty())
+            .collect();
+        return (found, Vec::new());
+    }
     let lines: Vec<&str> = text.lines().collect();
     let mut found = Vec::new();
     let mut problems = Vec::new();
@@ -117,8 +138,8 @@ pub fn coverage(catalogue: &Catalogue, sources: &[(String, String)]) -> Coverage
     result
 }
 
-/// The test sources of a workspace: every `<member>/tests/*.rs`, paths shown
-/// relative to `root`.
+/// The test sources of a workspace: every `<member>/tests/*.rs` and
+/// `features/*.feature`, paths shown relative to `root`.
 pub fn test_sources(root: &Path) -> std::io::Result<Vec<(String, String)>> {
     let mut members: Vec<_> = std::fs::read_dir(root)?
         .filter_map(|entry| entry.ok().map(|entry| entry.path()))
@@ -127,12 +148,18 @@ pub fn test_sources(root: &Path) -> std::io::Result<Vec<(String, String)>> {
     members.sort();
     let mut sources = Vec::new();
     for member in members {
-        let Ok(entries) = std::fs::read_dir(member.join("tests")) else {
-            continue;
-        };
-        let mut paths: Vec<_> = entries
+        // Feature files sit in features/ itself; Rust tests in <member>/tests/.
+        let folders = [member.join("tests"), member.clone()];
+        let mut paths: Vec<_> = folders
+            .iter()
+            .filter_map(|folder| std::fs::read_dir(folder).ok())
+            .flatten()
             .filter_map(|e| e.ok().map(|e| e.path()))
-            .filter(|p| p.extension().is_some_and(|x| x == "rs"))
+            .filter(|p| {
+                let in_tests = p.parent().is_some_and(|d| d.ends_with("tests"));
+                (in_tests && p.extension().is_some_and(|x| x == "rs"))
+                    || p.extension().is_some_and(|x| x == "feature")
+            })
             .collect();
         paths.sort();
         for path in paths {

@@ -1,0 +1,123 @@
+//! The scenarios of the embedded feature files, one entry per scenario or
+//! Examples row, with their tags.
+
+use cucumber::gherkin::{Feature, GherkinEnv};
+
+/// One runnable scenario (an outline's Examples row counts once).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ScenarioInfo {
+    pub file: String,
+    pub feature: String,
+    pub name: String,
+    /// The line cucumber filters on (an Examples row's line for outlines).
+    pub line: usize,
+    /// Requirement ids and capabilities from the feature's and scenario's tags.
+    pub requirements: Vec<String>,
+    pub capabilities: Vec<String>,
+    /// Runs without an implementation under test (the manual's tables).
+    pub model_only: bool,
+    /// Runs once against the soft device; the scenario names its profile.
+    pub once: bool,
+}
+
+const CAPABILITIES: [&str; 10] = [
+    "base11",
+    "ext29",
+    "fd",
+    "fast_queue",
+    "optimized_queue",
+    "transaction_number",
+    "timestamp",
+    "filters",
+    "info_data",
+    "distributed_clocks",
+];
+
+/// The embedded feature parsed, by file name.
+pub fn feature(file: &str) -> Option<Feature> {
+    let (path, text) = crate::embedded::EMBEDDED
+        .iter()
+        .find(|(path, _)| *path == file)?;
+    let mut feature = Feature::parse(text, GherkinEnv::default()).ok()?;
+    feature.path = Some(path.into());
+    Some(feature)
+}
+
+/// Every scenario of every embedded feature; a feature that does not parse is an error naming it.
+pub fn scenarios() -> Result<Vec<ScenarioInfo>, String> {
+    let mut list = Vec::new();
+    for (path, text) in crate::embedded::EMBEDDED {
+        let feature =
+            Feature::parse(text, GherkinEnv::default()).map_err(|e| format!("{path}: {e}"))?;
+        for scenario in &feature.scenarios {
+            let base: Vec<&String> = feature.tags.iter().chain(&scenario.tags).collect();
+            // Each runnable row with the tags that apply to it (an Examples block may add its own).
+            let mut rows: Vec<(usize, Vec<&String>)> = Vec::new();
+            for examples in &scenario.examples {
+                let tags: Vec<&String> = base.iter().copied().chain(&examples.tags).collect();
+                if let Some(table) = &examples.table {
+                    rows.extend(
+                        (1..table.rows.len()).map(|i| (table.position.line + i, tags.clone())),
+                    );
+                }
+            }
+            if scenario.examples.is_empty() {
+                rows.push((scenario.position.line, base.clone()));
+            }
+            for (line, tags) in rows {
+                list.push(ScenarioInfo {
+                    file: path.to_string(),
+                    feature: feature.name.clone(),
+                    name: scenario.name.clone(),
+                    line,
+                    requirements: tags
+                        .iter()
+                        .filter(|t| t.contains('-'))
+                        .map(|t| t.to_string())
+                        .collect(),
+                    capabilities: tags
+                        .iter()
+                        .filter(|t| CAPABILITIES.contains(&t.as_str()))
+                        .map(|t| t.to_string())
+                        .collect(),
+                    model_only: tags.iter().any(|t| *t == "model"),
+                    once: tags.iter().any(|t| *t == "once"),
+                });
+            }
+        }
+    }
+    Ok(list)
+}
+
+/// The feature cut down to the scenario at `line`; for an outline, to the one
+/// Examples row at `line`. Cucumber filters before it expands outlines, so a
+/// single row is chosen here.
+pub fn only(mut feature: Feature, line: usize) -> Option<Feature> {
+    feature.rules.clear();
+    feature.scenarios.retain(|scenario| {
+        scenario.position.line == line
+            || scenario.examples.iter().any(|e| {
+                e.table.as_ref().is_some_and(|t| {
+                    (t.position.line + 1..t.position.line + t.rows.len()).contains(&line)
+                })
+            })
+    });
+    let scenario = feature.scenarios.first_mut()?;
+    for examples in &mut scenario.examples {
+        if let Some(table) = &mut examples.table {
+            let first = table.position.line;
+            let keep: Vec<Vec<String>> = table
+                .rows
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| *i == 0 || first + *i == line)
+                .map(|(_, row)| row.clone())
+                .collect();
+            table.rows = keep;
+        }
+    }
+    scenario
+        .examples
+        .retain(|e| e.table.as_ref().is_some_and(|t| t.rows.len() > 1));
+    Some(feature)
+}

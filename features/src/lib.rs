@@ -1,0 +1,98 @@
+//! # canif-features — the manual as executable scenarios
+//!
+//! The `.feature` files in this folder say, in the manual's words, what the CAN
+//! interface does; the steps in [`steps`] drive any implementation the harness
+//! supports. [`run_scenario`] runs one scenario against one target.
+
+#![forbid(unsafe_code)]
+
+pub mod catalogue;
+pub mod steps;
+pub mod world;
+
+pub use catalogue::{scenarios, ScenarioInfo};
+pub use world::{set_target, CanWorld, Target};
+
+mod embedded {
+    include!(concat!(env!("OUT_DIR"), "/features.rs"));
+}
+
+use std::io;
+use std::sync::{Arc, Mutex};
+
+use cucumber::writer::Stats as _;
+use cucumber::writer::{self, Coloring, Verbosity};
+use cucumber::{World as _, WriterExt as _};
+
+/// Output captured from cucumber's writer.
+#[derive(Clone, Default)]
+struct Captured(Arc<Mutex<Vec<u8>>>);
+
+impl io::Write for Captured {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        self.0
+            .lock()
+            .map_err(|_| io::Error::other("poisoned"))?
+            .extend_from_slice(buf);
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        Ok(())
+    }
+}
+
+/// Feeds cucumber the embedded features instead of reading a folder.
+struct Embedded;
+
+impl cucumber::Parser<Vec<cucumber::gherkin::Feature>> for Embedded {
+    type Cli = cucumber::cli::Empty;
+    type Output = futures::stream::Iter<
+        std::vec::IntoIter<cucumber::parser::Result<cucumber::gherkin::Feature>>,
+    >;
+
+    fn parse(self, input: Vec<cucumber::gherkin::Feature>, _: Self::Cli) -> Self::Output {
+        futures::stream::iter(input.into_iter().map(Ok).collect::<Vec<_>>())
+    }
+}
+
+/// How one scenario ended.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ScenarioOutcome {
+    Passed,
+    /// Cucumber's report of the failing step.
+    Failed(String),
+}
+
+/// Runs the scenario at `line` of `file` against `target`.
+pub fn run_scenario(file: &str, line: usize, target: Target) -> ScenarioOutcome {
+    let Some(feature) = catalogue::feature(file).and_then(|f| catalogue::only(f, line)) else {
+        return ScenarioOutcome::Failed(format!("no scenario at {file}:{line}"));
+    };
+    // What cucumber's own parser does after reading a file: fill in the outline.
+    let feature = match cucumber::feature::Ext::expand_examples(feature) {
+        Ok(feature) => feature,
+        Err(error) => return ScenarioOutcome::Failed(format!("{file}:{line}: {error}")),
+    };
+    set_target(target);
+    let captured = Captured::default();
+    let writer =
+        writer::Basic::new(captured.clone(), Coloring::Never, Verbosity::ShowWorld).summarized();
+    let result = futures::executor::block_on(
+        CanWorld::cucumber::<&str>()
+            .with_parser(Embedded)
+            .with_writer(writer)
+            .with_default_cli()
+            .max_concurrent_scenarios(1)
+            .filter_run(vec![feature], |_, _, _| true),
+    );
+    let output = String::from_utf8_lossy(&captured.0.lock().map(|b| b.clone()).unwrap_or_default())
+        .into_owned();
+    let stats = result.scenarios_stats();
+    if result.execution_has_failed() || stats.failed > 0 || result.parsing_errors() > 0 {
+        ScenarioOutcome::Failed(output)
+    } else if stats.passed == 0 {
+        ScenarioOutcome::Failed(format!("no scenario ran at line {line} (skipped steps mean a step has no definition):\n{output}"))
+    } else {
+        ScenarioOutcome::Passed
+    }
+}

@@ -1,0 +1,295 @@
+//! The world a scenario runs in: a PLC (the reference client of 001 §6), an
+//! implementation under test built through the harness, and the bus around it.
+
+use canif_harness::check::declare_lengths;
+use canif_harness::{Iut, IutKind};
+use canif_model::client::PlcClient;
+use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig};
+use canif_model::exchange::{ExchangeMode, ProcessDataExchange};
+use canif_model::frame::Frame;
+use canif_model::image::{ImageLayout, InputImage, MessageRepr};
+use canif_model::info_data::ControllerStatus;
+use canif_model::Nanos;
+use std::cell::RefCell;
+
+/// Who the scenario runs against; set by the runner before each run.
+#[derive(Debug, Clone)]
+pub struct Target {
+    pub iut: IutKind,
+    pub profile: String,
+    pub caps: Capabilities,
+}
+
+thread_local! {
+    static TARGET: RefCell<Option<Target>> = const { RefCell::new(None) };
+}
+
+/// Sets the target for scenarios run on this thread.
+pub fn set_target(target: Target) {
+    TARGET.with(|t| *t.borrow_mut() = Some(target));
+}
+
+fn target() -> Target {
+    TARGET
+        .with(|t| t.borrow().clone())
+        .unwrap_or_else(|| Target {
+            iut: IutKind::Model,
+            profile: "everything".into(),
+            caps: Capabilities::everything(),
+        })
+}
+
+/// One cycle: 1 ms.
+pub const CYCLE: Nanos = 1_000_000;
+
+#[derive(cucumber::World)]
+#[world(init = Self::new)]
+pub struct CanWorld {
+    pub target: Target,
+    pub config: InterfaceConfig,
+    pub exchange_mode: ExchangeMode,
+    pub iut: Option<Box<dyn Iut>>,
+    pub refused: Option<String>,
+    pub plc: Option<PlcClient>,
+    pub exchange: Option<ProcessDataExchange>,
+    pub layout: Option<ImageLayout>,
+    /// The input image the IUT returned last.
+    pub inputs: Vec<u8>,
+    pub now: Nanos,
+    pub cycle: u64,
+    pub bus_blocked: bool,
+    /// The frame the controller took but could not finish while the bus was blocked.
+    pub in_controller: Option<Frame>,
+    /// Frames the IUT put on the bus, in order.
+    pub on_bus: Vec<Frame>,
+    /// Frames other nodes sent, with the end of their reception.
+    pub sent_by_nodes: Vec<(Frame, Nanos)>,
+    /// Messages the PLC read, in order.
+    pub received: Vec<MessageRepr>,
+    pub tx_counter_override: Option<u16>,
+    pub declared_lengths: Vec<(u16, u8)>,
+    pub next_tn: u16,
+    pub status: Option<ControllerStatus>,
+    /// Cycles from the PLC's TxCounter increment to its confirmation, as the PLC saw it.
+    pub confirmation_delay: Option<u64>,
+    pending_increment: Option<(u64, u16)>,
+    /// What a model-level step computed, for the `Then` that follows.
+    pub value: Vec<u8>,
+}
+
+impl std::fmt::Debug for CanWorld {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "CanWorld {{ iut: {}, profile: {}, config: {:?}, cycle: {}, inputs: {:02X?}, on_bus: {:?}, received: {} }}",
+            self.target.iut.name(),
+            self.target.profile,
+            self.config,
+            self.cycle,
+            self.inputs,
+            self.on_bus,
+            self.received.len()
+        )
+    }
+}
+
+impl CanWorld {
+    fn new() -> Self {
+        let target = target();
+        CanWorld {
+            target,
+            config: InterfaceConfig::new(FrameFormat::Base11, 4),
+            exchange_mode: ExchangeMode::SeparateInputUpdate,
+            iut: None,
+            refused: None,
+            plc: None,
+            exchange: None,
+            layout: None,
+            inputs: Vec::new(),
+            now: 0,
+            cycle: 0,
+            bus_blocked: false,
+            in_controller: None,
+            on_bus: Vec::new(),
+            sent_by_nodes: Vec::new(),
+            received: Vec::new(),
+            tx_counter_override: None,
+            declared_lengths: Vec::new(),
+            next_tn: 1,
+            status: None,
+            confirmation_delay: None,
+            pending_increment: None,
+            value: Vec::new(),
+        }
+    }
+
+    /// Builds the IUT the first time a scenario needs it.
+    pub fn start(&mut self) -> Result<(), String> {
+        if self.iut.is_some() {
+            return Ok(());
+        }
+        if let Some(reason) = &self.refused {
+            return Err(reason.clone());
+        }
+        match self.target.iut.build(&self.target.caps, &self.config) {
+            Ok(iut) => {
+                let layout = ImageLayout::new(&self.config, self.target.caps.info_data);
+                self.inputs = vec![0; layout.input_size()];
+                self.plc = Some(PlcClient::new(layout));
+                self.exchange = Some(ProcessDataExchange::new(self.exchange_mode, &self.inputs));
+                self.layout = Some(layout);
+                self.iut = Some(iut);
+                Ok(())
+            }
+            Err(reason) => {
+                self.refused = Some(reason.clone());
+                Err(reason)
+            }
+        }
+    }
+
+    pub fn layout(&self) -> ImageLayout {
+        self.layout.expect("started")
+    }
+
+    pub fn input_image(&self) -> InputImage<&[u8]> {
+        InputImage::new_checked(&self.inputs[..], self.layout())
+            .expect("the IUT's input image has the layout's size")
+    }
+
+    /// One task cycle: the PLC's task (unless busy), the IUT's cycle, then the bus.
+    pub fn cycle(&mut self, plc_busy: bool) -> Result<(), String> {
+        self.start()?;
+        let layout = self.layout();
+        let plc = self.plc.as_mut().expect("started");
+        let exchange = self.exchange.as_mut().expect("started");
+        if !plc_busy {
+            let seen = InputImage::new_checked(exchange.plc_inputs(), layout)
+                .map_err(|e| e.to_string())?
+                .tx_counter();
+            if let Some((since, counter)) = self.pending_increment {
+                if seen == counter {
+                    self.confirmation_delay = Some(self.cycle - since);
+                    self.pending_increment = None;
+                }
+            }
+            let before = u16::from_le_bytes([plc.outputs()[0], plc.outputs()[1]]);
+            plc.task(exchange.plc_inputs()).map_err(|e| e.to_string())?;
+            if !self.declared_lengths.is_empty() {
+                declare_lengths(&layout, &self.declared_lengths, plc.outputs_mut());
+            }
+            if let Some(counter) = self.tx_counter_override.take() {
+                plc.outputs_mut()[..2].copy_from_slice(&counter.to_le_bytes());
+            }
+            let after = u16::from_le_bytes([plc.outputs()[0], plc.outputs()[1]]);
+            if after != before && self.pending_increment.is_none() {
+                self.pending_increment = Some((self.cycle, after));
+            }
+            self.received.extend(plc.take_received());
+        }
+        let outputs = plc.outputs().to_vec();
+        let iut = self.iut.as_mut().expect("started");
+        if let Some(status) = self.status.take() {
+            iut.controller_status(&status);
+        }
+        self.inputs = iut.cycle(&outputs, self.now).map_err(|e| e.0)?;
+        exchange.device_cycle_done(&self.inputs);
+        self.run_bus()?;
+        self.now += CYCLE;
+        self.cycle += 1;
+        Ok(())
+    }
+
+    /// Lets every frame the IUT offers go on the bus (an idle, fast bus), up
+    /// to the next cycle; a blocked bus takes none.
+    pub fn run_bus(&mut self) -> Result<(), String> {
+        let iut = self.iut.as_mut().expect("started");
+        if self.bus_blocked {
+            // The controller takes the first frame but loses every arbitration.
+            if self.in_controller.is_none() {
+                match iut.poll_transmit(self.now) {
+                    Some(Ok(frame)) => self.in_controller = Some(frame),
+                    Some(Err(invalid)) => {
+                        return Err(format!(
+                            "the IUT put an invalid frame on the bus: {}",
+                            invalid.0
+                        ))
+                    }
+                    None => {}
+                }
+            }
+            return Ok(());
+        }
+        if let Some(frame) = self.in_controller.take() {
+            self.on_bus.push(frame);
+            iut.transmit_complete();
+        }
+        let mut at = self.now;
+        loop {
+            if let Some(due) = iut.poll_timeout() {
+                at = at.max(due);
+            }
+            match iut.poll_transmit(at) {
+                Some(Ok(frame)) => {
+                    self.on_bus.push(frame);
+                    iut.transmit_complete();
+                    at += 1_000;
+                }
+                Some(Err(invalid)) => {
+                    return Err(format!(
+                        "the IUT put an invalid frame on the bus: {}",
+                        invalid.0
+                    ))
+                }
+                None if iut
+                    .poll_timeout()
+                    .is_some_and(|due| due > at && due < self.now + CYCLE) =>
+                {
+                    continue
+                }
+                None => return Ok(()),
+            }
+        }
+    }
+
+    /// A frame from another node ends its reception now (plus a few µs per frame).
+    pub fn node_sends(&mut self, frame: Frame) -> Result<(), String> {
+        self.start()?;
+        let end = self.now + 10_000 + 1_000 * self.sent_by_nodes.len() as u64 % CYCLE;
+        self.sent_by_nodes.push((frame, end));
+        self.iut.as_mut().expect("started").receive(&frame, end);
+        Ok(())
+    }
+
+    /// One frame from another node in each of the next `cycles` cycles, the PLC reading all.
+    pub fn one_frame_per_cycle(&mut self, cycles: u32) -> Result<(), String> {
+        for k in 0..cycles {
+            self.node_sends(
+                Frame::classic(
+                    canif_model::frame::CanId::Standard((k % 0x7FF) as u16),
+                    &[k as u8],
+                )
+                .expect("1 byte"),
+            )?;
+            self.sent_by_nodes.clear();
+            self.cycle(false)?;
+            self.received.clear();
+        }
+        Ok(())
+    }
+
+    pub fn plc_sends(&mut self, frame: Frame) -> Result<(), String> {
+        self.start()?;
+        let transaction_number = self.next_tn;
+        self.next_tn = self.next_tn.wrapping_add(1);
+        self.plc
+            .as_mut()
+            .expect("started")
+            .send(MessageRepr {
+                transaction_number,
+                frame,
+                time_stamp: 0,
+            })
+            .map_err(|e| e.to_string())
+    }
+}

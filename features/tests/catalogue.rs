@@ -1,0 +1,97 @@
+//! The feature files: how many scenarios, well-formed tags, and every fault of
+//! the soft device caught by at least one scenario (the mutation self-check).
+
+use canif_features::{run_scenario, scenarios, ScenarioOutcome, Target};
+use canif_harness::IutKind;
+use canif_softdevice::Fault;
+use canif_spec::Catalogue;
+
+#[test]
+fn at_least_120_scenarios_counting_each_examples_row() {
+    let list = scenarios().unwrap();
+    assert!(list.len() >= 120, "{} scenarios", list.len());
+}
+
+#[test]
+fn every_tag_is_a_requirement_a_capability_or_a_run_mode() {
+    let catalogue = Catalogue::embedded().unwrap();
+    for scenario in scenarios().unwrap() {
+        assert!(
+            !scenario.requirements.is_empty(),
+            "{}:{} names no requirement",
+            scenario.file,
+            scenario.line
+        );
+        for id in &scenario.requirements {
+            assert!(
+                catalogue.requirement(id).is_some(),
+                "{}:{}: @{id} is no requirement",
+                scenario.file,
+                scenario.line
+            );
+        }
+    }
+}
+
+/// Each fault with a profile that has the feature it breaks.
+const FAULTS: [(Fault, &str); 20] = [
+    (Fault::AckBeforeAccept, "el6751-mdp"),
+    (Fault::OverwritesUnacknowledgedRx, "el6751-mdp"),
+    (Fault::FdLengthRoundsDown, "fc532x"),
+    (Fault::FdLength32As36, "fc532x"),
+    (Fault::RtrBitMisplaced, "el6751-mdp"),
+    (Fault::ExtendedFlagMissing, "ccat"),
+    (Fault::TransactionNumberOfFirstFrame, "ccat"),
+    (Fault::TransactionNumberOnHandover, "ccat"),
+    (Fault::TimeStampInMicroseconds, "ccat"),
+    (Fault::HeadDropWhenFull, "el6751-mdp"),
+    (Fault::FilterLastMatchWins, "ccat"),
+    (Fault::FastQueueWaitsForAck, "el6751-mdp"),
+    (Fault::CounterDoesNotWrap, "el6751-mdp"),
+    (Fault::RxCounterCountsEmptyCycles, "el6751-mdp"),
+    (Fault::SendsBatchReversed, "el6751-mdp"),
+    (Fault::SendsOneMoreThanAsked, "el6751-mdp"),
+    (Fault::FdPaddingFf, "fc532x"),
+    (Fault::CobIdWordBigEndian, "el6751-mdp"),
+    (Fault::BrsEsiSwapped, "fc532x"),
+    (Fault::ReceiveFifoNotReported, "fc532x"),
+];
+
+#[test]
+fn every_fault_is_caught_by_a_scenario() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let list = scenarios().unwrap();
+    let mut uncaught = Vec::new();
+    for (fault, profile_name) in FAULTS {
+        let profile = catalogue.profile(profile_name).unwrap();
+        let caught: Vec<String> = list
+            .iter()
+            .filter(|s| !s.model_only && (s.once || s.capabilities.iter().all(|c| profile.has(c))))
+            .filter(|s| {
+                let target = Target {
+                    iut: IutKind::SoftDevice {
+                        faults: vec![fault],
+                    },
+                    profile: profile.name.clone(),
+                    caps: profile.model_capabilities(),
+                };
+                matches!(
+                    run_scenario(&s.file, s.line, target),
+                    ScenarioOutcome::Failed(_)
+                )
+            })
+            .map(|s| format!("{}:{}", s.file, s.line))
+            .collect();
+        if caught.is_empty() {
+            uncaught.push(fault.name());
+        } else {
+            eprintln!(
+                "{:<36} caught by {} scenario(s), e.g. {}",
+                fault.name(),
+                caught.len(),
+                caught[0]
+            );
+        }
+    }
+    assert!(uncaught.is_empty(), "no scenario catches: {uncaught:?}");
+}
