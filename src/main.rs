@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use canif_harness::report::RunReport;
+use canif_harness::report::{RunReport, ScenarioResult};
 use canif_harness::suite::{run_profile, Options};
 use canif_harness::{IutKind, Outcome};
 use canif_model::frame::{CanId, Frame};
@@ -559,11 +559,25 @@ fn run(
         );
         results.push(result);
     }
+    let scenarios = match run_features(&kind, &profiles) {
+        Ok(scenarios) => scenarios,
+        Err(error) => {
+            eprintln!("the feature files do not parse: {error}");
+            return ExitCode::from(2);
+        }
+    };
+    let failed = scenarios.iter().filter(|s| s.outcome.is_err()).count();
+    eprintln!(
+        "Gherkin scenarios: {} run, {} failed",
+        scenarios.len(),
+        failed
+    );
     let report = RunReport {
         iut: kind.name(),
         seed: options.seed,
         bus: "simulated bus (virtual time)".into(),
         profiles: results,
+        scenarios,
         wall_time_ms: started.elapsed().as_millis(),
     };
     if let Err(error) = report.write(catalogue, report_dir) {
@@ -634,4 +648,62 @@ fn self_check(catalogue: &Catalogue, seed: u64) -> ExitCode {
         rows.len()
     );
     ExitCode::from(u8::from(uncaught > 0))
+}
+
+/// Every Gherkin scenario against the IUT: once per profile whose capabilities
+/// it needs, the manual's tables (`@model`) and `@once` scenarios once.
+fn run_features(
+    kind: &IutKind,
+    profiles: &[&canif_spec::Profile],
+) -> Result<Vec<ScenarioResult>, String> {
+    let mut results = Vec::new();
+    for scenario in canif_features::scenarios()? {
+        let mut targets = Vec::new();
+        if scenario.model_only {
+            targets.push((
+                "model".to_string(),
+                IutKind::Model,
+                canif_model::config::Capabilities::everything(),
+            ));
+        } else if scenario.once {
+            targets.push((
+                "any-profile".to_string(),
+                kind.clone(),
+                canif_model::config::Capabilities::everything(),
+            ));
+        } else {
+            for profile in profiles
+                .iter()
+                .filter(|p| scenario.capabilities.iter().all(|c| p.has(c)))
+            {
+                targets.push((
+                    profile.name.clone(),
+                    kind.clone(),
+                    profile.model_capabilities(),
+                ));
+            }
+        }
+        for (suite, iut, caps) in targets {
+            let target = canif_features::Target {
+                iut,
+                profile: suite.clone(),
+                caps,
+            };
+            let outcome = match canif_features::run_scenario(&scenario.file, scenario.line, target)
+            {
+                canif_features::ScenarioOutcome::Passed => Ok(()),
+                canif_features::ScenarioOutcome::Failed(report) => Err(report),
+            };
+            results.push(ScenarioResult {
+                suite,
+                name: scenario.name.clone(),
+                file: scenario.file.clone(),
+                line: scenario.line,
+                requirements: scenario.requirements.clone(),
+                outcome,
+            });
+        }
+    }
+    results.sort_by(|a, b| (&a.suite, &a.file, a.line).cmp(&(&b.suite, &b.file, b.line)));
+    Ok(results)
 }

@@ -81,14 +81,16 @@ impl std::fmt::Debug for CanWorld {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "CanWorld {{ iut: {}, profile: {}, config: {:?}, cycle: {}, inputs: {:02X?}, on_bus: {:?}, received: {} }}",
+            "CanWorld {{ iut: {}, profile: {}, {:?} {:?} with {} slots, cycle: {}, input header: {:02X?}, on the bus: {:?}, the PLC received: {:?} }}",
             self.target.iut.name(),
             self.target.profile,
-            self.config,
+            self.config.format,
+            self.config.queue,
+            self.config.tx_slots,
             self.cycle,
-            self.inputs,
+            &self.inputs[..self.inputs.len().min(8)],
             self.on_bus,
-            self.received.len()
+            self.received.iter().map(|m| m.frame).collect::<Vec<_>>()
         )
     }
 }

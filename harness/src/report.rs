@@ -9,6 +9,19 @@ use serde_json::{json, Value};
 use crate::check::{Failure, Outcome};
 use crate::suite::{ProfileRun, Verdict};
 
+/// One Gherkin scenario (or Examples row) run against one profile.
+#[derive(Debug, Clone)]
+pub struct ScenarioResult {
+    /// The profile, or `model` / `any-profile` for scenarios that run once.
+    pub suite: String,
+    pub name: String,
+    pub file: String,
+    pub line: usize,
+    pub requirements: Vec<String>,
+    /// `Err` holds cucumber's report of the failing step.
+    pub outcome: Result<(), String>,
+}
+
 /// What a whole run produced, and how it was asked for.
 #[derive(Debug, Clone)]
 pub struct RunReport {
@@ -16,6 +29,7 @@ pub struct RunReport {
     pub seed: u64,
     pub bus: String,
     pub profiles: Vec<ProfileRun>,
+    pub scenarios: Vec<ScenarioResult>,
     pub wall_time_ms: u128,
 }
 
@@ -44,12 +58,16 @@ impl RunReport {
         totals
     }
 
+    pub fn failed_scenarios(&self) -> usize {
+        self.scenarios.iter().filter(|s| s.outcome.is_err()).count()
+    }
+
     /// 0 when everything conforms, 1 on any failure, 2 on any error.
     pub fn exit_code(&self) -> u8 {
         let totals = self.totals();
         if totals.error > 0 {
             2
-        } else if totals.fail > 0 {
+        } else if totals.fail > 0 || self.failed_scenarios() > 0 {
             1
         } else {
             0
@@ -140,6 +158,41 @@ impl RunReport {
             }
             xml.push_str("  </testsuite>\n");
         }
+        let mut suites: Vec<&str> = self.scenarios.iter().map(|s| s.suite.as_str()).collect();
+        suites.dedup();
+        for suite in suites {
+            let cases: Vec<&ScenarioResult> =
+                self.scenarios.iter().filter(|s| s.suite == suite).collect();
+            let _ = writeln!(
+                xml,
+                "  <testsuite name=\"features: {}\" tests=\"{}\" failures=\"{}\" errors=\"0\" skipped=\"0\">",
+                escape(suite),
+                cases.len(),
+                cases.iter().filter(|c| c.outcome.is_err()).count()
+            );
+            for case in cases {
+                let name = format!(
+                    "{}:{}: {} ({})",
+                    case.file,
+                    case.line,
+                    case.name,
+                    case.requirements.join(", ")
+                );
+                let _ = write!(
+                    xml,
+                    "    <testcase classname=\"features.{}\" name=\"{}\"",
+                    escape(suite),
+                    escape(&name)
+                );
+                match &case.outcome {
+                    Ok(()) => xml.push_str("/>\n"),
+                    Err(report) => {
+                        let _ = writeln!(xml, ">\n      <failure message=\"scenario failed\">{}</failure>\n    </testcase>", escape(report));
+                    }
+                }
+            }
+            xml.push_str("  </testsuite>\n");
+        }
         xml.push_str("</testsuites>\n");
         xml
     }
@@ -156,6 +209,11 @@ impl RunReport {
                 "pass": totals.pass, "fail": totals.fail, "error": totals.error,
                 "not_applicable": totals.not_applicable, "not_testable": totals.not_testable,
             },
+            "scenarios": self.scenarios.iter().map(|s| json!({
+                "suite": s.suite, "file": s.file, "line": s.line, "name": s.name, "requirements": s.requirements,
+                "outcome": match &s.outcome { Ok(()) => "pass".to_string(), Err(_) => "fail".to_string() },
+                "report": s.outcome.as_ref().err(),
+            })).collect::<Vec<_>>(),
             "profiles": self.profiles.iter().map(|p| json!({
                 "profile": p.profile,
                 "cycles": p.cycles(),
@@ -191,6 +249,12 @@ impl RunReport {
             totals.not_applicable,
             totals.not_testable
         );
+        let _ = writeln!(
+            md,
+            "Gherkin scenarios: {} run, {} failed.\n",
+            self.scenarios.len(),
+            self.failed_scenarios()
+        );
         md.push_str("| profile | pass | fail | error | n/a | not testable | cycles | frames checked |\n|---|---|---|---|---|---|---|---|\n");
         for p in &self.profiles {
             let count = |label: &str| p.verdicts.values().filter(|v| v.label() == label).count();
@@ -205,6 +269,18 @@ impl RunReport {
                 count("not testable"),
                 p.cycles(),
                 p.frames_checked()
+            );
+        }
+        for scenario in self.scenarios.iter().filter(|s| s.outcome.is_err()) {
+            let _ = write!(
+                md,
+                "\n## {} — scenario {}:{} {} ({})\n\n```\n{}\n```\n",
+                scenario.suite,
+                scenario.file,
+                scenario.line,
+                scenario.name,
+                scenario.requirements.join(", "),
+                scenario.outcome.as_ref().err().map_or("", String::as_str)
             );
         }
         for p in &self.profiles {

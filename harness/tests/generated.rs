@@ -158,6 +158,7 @@ fn report(seed: u64) -> serde_json::Value {
         seed,
         bus: "sim".into(),
         profiles: vec![run],
+        scenarios: Vec::new(),
         wall_time_ms: 0,
     };
     report.json(&catalogue)
