@@ -82,3 +82,57 @@ Feature: CANopen quick start through the CAN interface
   @SDO-007 @ERR-R8
   Scenario: Abort when the object does not exist
     Then aborting 0x2000:0 because the object does not exist is 80 00 20 00 00 00 02 06
+
+  @GRD-004
+  Scenario Outline: The master notices a toggle bit that did not invert
+    Then a guarding answer <second> after <first> is <verdict>
+
+    Examples:
+      | first | second | verdict        |
+      | 0x05  | 0x85   | accepted       |
+      | 0x05  | 0x05   | a toggle error |
+
+  @GRD-005
+  Scenario Outline: Reaction time of life guarding
+    Then a guard time of <guard> ms with life time factor <factor> gives <result>
+
+    Examples:
+      | guard | factor | result                        |
+      | 100   | 3      | a reaction time of 300 ms     |
+      | 0     | 3      | no life guarding              |
+
+  @HB-003
+  Scenario Outline: Heartbeats follow at the producer time
+    Then with a producer time of <period> ms a heartbeat sent at 1 ms is followed <next>
+
+    Examples:
+      | period | next       |
+      | 100    | at 101 ms  |
+      | 0      | by none    |
+
+  @PDO-002
+  Scenario: Analog values travel low byte first
+    Then the analog PDO of the channel values 4660 and -2 is 34 12 FE FF
+
+  @PDO-001
+  Scenario Outline: Digital PDOs carry 1 to 8 bytes
+    Then a digital PDO of <n> bytes is <verdict>
+
+    Examples:
+      | n | verdict |
+      | 1 | valid   |
+      | 8 | valid   |
+      | 9 | invalid |
+
+  @SDO-008 @SDO-005
+  Scenario Outline: Unsigned8 in D0, Unsigned16 in D0 and D1
+    Then uploading <object> = <value> as Unsigned<bits> is <data>
+
+    Examples:
+      | object   | value | bits | data                    |
+      | 0x1001:0 | 5     | 8    | 4F 01 10 00 05 00 00 00 |
+      | 0x100C:0 | 1000  | 16   | 4B 0C 10 00 E8 03 00 00 |
+
+  @SDO-009 @SDO-001
+  Scenario: Reading an object is the upload request 0x40
+    Then reading 0x1018:1 from node 5 is 0x605 with data 40 18 10 01 00 00 00 00

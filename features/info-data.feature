@@ -32,3 +32,11 @@ Feature: InfoData
     When other nodes transmit 7 frames
     And the PLC is busy for 2 cycles
     Then InfoData[6] is 3
+
+  @INFO-003 @INFO-004
+  Scenario: The bit timing and the transceiver delay
+    Given the arbitration bit timing jump width 1, time A 13, time B 2, prescaler 5
+    When the controller reports a transceiver delay of 9 time quanta
+    And a cycle passes
+    Then InfoData[1] is 0x05020D01
+    And InfoData[3] is 9

@@ -45,7 +45,7 @@ Feature: Process-image layouts
       | 0x00000001 |          | 00 00 01 00 00 80             |
       | 0x1FFFFFFF | 01       | 01 00 FF FF FF 9F 01          |
 
-  @ext29 @LAY-29-005 @PROF-006
+  @ext29 @LAY-29-005 @PROF-006 @LAY-GEN-001
   Scenario: An 11-bit frame through the 29-bit interface has bit 31 clear
     Given the interface is set up for 29-bit messages with 4 slots
     When node 0x01 transmits 0x123 with data 01
@@ -83,3 +83,8 @@ Feature: Process-image layouts
     And transaction numbers are on
     And time stamps are on
     Then the output image has 38 bytes and the input image 52 before InfoData
+
+  @fd @LAY-FD-001 @LAY-FD-002
+  Scenario: The CAN FD structures are 72 and 78 bytes
+    Given the interface is set up for CAN FD messages with 4 slots
+    Then the output image has 294 bytes and the input image 320 before InfoData

@@ -46,3 +46,13 @@ Feature: Frame timing and buffer size
       | 500  | 8     | 1000  | 4     |
       | 500  | 8     | 5000  | 20    |
       | 1000 | 0     | 1000  | 20    |
+
+  @TIM-003 @FD-BIT-004
+  Scenario Outline: A CAN FD frame's two phases at their own bit rates
+    Then a CAN FD frame of <bytes> bytes at <rates> kbit/s takes <switched> µs with BRS and <plain> µs without, not counting stuff bits
+
+    Examples:
+      | bytes | rates    | switched | plain  |
+      | 64    | 500/2000 | 334.5    | 1158.0 |
+      | 8     | 500/2000 | 108.0    | 252.0  |
+      | 64    | 500/500  | 1158.0   | 1158.0 |

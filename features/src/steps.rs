@@ -173,6 +173,18 @@ fn exchange(world: &mut CanWorld, mode: String) {
     };
 }
 
+#[given(
+    regex = r"^the arbitration bit timing jump width (\d+), time A (\d+), time B (\d+), prescaler (\d+)$"
+)]
+fn bit_timing(world: &mut CanWorld, jump_width: u8, time_a: u8, time_b: u8, prescaler: u8) {
+    world.config.nominal_timing = canif_model::info_data::BitTiming {
+        jump_width,
+        time_a,
+        time_b,
+        prescaler,
+    };
+}
+
 // ---------------------------------------------------------------- When
 
 #[when(regex = r"^the PLC sends (\d+) messages?$")]
@@ -323,6 +335,16 @@ fn controller_reports(world: &mut CanWorld, state: String, crc: u32, tec: u32) {
         crc_errors: crc,
         transmit_error_counter: tec,
         core_running: state != "bus off",
+        ..ControllerStatus::default()
+    });
+}
+
+#[when(regex = r"^the controller reports a transceiver delay of (\d+) time quanta$")]
+fn transceiver_delay(world: &mut CanWorld, quanta: u32) {
+    world.status = Some(ControllerStatus {
+        transceiver_delay: quanta,
+        node_active: true,
+        core_running: true,
         ..ControllerStatus::default()
     });
 }
@@ -909,5 +931,147 @@ fn heartbeat_frame(
     check(
         frame.id.raw() == num(&cob) && frame.data() == bytes(&data),
         || frame.to_string(),
+    )
+}
+
+#[then(
+    regex = r"^a CAN FD frame of (\d+) bytes at (\d+)/(\d+) kbit/s takes ([0-9.]+) µs with BRS and ([0-9.]+) µs without, not counting stuff bits$"
+)]
+fn fd_duration(
+    _world: &mut CanWorld,
+    len: usize,
+    nominal: u32,
+    data: u32,
+    with_brs: f64,
+    without: f64,
+) -> StepResult {
+    use canif_model::timing::{frame_duration, BitRates, Stuffing};
+    let rates = BitRates {
+        nominal: nominal * 1000,
+        data: data * 1000,
+    };
+    let frame = |brs| {
+        Frame::fd(CanId::Standard(0x123), brs, false, &vec![0; len]).map_err(|e| e.to_string())
+    };
+    let switched = frame_duration(&frame(true)?, rates, Stuffing::Nominal) as f64 / 1000.0;
+    let plain = frame_duration(&frame(false)?, rates, Stuffing::Nominal) as f64 / 1000.0;
+    check(
+        (switched - with_brs).abs() < 0.01 && (plain - without).abs() < 0.01,
+        || format!("{switched} µs with BRS, {plain} µs without"),
+    )
+}
+
+#[then(
+    regex = r"^a guarding answer (0x[0-9A-Fa-f]+) after (0x[0-9A-Fa-f]+) is (accepted|a toggle error)$"
+)]
+fn guarding_toggle(
+    _world: &mut CanWorld,
+    second: String,
+    first: String,
+    verdict: String,
+) -> StepResult {
+    let mut checker = canif_model::canopen::guarding::GuardChecker::default();
+    let answer =
+        |byte: String| Frame::classic(CanId::Standard(0x703), &[num(&byte) as u8]).expect("1 byte");
+    checker.check(&answer(first))?;
+    let result = checker.check(&answer(second));
+    check(result.is_ok() == (verdict == "accepted"), || {
+        format!("the checker says {result:?}")
+    })
+}
+
+#[then(
+    regex = r"^a guard time of (\d+) ms with life time factor (\d+) gives (a reaction time of (\d+) ms|no life guarding)$"
+)]
+fn life_time(
+    _world: &mut CanWorld,
+    guard: u16,
+    factor: u8,
+    _text: String,
+    ms: String,
+) -> StepResult {
+    let actual = canif_model::canopen::guarding::life_time(guard, factor);
+    let expected = if ms.is_empty() {
+        None
+    } else {
+        Some(u64::from(num(&ms)) * 1_000_000)
+    };
+    check(actual == expected, || format!("{actual:?} ns"))
+}
+
+#[then(
+    regex = r"^with a producer time of (\d+) ms a heartbeat sent at (\d+) ms is followed (at (\d+) ms|by none)$"
+)]
+fn heartbeat_period(
+    _world: &mut CanWorld,
+    period: u16,
+    sent: u64,
+    _text: String,
+    next: String,
+) -> StepResult {
+    let actual = heartbeat::next_due(sent * 1_000_000, period);
+    let expected = if next.is_empty() {
+        None
+    } else {
+        Some(u64::from(num(&next)) * 1_000_000)
+    };
+    check(actual == expected, || format!("{actual:?} ns"))
+}
+
+#[then(regex = r"^the analog PDO of the channel values (-?\d+) and (-?\d+) is ([0-9A-Fa-f ]+)$")]
+fn analog_pdo(_world: &mut CanWorld, first: i16, second: i16, data: String) -> StepResult {
+    let payload = canif_model::canopen::pdo::analog_payload(&[first, second]);
+    check(payload == bytes(&data), || hex(&payload))
+}
+
+#[then(regex = r"^a digital PDO of (\d+) bytes is (valid|invalid)$")]
+fn digital_pdo(_world: &mut CanWorld, n: usize, verdict: String) -> StepResult {
+    let valid = canif_model::canopen::pdo::digital_payload(&vec![0; n]).is_some();
+    check(valid == (verdict == "valid"), || {
+        format!("{n} bytes valid: {valid}")
+    })
+}
+
+#[then(
+    regex = r"^uploading (0x[0-9A-Fa-f]+):(\d+) = (\d+) as Unsigned(8|16|32) is ([0-9A-Fa-f ]+)$"
+)]
+fn sdo_upload(
+    _world: &mut CanWorld,
+    index: String,
+    sub: u8,
+    value: u32,
+    bits: u32,
+    data: String,
+) -> StepResult {
+    let response = SdoResponse::Upload {
+        index: num(&index) as u16,
+        sub_index: sub,
+        data: value.to_le_bytes(),
+        size: (bits / 8) as u8,
+    };
+    check(response.to_bytes().to_vec() == bytes(&data), || {
+        hex(&response.to_bytes())
+    })
+}
+
+#[then(
+    regex = r"^reading (0x[0-9A-Fa-f]+):(\d+) from node (\d+) is (0x[0-9A-Fa-f]+) with data ([0-9A-Fa-f ]+)$"
+)]
+fn sdo_upload_request(
+    _world: &mut CanWorld,
+    index: String,
+    sub: u8,
+    node: u8,
+    cob: String,
+    data: String,
+) -> StepResult {
+    let request = SdoRequest::Upload {
+        index: num(&index) as u16,
+        sub_index: sub,
+    };
+    let id = default_cob_id(Channel::SdoRequest, NodeId::new(node).ok_or("node")?);
+    check(
+        u32::from(id) == num(&cob) && request.to_bytes().to_vec() == bytes(&data),
+        || format!("0x{id:03X} with {}", hex(&request.to_bytes())),
     )
 }
