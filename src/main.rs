@@ -119,10 +119,21 @@ enum SpecCommand {
         /// The workspace whose tests to read.
         #[arg(long, default_value = ".")]
         root: PathBuf,
+        /// List every requirement with the tests, properties and scenarios that cover it.
+        #[arg(long)]
+        each: bool,
     },
 }
 
 fn main() -> ExitCode {
+    // `canif spec list | head` should end quietly when head stops reading, as
+    // command-line tools do, rather than panic on the broken pipe.
+    #[cfg(unix)]
+    // SAFETY: restoring the default disposition of SIGPIPE before any other
+    // thread exists; no handler is involved.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     let catalogue = match &cli.spec {
         Some(dir) => Catalogue::load_dir(dir),
@@ -235,7 +246,7 @@ fn spec(catalogue: &Catalogue, command: SpecCommand) -> ExitCode {
                 catalogue.capabilities.len()
             );
         }
-        SpecCommand::Coverage { root } => return spec_coverage(catalogue, &root),
+        SpecCommand::Coverage { root, each } => return spec_coverage(catalogue, &root, each),
     }
     ExitCode::SUCCESS
 }
@@ -290,7 +301,7 @@ fn summary(catalogue: &Catalogue) {
     );
 }
 
-fn spec_coverage(catalogue: &Catalogue, root: &Path) -> ExitCode {
+fn spec_coverage(catalogue: &Catalogue, root: &Path, each: bool) -> ExitCode {
     let sources = match coverage::test_sources(root) {
         Ok(sources) if !sources.is_empty() => sources,
         Ok(_) => {
@@ -306,6 +317,30 @@ fn spec_coverage(catalogue: &Catalogue, root: &Path) -> ExitCode {
         }
     };
     let result = coverage::coverage(catalogue, &sources);
+    if each {
+        for r in catalogue.requirements() {
+            let places: Vec<String> = result
+                .covered_by
+                .get(&r.id)
+                .into_iter()
+                .flatten()
+                .map(|(file, line)| format!("{file}:{line}"))
+                .collect();
+            let status = format!("{:?}", r.status).to_lowercase();
+            let how = if r.verification == Verification::Inspection {
+                "inspection".to_string()
+            } else {
+                places.join(" ")
+            };
+            println!(
+                "{:<11} {:<10} {}",
+                r.id,
+                status,
+                if how.is_empty() { "-" } else { &how }
+            );
+        }
+        println!();
+    }
     let in_runs = canif_harness::suite::checked_ids(
         &canif_model::config::Capabilities::everything(),
         &Options::default(),
