@@ -75,13 +75,15 @@ pub struct CanWorld {
     pending_increment: Option<(u64, u16)>,
     /// What a model-level step computed, for the `Then` that follows.
     pub value: Vec<u8>,
+    /// The last cycles, shown when a step fails (bounded).
+    pub trace: std::collections::VecDeque<String>,
 }
 
 impl std::fmt::Debug for CanWorld {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "CanWorld {{ iut: {}, profile: {}, {:?} {:?} with {} slots, cycle: {}, input header: {:02X?}, on the bus: {:?}, the PLC received: {:?} }}",
+            "CanWorld {{ iut: {}, profile: {}, {:?} {:?} with {} slots, cycle: {}, input header: {:02X?}, on the bus: {:?}, the PLC received: {:?} }}\n      last cycles:\n        {}",
             self.target.iut.name(),
             self.target.profile,
             self.config.format,
@@ -90,7 +92,8 @@ impl std::fmt::Debug for CanWorld {
             self.cycle,
             &self.inputs[..self.inputs.len().min(8)],
             self.on_bus,
-            self.received.iter().map(|m| m.frame).collect::<Vec<_>>()
+            self.received.iter().map(|m| m.frame).collect::<Vec<_>>(),
+            self.trace.iter().cloned().collect::<Vec<_>>().join("\n        ")
         )
     }
 }
@@ -122,6 +125,7 @@ impl CanWorld {
             confirmation_delay: None,
             pending_increment: None,
             value: Vec::new(),
+            trace: std::collections::VecDeque::new(),
         }
     }
 
@@ -196,7 +200,34 @@ impl CanWorld {
         }
         self.inputs = iut.cycle(&outputs, self.now).map_err(|e| e.0)?;
         exchange.device_cycle_done(&self.inputs);
-        self.run_bus()?;
+        let sent_before = self.on_bus.len();
+        let result = self.run_bus();
+        let header = |b: &[u8]| {
+            [0, 2, 4].map(|at| {
+                b.get(at..at + 2)
+                    .map_or(0, |w| u16::from_le_bytes([w[0], w[1]]))
+            })
+        };
+        let [otx, orx, on] = header(&outputs);
+        let [itx, irx, inn] = header(&self.inputs);
+        let sent: Vec<String> = self.on_bus[sent_before..]
+            .iter()
+            .map(ToString::to_string)
+            .collect();
+        self.trace.push_back(format!(
+            "cycle {:>3}{}: out[tx={otx} rx={orx} n={on}] in[tx={itx} rx={irx} n={inn}] bus: {}",
+            self.cycle,
+            if plc_busy { " (PLC busy)" } else { "" },
+            if sent.is_empty() {
+                "-".to_string()
+            } else {
+                sent.join(" ")
+            }
+        ));
+        if self.trace.len() > 6 {
+            self.trace.pop_front();
+        }
+        result?;
         self.now += CYCLE;
         self.cycle += 1;
         Ok(())

@@ -1,8 +1,9 @@
-Feature: Buffered, Optimized and Fast CAN Queue
-  Fast CAN Queue: no receive messages are buffered on the EL6751 and they need
-  not be acknowledged; the EL6751 counts RxCounter up when new messages were
-  received. Optimized CAN Queue: received messages are buffered. Both support
-  only 11-bit identifiers and no filters. (000 §5.1, 003)
+Feature: Fast CAN Queue
+  No receive messages are buffered on the EL6751; the RxQueue should hold all
+  messages that can arrive in one EtherCAT cycle. Received messages need not be
+  acknowledged; the EL6751 counts RxCounter up when new messages arrived. In
+  the transmit direction the sequence is that of the Buffered CAN Queue. Only
+  11-bit identifiers, no filters, no transaction number. (000 §5.1.1, 003)
 
   @fast_queue @FQ-001 @FQ-002 @base11
   Scenario: The Fast CAN Queue delivers without waiting for the acknowledge
@@ -31,30 +32,6 @@ Feature: Buffered, Optimized and Fast CAN Queue
     And 2 cycles pass
     Then Inputs.TxCounter is 1
     And the bus carries 0x100, 0x101, 0x102 in that order
-
-  @optimized_queue @BQ-001 @base11
-  Scenario: The Optimized CAN Queue buffers until the PLC has read
-    Given the interface is set up for 11-bit messages with 2 slots
-    And the Optimized CAN Queue
-    When other nodes transmit 5 frames
-    And 4 cycles pass
-    Then the PLC has received 5 messages
-
-  @BQ-003 @PROF-003
-  Scenario Outline: Fast and Optimized CAN Queue refuse 29-bit messages
-    Given the interface is set up for 29-bit messages with 4 slots
-    And the <queue> CAN Queue
-    Then the device refuses the configuration
-
-    @fast_queue
-    Examples: Fast
-      | queue |
-      | Fast  |
-
-    @optimized_queue
-    Examples: Optimized
-      | queue     |
-      | Optimized |
 
   @BQ-005 @base11 @fast_queue
   Scenario: The Fast CAN Queue has no transaction number
