@@ -1,5 +1,6 @@
 //! The step library. Every step is documented in features/README.md.
 
+use canif_harness::check::hex;
 use canif_model::canopen::cob_id::{default_cob_id, Channel};
 use canif_model::canopen::guarding::GuardResponder;
 use canif_model::canopen::heartbeat;
@@ -38,14 +39,6 @@ fn bytes(text: &str) -> Vec<u8> {
     text.split_whitespace()
         .map(|b| u8::from_str_radix(b, 16).unwrap_or_else(|_| panic!("not a hex byte: {b}")))
         .collect()
-}
-
-fn hex(bytes: &[u8]) -> String {
-    bytes
-        .iter()
-        .map(|b| format!("{b:02X}"))
-        .collect::<Vec<_>>()
-        .join(" ")
 }
 
 fn id(text: &str, extended: bool) -> CanId {

@@ -47,12 +47,7 @@ fn main() {
                 "{}::{file}:{}: {}",
                 profile.name, scenario.line, scenario.name
             );
-            let missing: Vec<&str> = scenario
-                .capabilities
-                .iter()
-                .filter(|c| !profile.has(c))
-                .map(String::as_str)
-                .collect();
+            let missing = profile.lacks(&scenario.capabilities);
             if !missing.is_empty() {
                 trials.push(
                     Trial::test(name, || Ok(()))

@@ -173,7 +173,8 @@ struct Difference {
     actual: String,
 }
 
-fn hex(bytes: &[u8]) -> String {
+/// Bytes as `01 02 0A`.
+pub fn hex(bytes: &[u8]) -> String {
     bytes
         .iter()
         .map(|b| format!("{b:02X}"))

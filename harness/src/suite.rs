@@ -401,12 +401,7 @@ pub fn judge(catalogue: &Catalogue, profile: &Profile, runs: Vec<ScenarioRun>) -
     }
     let mut verdicts = BTreeMap::new();
     for requirement in catalogue.requirements() {
-        let missing: Vec<&str> = requirement
-            .capabilities
-            .iter()
-            .filter(|c| !profile.has(c))
-            .map(String::as_str)
-            .collect();
+        let missing = profile.lacks(&requirement.capabilities);
         let checked = runs.iter().any(|r| r.covers.contains(&requirement.id));
         let verdict = if !missing.is_empty() {
             Verdict::NotApplicable(format!("{} lacks {}", profile.name, missing.join(", ")))

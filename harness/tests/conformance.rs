@@ -51,12 +51,7 @@ fn main() {
         let checked = checked_ids(&profile.model_capabilities(), &options());
         for requirement in catalogue.requirements() {
             let name = format!("{}::{}", profile.name, requirement.id);
-            let missing: Vec<&str> = requirement
-                .capabilities
-                .iter()
-                .filter(|c| !profile.has(c))
-                .map(String::as_str)
-                .collect();
+            let missing = profile.lacks(&requirement.capabilities);
             if !missing.is_empty() {
                 trials.push(
                     Trial::test(name, || Ok(()))

@@ -34,6 +34,15 @@ impl Profile {
         self.capabilities.iter().any(|c| c == capability)
     }
 
+    /// The capabilities of `needed` this profile does not offer.
+    pub fn lacks<'a>(&self, needed: &'a [String]) -> Vec<&'a str> {
+        needed
+            .iter()
+            .filter(|c| !self.has(c))
+            .map(String::as_str)
+            .collect()
+    }
+
     /// The capabilities the model needs, from this profile's data.
     pub fn model_capabilities(&self) -> Capabilities {
         Capabilities {
