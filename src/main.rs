@@ -32,9 +32,13 @@ struct Cli {
 enum Command {
     /// Certify an implementation on the simulated bus against the model, per profile.
     Run {
-        /// softdevice (the built-in soft EL6751) or model (the reference itself).
+        /// softdevice (the built-in soft EL6751), model (the reference itself), or
+        /// exec:'COMMAND' (a process speaking the adapter protocol).
         #[arg(long, default_value = "softdevice")]
         iut: String,
+        /// How long an external IUT may take to answer one request.
+        #[arg(long, default_value_t = 5000)]
+        timeout_ms: u64,
         /// Switch on a soft-device fault (repeatable; see `canif faults`).
         #[arg(long)]
         fault: Vec<String>,
@@ -58,6 +62,15 @@ enum Command {
     },
     /// The soft device's deliberate faults.
     Faults,
+    /// Run the soft device on its own, behind the adapter protocol on stdin/stdout.
+    Device {
+        /// Speak the adapter protocol (docs/adapter-protocol.md) on stdin/stdout.
+        #[arg(long)]
+        stdio: bool,
+        /// Switch on a fault (repeatable).
+        #[arg(long)]
+        fault: Vec<String>,
+    },
     /// The suite's power: run every fault on every profile; exit 1 if one goes uncaught.
     SelfCheck {
         #[arg(long, default_value_t = 1)]
@@ -149,6 +162,7 @@ fn main() -> ExitCode {
     match cli.command {
         Command::Run {
             iut,
+            timeout_ms,
             fault,
             profile,
             seed,
@@ -163,9 +177,12 @@ fn main() -> ExitCode {
                 generated_cycles: duration.map_or(200, |s| (s * 1000.0).max(1.0) as u64),
                 counter_wrap: !no_counter_wrap,
             };
-            run(&catalogue, &iut, &fault, &profile, &options, &report)
+            run(
+                &catalogue, &iut, &fault, &profile, &options, &report, timeout_ms,
+            )
         }
         Command::SelfCheck { seed } => self_check(&catalogue, seed),
+        Command::Device { stdio, fault } => device(stdio, &fault),
         Command::Faults => {
             for fault in Fault::ALL {
                 println!("{:<36} {}", fault.name(), fault.description());
@@ -504,6 +521,7 @@ fn frame_time(
     ExitCode::SUCCESS
 }
 
+#[allow(clippy::too_many_arguments)]
 fn run(
     catalogue: &Catalogue,
     iut: &str,
@@ -511,6 +529,7 @@ fn run(
     profile: &str,
     options: &Options,
     report_dir: &Path,
+    timeout_ms: u64,
 ) -> ExitCode {
     let mut chosen = Vec::new();
     for name in faults {
@@ -523,6 +542,18 @@ fn run(
         }
     }
     let kind = match iut {
+        _ if iut.starts_with("exec:") => {
+            if !chosen.is_empty() {
+                eprintln!(
+                    "--fault applies to the soft device only (pass it to the IUT's own command)"
+                );
+                return ExitCode::from(2);
+            }
+            IutKind::Exec {
+                command: iut["exec:".len()..].to_string(),
+                timeout_ms,
+            }
+        }
         "softdevice" => IutKind::SoftDevice { faults: chosen },
         "model" if chosen.is_empty() => IutKind::Model,
         "model" => {
@@ -530,7 +561,7 @@ fn run(
             return ExitCode::from(2);
         }
         other => {
-            eprintln!("unknown IUT `{other}`: use softdevice or model");
+            eprintln!("unknown IUT `{other}`: use softdevice, model or exec:'COMMAND'");
             return ExitCode::from(2);
         }
     };
@@ -701,11 +732,17 @@ fn run_features(
                 canif_model::config::Capabilities::everything(),
             ));
         } else if scenario.once {
-            targets.push((
-                "any-profile".to_string(),
-                kind.clone(),
-                canif_model::config::Capabilities::everything(),
-            ));
+            // A profile scenario names its device; it runs when that profile is certified.
+            let named = profiles
+                .iter()
+                .find(|p| scenario.profile.as_deref().is_none_or(|n| n == p.name));
+            if let Some(profile) = named {
+                targets.push((
+                    profile.name.clone(),
+                    kind.clone(),
+                    profile.model_capabilities(),
+                ));
+            }
         } else {
             for profile in profiles
                 .iter()
@@ -741,4 +778,33 @@ fn run_features(
     }
     results.sort_by(|a, b| (&a.suite, &a.file, a.line).cmp(&(&b.suite, &b.file, b.line)));
     Ok(results)
+}
+
+fn device(stdio: bool, faults: &[String]) -> ExitCode {
+    if !stdio {
+        eprintln!("canif device needs --stdio (a SocketCAN bus comes with the SocketCAN issue)");
+        return ExitCode::from(2);
+    }
+    let mut chosen = Vec::new();
+    for name in faults {
+        match Fault::from_name(name) {
+            Some(fault) => chosen.push(fault),
+            None => {
+                eprintln!("unknown fault `{name}`; `canif faults` lists them");
+                return ExitCode::from(2);
+            }
+        }
+    }
+    let stdin = std::io::stdin();
+    match canif_harness::exec::serve(
+        &IutKind::SoftDevice { faults: chosen },
+        stdin.lock(),
+        std::io::stdout(),
+    ) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("canif device: {error}");
+            ExitCode::from(2)
+        }
+    }
 }

@@ -18,6 +18,29 @@ pub struct ScenarioInfo {
     pub model_only: bool,
     /// Runs once against the soft device; the scenario names its profile.
     pub once: bool,
+    /// The profile a `Given the device profile …` step names (outline values filled in).
+    pub profile: Option<String>,
+}
+
+/// The profile a scenario's `Given the device profile X` step names, with an
+/// outline's `<column>` taken from the row.
+fn named_profile(
+    scenario: &cucumber::gherkin::Scenario,
+    header: Option<&Vec<String>>,
+    row: Option<&Vec<String>>,
+) -> Option<String> {
+    let step = scenario
+        .steps
+        .iter()
+        .find_map(|s| s.value.strip_prefix("the device profile "))?
+        .trim();
+    match step.strip_prefix('<').and_then(|s| s.strip_suffix('>')) {
+        Some(column) => {
+            let index = header?.iter().position(|h| h == column)?;
+            row?.get(index).cloned()
+        }
+        None => Some(step.to_string()),
+    }
 }
 
 const CAPABILITIES: [&str; 10] = [
@@ -52,19 +75,25 @@ pub fn scenarios() -> Result<Vec<ScenarioInfo>, String> {
         for scenario in &feature.scenarios {
             let base: Vec<&String> = feature.tags.iter().chain(&scenario.tags).collect();
             // Each runnable row with the tags that apply to it (an Examples block may add its own).
-            let mut rows: Vec<(usize, Vec<&String>)> = Vec::new();
+            let mut rows: Vec<(usize, Vec<&String>, Option<String>)> = Vec::new();
             for examples in &scenario.examples {
                 let tags: Vec<&String> = base.iter().copied().chain(&examples.tags).collect();
                 if let Some(table) = &examples.table {
-                    rows.extend(
-                        (1..table.rows.len()).map(|i| (table.position.line + i, tags.clone())),
-                    );
+                    rows.extend((1..table.rows.len()).map(|i| {
+                        let profile =
+                            named_profile(scenario, table.rows.first(), table.rows.get(i));
+                        (table.position.line + i, tags.clone(), profile)
+                    }));
                 }
             }
             if scenario.examples.is_empty() {
-                rows.push((scenario.position.line, base.clone()));
+                rows.push((
+                    scenario.position.line,
+                    base.clone(),
+                    named_profile(scenario, None, None),
+                ));
             }
-            for (line, tags) in rows {
+            for (line, tags, profile) in rows {
                 list.push(ScenarioInfo {
                     file: path.to_string(),
                     feature: feature.name.clone(),
@@ -82,6 +111,7 @@ pub fn scenarios() -> Result<Vec<ScenarioInfo>, String> {
                         .collect(),
                     model_only: tags.iter().any(|t| *t == "model"),
                     once: tags.iter().any(|t| *t == "once"),
+                    profile,
                 });
             }
         }

@@ -147,7 +147,8 @@ impl CanWorld {
                 self.iut = Some(iut);
                 Ok(())
             }
-            Err(reason) => {
+            Err(error) => {
+                let reason = error.to_string();
                 self.refused = Some(reason.clone());
                 Err(reason)
             }

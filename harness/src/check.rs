@@ -632,15 +632,16 @@ pub fn run_scenario(
     };
     let iut = match kind.build(caps, &scenario.interface) {
         Ok(iut) => iut,
-        Err(e) => {
+        Err(crate::iut::BuildError::Refused(reason)) => {
             return run(
                 Outcome::Error(format!(
-                    "the IUT refuses a configuration the profile allows: {e}"
+                    "the IUT refuses a configuration the profile allows: {reason}"
                 )),
                 0,
                 0,
             )
         }
+        Err(crate::iut::BuildError::Failed(reason)) => return run(Outcome::Error(reason), 0, 0),
     };
     let layout = model.layout();
     let mut plc = PlcClient::new(layout);

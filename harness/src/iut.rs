@@ -10,6 +10,8 @@ use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 use canif_softdevice::{CanFrame, Fault, FilterRule, Format, Offer, Queue, Settings, SoftDevice};
 
+use crate::exec::ExecIut;
+
 /// A frame an IUT put on the bus that is no valid CAN frame (e.g. 36 FD bytes).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct InvalidFrame(pub String);
@@ -37,28 +39,101 @@ pub trait Iut {
 /// Which implementation to run.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum IutKind {
-    SoftDevice { faults: Vec<Fault> },
+    SoftDevice {
+        faults: Vec<Fault>,
+    },
     Model,
+    /// Another process speaking the adapter protocol (docs/adapter-protocol.md).
+    Exec {
+        command: String,
+        timeout_ms: u64,
+    },
 }
 
+/// Why no IUT could be built for a configuration.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum BuildError {
+    /// The IUT refuses the configuration: a legitimate answer, judged by the refusal grid.
+    Refused(String),
+    /// The IUT could not be started or broke the protocol.
+    Failed(String),
+}
+
+impl std::fmt::Display for BuildError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            BuildError::Refused(reason) => write!(f, "refused: {reason}"),
+            BuildError::Failed(reason) => f.write_str(reason),
+        }
+    }
+}
+
+/// Asks an IUT, configuration after configuration, whether it accepts.
+pub type Configurer = Box<dyn FnMut(&Capabilities, &InterfaceConfig) -> Result<(), BuildError>>;
+
 impl IutKind {
-    /// Builds the IUT for a configuration; `Err` when it refuses the configuration.
+    /// Builds the IUT for a configuration.
     pub fn build(
         &self,
         caps: &Capabilities,
         config: &InterfaceConfig,
-    ) -> Result<Box<dyn Iut>, String> {
+    ) -> Result<Box<dyn Iut>, BuildError> {
+        let refused = |e: &dyn std::fmt::Display| BuildError::Refused(e.to_string());
         match self {
             IutKind::Model => Ok(Box::new(ModelIut(
-                Device::new(caps, config.clone()).map_err(|e| e.to_string())?,
+                Device::new(caps, config.clone()).map_err(|e| refused(&e))?,
             ))),
             IutKind::SoftDevice { faults } => {
                 let mut device =
-                    SoftDevice::new(soft_settings(caps, config)).map_err(|e| e.to_string())?;
+                    SoftDevice::new(soft_settings(caps, config)).map_err(|e| refused(&e))?;
                 for fault in faults {
                     device.inject(*fault);
                 }
                 Ok(Box::new(SoftDeviceIut(device)))
+            }
+            IutKind::Exec {
+                command,
+                timeout_ms,
+            } => {
+                let mut iut =
+                    ExecIut::spawn(command, std::time::Duration::from_millis(*timeout_ms))
+                        .map_err(BuildError::Failed)?;
+                match iut.configure(caps, config).map_err(BuildError::Failed)? {
+                    Ok(()) => Ok(Box::new(iut)),
+                    Err(reason) => Err(BuildError::Refused(reason)),
+                }
+            }
+        }
+    }
+
+    /// Something that answers configuration after configuration; for an
+    /// external process, one process answers them all.
+    pub fn configurer(&self) -> Configurer {
+        match self {
+            IutKind::Exec {
+                command,
+                timeout_ms,
+            } => {
+                let (command, timeout) = (
+                    command.clone(),
+                    std::time::Duration::from_millis(*timeout_ms),
+                );
+                let mut process: Option<ExecIut> = None;
+                Box::new(move |caps, config| {
+                    if process.is_none() {
+                        process =
+                            Some(ExecIut::spawn(&command, timeout).map_err(BuildError::Failed)?);
+                    }
+                    let iut = process.as_mut().expect("just started");
+                    match iut.configure(caps, config).map_err(BuildError::Failed)? {
+                        Ok(()) => Ok(()),
+                        Err(reason) => Err(BuildError::Refused(reason)),
+                    }
+                })
+            }
+            other => {
+                let kind = other.clone();
+                Box::new(move |caps, config| kind.build(caps, config).map(|_| ()))
             }
         }
     }
@@ -77,6 +152,7 @@ impl IutKind {
                         .join("+")
                 )
             }
+            IutKind::Exec { command, .. } => format!("exec:{command}"),
         }
     }
 }

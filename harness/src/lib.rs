@@ -11,11 +11,12 @@
 
 pub mod bus;
 pub mod check;
+pub mod exec;
 pub mod iut;
 pub mod report;
 pub mod scenario;
 pub mod suite;
 
 pub use check::{Failure, Outcome, ScenarioRun};
-pub use iut::{Iut, IutKind};
+pub use iut::{BuildError, Iut, IutKind};
 pub use suite::{run_profile, Options, ProfileRun, Verdict};

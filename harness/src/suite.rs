@@ -276,6 +276,7 @@ pub const REFUSAL_IDS: &[&str] = &[
 /// Every configuration in a grid: the IUT must accept exactly what the model accepts.
 pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
     let mut checked = 0;
+    let mut configure = kind.configurer();
     for format in [
         FrameFormat::Base11,
         FrameFormat::Extended29,
@@ -302,7 +303,19 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
                             }
                             checked += 1;
                             let expected = config.validate(caps);
-                            let actual = kind.build(caps, &config).map(|_| ());
+                            let actual = match configure(caps, &config) {
+                                Ok(()) => Ok(()),
+                                Err(crate::iut::BuildError::Refused(reason)) => Err(reason),
+                                Err(crate::iut::BuildError::Failed(reason)) => {
+                                    return ScenarioRun {
+                                        scenario: "configuration refusals".into(),
+                                        covers: ids(REFUSAL_IDS),
+                                        outcome: Outcome::Error(reason),
+                                        cycles: checked,
+                                        frames_checked: 0,
+                                    };
+                                }
+                            };
                             if expected.is_ok() != actual.is_ok() {
                                 let requirements = match &expected {
                                     Err(e) => {
