@@ -740,13 +740,7 @@ pub fn run_scenario(
         };
         let actual = match state.iut.cycle(&outputs, t) {
             Ok(inputs) => inputs,
-            Err(e) => {
-                return run(
-                    Outcome::Error(format!("the IUT rejected the output image: {}", e.0)),
-                    k,
-                    state.frames,
-                )
-            }
+            Err(e) => return run(Outcome::Error(e.0), k, state.frames),
         };
         state.remember(&outputs, &actual);
         let recent = &state.recent_rx;

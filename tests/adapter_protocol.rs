@@ -1,0 +1,291 @@
+//! IUTs in other processes over the adapter protocol (docs/adapter-protocol.md):
+//! a conforming one passes, a faulty one is caught on its requirement, and
+//! every way of breaking the protocol is an `error` that says what happened —
+//! never a hang, never a `fail`.
+
+use std::time::{Duration, Instant};
+
+use canif_harness::check::run_scenario;
+use canif_harness::report::RunReport;
+use canif_harness::scenario;
+use canif_harness::suite::{run_profile, Options};
+use canif_harness::{IutKind, Outcome, Verdict};
+use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig};
+use canif_spec::Catalogue;
+
+fn quick() -> Options {
+    Options {
+        seed: 3,
+        cases: 1,
+        generated_cycles: 100,
+        counter_wrap: false,
+    }
+}
+
+fn exec(command: &str, timeout_ms: u64) -> IutKind {
+    IutKind::Exec {
+        command: command.to_string(),
+        timeout_ms,
+    }
+}
+
+fn soft_device(args: &str) -> IutKind {
+    exec(
+        &format!("{} device --stdio {args}", env!("CARGO_BIN_EXE_canif")),
+        5_000,
+    )
+}
+
+fn failures_and_errors(kind: &IutKind, profile: &str) -> (Vec<String>, Vec<String>) {
+    let catalogue = Catalogue::embedded().unwrap();
+    let run = run_profile(
+        &catalogue,
+        catalogue.profile(profile).unwrap(),
+        kind,
+        &quick(),
+        |_| {},
+    );
+    let failed = run
+        .verdicts
+        .iter()
+        .filter(|(_, v)| matches!(v, Verdict::Fail(_)))
+        .map(|(id, _)| id.clone())
+        .collect();
+    let errors = run
+        .runs
+        .iter()
+        .filter_map(|r| match &r.outcome {
+            Outcome::Error(e) => Some(format!("{}: {e}", r.scenario)),
+            _ => None,
+        })
+        .collect();
+    (failed, errors)
+}
+
+#[test]
+fn the_soft_device_behind_the_protocol_conforms() {
+    let (failed, errors) = failures_and_errors(&soft_device(""), "fc532x");
+    assert!(
+        failed.is_empty() && errors.is_empty(),
+        "failed {failed:?}, errors {errors:?}"
+    );
+}
+
+#[test]
+fn a_fault_behind_the_protocol_is_caught_on_its_requirement() {
+    let (failed, errors) =
+        failures_and_errors(&soft_device("--fault head-drop-when-full"), "el6751-mdp");
+    assert!(errors.is_empty(), "{errors:?}");
+    assert!(failed.contains(&"RXQ-004".to_string()), "{failed:?}");
+}
+
+#[test]
+fn the_python_example_written_from_the_document_is_certified() {
+    let script = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/python/minimal_iut.py"
+    );
+    let (failed, errors) = failures_and_errors(
+        &exec(&format!("python3 {script}"), 5_000),
+        "fc510x-before-fw2.14",
+    );
+    assert!(
+        failed.is_empty() && errors.is_empty(),
+        "failed {failed:?}, errors {errors:?}"
+    );
+}
+
+/// One broken IUT: the error it must produce, in words.
+fn broken(command: &str, expected: &[&str]) {
+    let caps = Capabilities::everything();
+    let scenario = scenario::tx_batches(&InterfaceConfig::new(FrameFormat::Base11, 4), 1);
+    let started = Instant::now();
+    let run = run_scenario(&exec(command, 400), &caps, &scenario, scenario.steps());
+    assert!(
+        started.elapsed() < Duration::from_secs(10),
+        "the harness waited {:?}",
+        started.elapsed()
+    );
+    let Outcome::Error(message) = run.outcome else {
+        panic!("`{command}` gave {:?}, not an error", run.outcome)
+    };
+    for words in expected {
+        assert!(
+            message.contains(words),
+            "`{command}`: the error does not say {words:?}: {message}"
+        );
+    }
+}
+
+/// Accepts the configuration, then answers the first request (the bus polls
+/// the controller at t = 0, before the first cycle) with "nothing to send".
+const CONFIGURED: &str = r#"read l; echo '{"type":"configured","protocol":1,"accepted":true}'; read l; echo '{"type":"transmit","frame":null}'"#;
+
+#[test]
+fn an_iut_that_exits_is_an_error_with_its_last_words() {
+    broken(
+        "echo 'segmentation fault in my driver' >&2; exit 3",
+        &["exited", "segmentation fault in my driver"],
+    );
+}
+
+#[test]
+fn an_iut_that_hangs_is_killed_after_the_timeout() {
+    broken(
+        &format!("{CONFIGURED}; echo 'waiting for a bus that never comes' >&2; sleep 30"),
+        &["no answer to `cycle` within 400 ms", "waiting for a bus"],
+    );
+}
+
+#[test]
+fn an_iut_that_prints_garbage_is_an_error() {
+    broken(
+        "echo 'Hello from my IUT!'; cat >/dev/null",
+        &["not a JSON object", "Hello from my IUT!"],
+    );
+}
+
+#[test]
+fn another_protocol_version_is_an_error() {
+    broken(
+        r#"read l; echo '{"type":"configured","protocol":2,"accepted":true}'; cat >/dev/null"#,
+        &["protocol version 2", "speaks 1"],
+    );
+}
+
+#[test]
+fn an_image_of_the_wrong_size_is_an_error() {
+    broken(
+        &format!(
+            r#"{CONFIGURED}; read l; echo '{{"type":"inputs","inputs":"00"}}'; cat >/dev/null"#
+        ),
+        &["input image of 1 bytes", "the layout has 110"],
+    );
+}
+
+#[test]
+fn a_command_that_does_not_exist_is_an_error_and_the_report_says_error() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("fc510x-before-fw2.14").unwrap();
+    let run = run_profile(
+        &catalogue,
+        profile,
+        &exec("/nonexistent/iut", 400),
+        &quick(),
+        |_| {},
+    );
+    assert!(run
+        .verdicts
+        .values()
+        .any(|v| matches!(v, Verdict::Error(_))));
+    assert!(
+        !run.verdicts.values().any(|v| matches!(v, Verdict::Fail(_))),
+        "a broken IUT is an error, not a failure"
+    );
+    let report = RunReport {
+        iut: "exec".into(),
+        seed: 3,
+        bus: "sim".into(),
+        profiles: vec![run],
+        scenarios: Vec::new(),
+        wall_time_ms: 0,
+    };
+    assert_eq!(report.exit_code(), 2);
+    let dir = std::env::temp_dir().join(format!("canif-broken-{}", std::process::id()));
+    report.write(&catalogue, &dir).unwrap();
+    assert!(
+        std::fs::read_to_string(dir.join("junit.xml"))
+            .unwrap()
+            .contains("<error message="),
+        "the report is still written"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+fn schema() -> jsonschema::Validator {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/docs/adapter-protocol.schema.json"
+    ))
+    .unwrap();
+    jsonschema::validator_for(&serde_json::from_str(&text).unwrap())
+        .expect("the schema is a valid JSON Schema")
+}
+
+fn check_lines(schema: &jsonschema::Validator, what: &str, lines: &[&str]) -> usize {
+    for line in lines {
+        let value: serde_json::Value =
+            serde_json::from_str(line).unwrap_or_else(|e| panic!("{what}: not JSON ({e}): {line}"));
+        let errors: Vec<String> = schema.iter_errors(&value).map(|e| e.to_string()).collect();
+        assert!(
+            errors.is_empty(),
+            "{what}: {line}\nviolates the schema: {errors:?}"
+        );
+    }
+    lines.len()
+}
+
+/// Every message of a real session (harness requests, soft-device answers) and
+/// every line of the document's example session fit the JSON Schema.
+#[test]
+fn real_traffic_and_the_documented_session_fit_the_schema() {
+    let schema = schema();
+    let dir = std::env::temp_dir().join(format!("canif-traffic-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (requests, answers) = (dir.join("requests.log"), dir.join("answers.log"));
+    let command = format!(
+        "tee {} | {} device --stdio | tee {}",
+        requests.display(),
+        env!("CARGO_BIN_EXE_canif"),
+        answers.display()
+    );
+    let mut config = InterfaceConfig::new(FrameFormat::Fd, 4);
+    config.transaction_number = true;
+    config.time_stamp = true;
+    let scenario = scenario::info_data(&config);
+    let run = run_scenario(
+        &exec(&command, 5_000),
+        &Capabilities::everything(),
+        &scenario,
+        scenario.steps(),
+    );
+    assert_eq!(run.outcome, Outcome::Pass);
+    drop(run);
+    std::thread::sleep(Duration::from_millis(100));
+    let requests = std::fs::read_to_string(requests).unwrap();
+    let answers = std::fs::read_to_string(answers).unwrap();
+    let sent = check_lines(&schema, "request", &requests.lines().collect::<Vec<_>>());
+    let answered = check_lines(&schema, "answer", &answers.lines().collect::<Vec<_>>());
+    assert!(
+        sent > 100 && answered + 1 >= sent,
+        "{sent} requests, {answered} answers"
+    );
+    for kind in [
+        "configure",
+        "cycle",
+        "receive",
+        "poll_transmit",
+        "transmit_complete",
+        "controller_status",
+    ] {
+        assert!(
+            requests.contains(&format!("\"type\":\"{kind}\"")),
+            "the session has no {kind}"
+        );
+    }
+    let doc = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/docs/adapter-protocol.md"
+    ))
+    .unwrap();
+    let documented: Vec<&str> = doc
+        .lines()
+        .filter_map(|l| l.strip_prefix("→ ").or_else(|| l.strip_prefix("← ")))
+        .collect();
+    assert!(check_lines(&schema, "the documented session", &documented) >= 10);
+    // The schema says no to what the protocol forbids.
+    assert!(!schema.is_valid(&serde_json::json!({"type": "inputs", "inputs": "0g"})));
+    assert!(!schema
+        .is_valid(&serde_json::json!({"type": "configured", "protocol": 2, "accepted": true})));
+    let _ = std::fs::remove_dir_all(dir);
+}
