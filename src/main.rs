@@ -60,6 +60,8 @@ enum Command {
         #[arg(long, default_value = "reports/latest")]
         report: PathBuf,
     },
+    /// What changed between two report.json files; exit 1 on a regression.
+    Compare { base: PathBuf, new: PathBuf },
     /// The soft device's deliberate faults.
     Faults,
     /// Run the soft device on its own, behind the adapter protocol on stdin/stdout.
@@ -182,6 +184,7 @@ fn main() -> ExitCode {
             )
         }
         Command::SelfCheck { seed } => self_check(&catalogue, seed),
+        Command::Compare { base, new } => compare(&base, &new),
         Command::Device { stdio, fault } => device(stdio, &fault),
         Command::Faults => {
             for fault in Fault::ALL {
@@ -807,4 +810,23 @@ fn device(stdio: bool, faults: &[String]) -> ExitCode {
             ExitCode::from(2)
         }
     }
+}
+
+fn compare(base: &Path, new: &Path) -> ExitCode {
+    let load = |path: &Path| -> Result<std::collections::BTreeMap<String, String>, String> {
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let value: serde_json::Value =
+            serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+        canif_harness::compare::verdicts(&value).map_err(|e| format!("{}: {e}", path.display()))
+    };
+    let (base, new) = match (load(base), load(new)) {
+        (Ok(base), Ok(new)) => (base, new),
+        (Err(e), _) | (_, Err(e)) => {
+            eprintln!("{e}");
+            return ExitCode::from(2);
+        }
+    };
+    let comparison = canif_harness::compare::compare(&base, &new);
+    print!("{}", comparison.markdown());
+    ExitCode::from(u8::from(!comparison.regressions.is_empty()))
 }

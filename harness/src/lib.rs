@@ -11,6 +11,7 @@
 
 pub mod bus;
 pub mod check;
+pub mod compare;
 pub mod exec;
 pub mod iut;
 pub mod report;

@@ -174,3 +174,33 @@ fn the_same_seed_gives_the_same_run_byte_for_byte() {
         "the seed changes the generated traffic"
     );
 }
+
+#[test]
+fn compare_names_regressions_fixes_and_changes() {
+    use canif_harness::compare::{compare, verdicts};
+    let report = |a: &str, b: &str, scenario: &str| {
+        serde_json::json!({
+            "profiles": [{"profile": "p", "verdicts": {"A-001": {"verdict": a}, "B-001": {"verdict": b}}}],
+            "scenarios": [{"suite": "p", "file": "f.feature", "line": 3, "name": "s", "outcome": scenario}],
+        })
+    };
+    let base = verdicts(&report("pass", "fail", "pass")).unwrap();
+    let new = verdicts(&report("error", "pass", "fail")).unwrap();
+    let result = compare(&base, &new);
+    let keys =
+        |rows: &Vec<(String, String, String)>| rows.iter().map(|r| r.0.clone()).collect::<Vec<_>>();
+    assert_eq!(
+        keys(&result.regressions),
+        ["p :: A-001", "p :: f.feature:3 s"]
+    );
+    assert_eq!(keys(&result.fixes), ["p :: B-001"]);
+    assert!(result.markdown().contains("2 regression(s), 1 fix(es)"));
+    // A check that is new and fails is a regression; one that disappeared is a change.
+    let mut newer = new.clone();
+    newer.insert("p :: C-001".into(), "fail".into());
+    newer.remove("p :: B-001");
+    let result = compare(&base, &newer);
+    assert!(keys(&result.regressions).contains(&"p :: C-001".to_string()));
+    assert_eq!(keys(&result.changes), ["p :: B-001"]);
+    assert!(verdicts(&serde_json::json!({"x": 1})).is_err());
+}
