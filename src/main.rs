@@ -59,6 +59,9 @@ enum Command {
         /// Where to write junit.xml, report.json and summary.md.
         #[arg(long, default_value = "reports/latest")]
         report: PathBuf,
+        /// Also write every scenario's bus as a candump log and a pcapng file here.
+        #[arg(long, value_name = "DIR")]
+        trace: Option<PathBuf>,
     },
     /// What changed between two report.json files; exit 1 on a regression.
     Compare { base: PathBuf, new: PathBuf },
@@ -172,12 +175,14 @@ fn main() -> ExitCode {
             duration,
             no_counter_wrap,
             report,
+            trace,
         } => {
             let options = Options {
                 seed,
                 cases: if duration.is_some() { 1 } else { cases },
                 generated_cycles: duration.map_or(200, |s| (s * 1000.0).max(1.0) as u64),
                 counter_wrap: !no_counter_wrap,
+                trace_dir: trace,
             };
             run(
                 &catalogue, &iut, &fault, &profile, &options, &report, timeout_ms,
@@ -676,6 +681,7 @@ fn self_check(catalogue: &Catalogue, seed: u64) -> ExitCode {
         cases: 2,
         generated_cycles: 150,
         counter_wrap: false,
+        trace_dir: None,
     };
     let rows = canif_harness::suite::kill_matrix(catalogue, &options, |fault| {
         eprintln!("running {fault} on every profile")

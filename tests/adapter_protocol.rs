@@ -19,6 +19,7 @@ fn quick() -> Options {
         cases: 1,
         generated_cycles: 100,
         counter_wrap: false,
+        trace_dir: None,
     }
 }
 

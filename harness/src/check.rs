@@ -413,6 +413,7 @@ struct Lockstep<'a> {
     /// Frames other nodes sent lately: a slot holding one of them carries a real
     /// frame (the wrong one), anything else is a frame the IUT encoded wrongly.
     recent_rx: VecDeque<Frame>,
+    trace: Option<crate::trace::TraceWriter>,
 }
 
 /// What one cycle looked like, kept raw until a failure shows it.
@@ -543,6 +544,11 @@ impl Lockstep<'_> {
 
     fn complete(&mut self, frame: Frame, from_iut: bool, end: Nanos) {
         self.frames += 1;
+        if let Some(trace) = self.trace.as_mut() {
+            if trace.frame(end, &frame).is_err() {
+                self.trace = None; // a full disk ends the trace, not the run
+            }
+        }
         if from_iut {
             self.iut.transmit_complete();
             self.model.handle_transmit_complete();
@@ -660,6 +666,10 @@ pub fn run_scenario(
         history: VecDeque::new(),
         bus_log: VecDeque::new(),
         recent_rx: VecDeque::new(),
+        trace: scenario
+            .trace
+            .as_ref()
+            .and_then(|(dir, name)| crate::trace::TraceWriter::create(dir, name).ok()),
     };
     let mut outputs = plc.outputs().to_vec();
     let mut increment_at: Option<(u64, u16)> = None;
@@ -769,6 +779,9 @@ pub fn run_scenario(
         }
     }
     let cycles = state.cycle + 1;
+    if let Some(trace) = state.trace.take() {
+        let _ = trace.finish();
+    }
     run(Outcome::Pass, cycles, state.frames)
 }
 

@@ -17,6 +17,7 @@ pub mod iut;
 pub mod report;
 pub mod scenario;
 pub mod suite;
+pub mod trace;
 
 pub use check::{Failure, Outcome, ScenarioRun};
 pub use iut::{BuildError, Iut, IutKind};

@@ -86,6 +86,8 @@ pub struct Scenario {
     /// How far a receive time stamp may be from the end of reception (the
     /// profile's timestamp_tolerance_ns, TS-004).
     pub time_stamp_tolerance: Nanos,
+    /// Write the bus as `DIR/NAME.log` (candump) and `DIR/NAME.pcapng`.
+    pub trace: Option<(std::path::PathBuf, String)>,
     pub steps: Steps,
 }
 
@@ -223,6 +225,7 @@ fn scenario(name: &str, config: &InterfaceConfig, covers: &[&str], steps: Steps)
         check_confirmation_delay: false,
         declared_lengths: Vec::new(),
         time_stamp_tolerance: 0,
+        trace: None,
         steps,
     }
 }

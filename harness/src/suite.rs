@@ -23,6 +23,8 @@ pub struct Options {
     pub generated_cycles: u64,
     /// Include the 65,540-cycle RxCounter wrap.
     pub counter_wrap: bool,
+    /// Write each scenario's bus trace under this folder (`PROFILE/SCENARIO.{log,pcapng}`).
+    pub trace_dir: Option<std::path::PathBuf>,
 }
 
 impl Default for Options {
@@ -32,6 +34,7 @@ impl Default for Options {
             cases: 4,
             generated_cycles: 200,
             counter_wrap: true,
+            trace_dir: None,
         }
     }
 }
@@ -382,6 +385,20 @@ pub fn run_profile(
     progress(&runs[0]);
     for mut scenario in scenarios(&caps, options) {
         scenario.time_stamp_tolerance = profile.timestamp_tolerance_ns;
+        if let Some(dir) = &options.trace_dir {
+            let name: String = scenario
+                .name
+                .chars()
+                .map(|c| {
+                    if c.is_ascii_alphanumeric() || c == '-' {
+                        c
+                    } else {
+                        '_'
+                    }
+                })
+                .collect();
+            scenario.trace = Some((dir.join(&profile.name), name));
+        }
         let run = run_scenario(kind, &caps, &scenario, scenario.steps());
         progress(&run);
         runs.push(run);

@@ -74,6 +74,7 @@ fn scenario_of(cycles: &[Cycle]) -> Scenario {
         check_confirmation_delay: false,
         declared_lengths: Vec::new(),
         time_stamp_tolerance: 0,
+        trace: None,
         steps: Steps::Scripted(steps),
     }
 }
@@ -143,6 +144,7 @@ fn report(seed: u64) -> serde_json::Value {
         cases: 2,
         generated_cycles: 150,
         counter_wrap: false,
+        trace_dir: None,
     };
     let run = run_profile(
         &catalogue,
@@ -203,4 +205,91 @@ fn compare_names_regressions_fixes_and_changes() {
     assert!(keys(&result.regressions).contains(&"p :: C-001".to_string()));
     assert_eq!(keys(&result.changes), ["p :: B-001"]);
     assert!(verdicts(&serde_json::json!({"x": 1})).is_err());
+}
+
+/// The pcapng of a run: section header, one interface of link type 227 with
+/// nanosecond time stamps, and one enhanced packet per frame on the bus, the CAN
+/// id big-endian; the candump log has one line per frame. If tshark is
+/// installed (.ci/run installs it), it must read the file too.
+#[test]
+fn traces_are_pcapng_and_candump() {
+    use canif_harness::check::run_scenario;
+    use canif_harness::scenario;
+    let dir = std::env::temp_dir().join(format!("canif-trace-{}", std::process::id()));
+    let mut config = InterfaceConfig::new(FrameFormat::Fd, 4);
+    config.transaction_number = true;
+    config.time_stamp = true;
+    let mut scenario = scenario::fd_lengths(&config);
+    scenario.trace = Some((dir.clone(), "fd".into()));
+    let run = run_scenario(
+        &IutKind::SoftDevice { faults: vec![] },
+        &Capabilities::everything(),
+        &scenario,
+        scenario.steps(),
+    );
+    assert_eq!(run.outcome, Outcome::Pass);
+
+    let bytes = std::fs::read(dir.join("fd.pcapng")).unwrap();
+    let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
+    let (mut at, mut packets, mut ids) = (0, 0, Vec::new());
+    let mut kinds = Vec::new();
+    while at < bytes.len() {
+        let (kind, length) = (word(at), word(at + 4) as usize);
+        assert_eq!(
+            word(at + length - 4) as usize,
+            length,
+            "block lengths agree"
+        );
+        kinds.push(kind);
+        if kind == 1 {
+            assert_eq!(
+                u16::from_le_bytes([bytes[at + 8], bytes[at + 9]]),
+                227,
+                "LINKTYPE_CAN_SOCKETCAN"
+            );
+            assert_eq!(
+                &bytes[at + 16..at + 21],
+                &[9, 0, 1, 0, 9],
+                "if_tsresol = 9 (nanoseconds)"
+            );
+        }
+        if kind == 6 {
+            packets += 1;
+            let data = at + 28;
+            ids.push(u32::from_be_bytes(
+                bytes[data..data + 4].try_into().unwrap(),
+            ));
+        }
+        at += length;
+    }
+    assert_eq!(&kinds[..2], &[0x0A0D_0D0A, 1]);
+    assert_eq!(packets as u64, run.frames_checked);
+    assert!(
+        ids.contains(&(0x8000_1000)),
+        "an extended id with the EFF flag, big-endian"
+    );
+    let log = std::fs::read_to_string(dir.join("fd.log")).unwrap();
+    assert_eq!(log.lines().count() as u64, run.frames_checked);
+    assert!(
+        log.lines()
+            .any(|l| l.contains(" sim0 ") && l.contains("##")),
+        "FD frames as ##"
+    );
+
+    let tshark = std::process::Command::new("tshark")
+        .args(["-r"])
+        .arg(dir.join("fd.pcapng"))
+        .args(["-T", "fields", "-e", "can.id"])
+        .output();
+    match tshark {
+        Ok(out) if out.status.success() => {
+            let text = String::from_utf8_lossy(&out.stdout);
+            assert_eq!(text.lines().count() as u64, run.frames_checked, "tshark reads every frame: {text}");
+        }
+        Ok(out) => panic!("tshark cannot read the pcapng: {}", String::from_utf8_lossy(&out.stderr)),
+        // .ci/run installs tshark: in CI its absence is a failure, not a skip.
+        Err(_) if std::env::var_os("CI").is_some() => panic!("tshark is not installed in CI (.ci/run installs it)"),
+        Err(_) => eprintln!("SKIPPED the tshark check: tshark is not installed (apt-get install tshark; .ci/run does)"),
+    }
+    let _ = std::fs::remove_dir_all(dir);
 }

@@ -13,6 +13,7 @@ fn quick() -> Options {
         cases: 2,
         generated_cycles: 120,
         counter_wrap: false,
+        trace_dir: None,
     }
 }
 
