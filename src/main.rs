@@ -63,6 +63,27 @@ enum Command {
         #[arg(long, value_name = "DIR")]
         trace: Option<PathBuf>,
     },
+    /// Certify one profile: a sealed certificate (JSON + HTML) of every requirement's verdict.
+    Certify {
+        /// The profile to certify.
+        #[arg(long, required_unless_present = "verify")]
+        profile: Option<String>,
+        /// softdevice, model or exec:'COMMAND'.
+        #[arg(long, default_value = "softdevice")]
+        iut: String,
+        #[arg(long)]
+        fault: Vec<String>,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        #[arg(long, default_value_t = 5000)]
+        timeout_ms: u64,
+        /// Where to write certificate.json and certificate.html.
+        #[arg(long, default_value = "reports/certificate")]
+        out: PathBuf,
+        /// Check the seal of an existing certificate.json instead.
+        #[arg(long, value_name = "CERTIFICATE")]
+        verify: Option<PathBuf>,
+    },
     /// What changed between two report.json files; exit 1 on a regression.
     Compare { base: PathBuf, new: PathBuf },
     /// The soft device's deliberate faults.
@@ -190,6 +211,26 @@ fn main() -> ExitCode {
         }
         Command::SelfCheck { seed } => self_check(&catalogue, seed),
         Command::Compare { base, new } => compare(&base, &new),
+        Command::Certify {
+            profile,
+            iut,
+            fault,
+            seed,
+            timeout_ms,
+            out,
+            verify,
+        } => match verify {
+            Some(path) => verify_certificate(&path),
+            None => certify(
+                &catalogue,
+                profile.as_deref().unwrap_or_default(),
+                &iut,
+                &fault,
+                seed,
+                timeout_ms,
+                &out,
+            ),
+        },
         Command::Device { stdio, fault } => device(stdio, &fault),
         Command::Faults => {
             for fault in Fault::ALL {
@@ -539,39 +580,9 @@ fn run(
     report_dir: &Path,
     timeout_ms: u64,
 ) -> ExitCode {
-    let mut chosen = Vec::new();
-    for name in faults {
-        match Fault::from_name(name) {
-            Some(fault) => chosen.push(fault),
-            None => {
-                eprintln!("unknown fault `{name}`; `canif faults` lists them");
-                return ExitCode::from(2);
-            }
-        }
-    }
-    let kind = match iut {
-        _ if iut.starts_with("exec:") => {
-            if !chosen.is_empty() {
-                eprintln!(
-                    "--fault applies to the soft device only (pass it to the IUT's own command)"
-                );
-                return ExitCode::from(2);
-            }
-            IutKind::Exec {
-                command: iut["exec:".len()..].to_string(),
-                timeout_ms,
-            }
-        }
-        "softdevice" => IutKind::SoftDevice { faults: chosen },
-        "model" if chosen.is_empty() => IutKind::Model,
-        "model" => {
-            eprintln!("--fault applies to the soft device only");
-            return ExitCode::from(2);
-        }
-        other => {
-            eprintln!("unknown IUT `{other}`: use softdevice, model or exec:'COMMAND'");
-            return ExitCode::from(2);
-        }
+    let kind = match resolve_iut(iut, faults, timeout_ms) {
+        Ok(kind) => kind,
+        Err(code) => return code,
     };
     let profiles: Vec<_> = if profile == "all" {
         catalogue.profiles.iter().collect()
@@ -835,4 +846,157 @@ fn compare(base: &Path, new: &Path) -> ExitCode {
     let comparison = canif_harness::compare::compare(&base, &new);
     print!("{}", comparison.markdown());
     ExitCode::from(u8::from(!comparison.regressions.is_empty()))
+}
+
+/// The IUT named on the command line, or the exit code of a usage error.
+fn resolve_iut(iut: &str, faults: &[String], timeout_ms: u64) -> Result<IutKind, ExitCode> {
+    let mut chosen = Vec::new();
+    for name in faults {
+        match Fault::from_name(name) {
+            Some(fault) => chosen.push(fault),
+            None => {
+                eprintln!("unknown fault `{name}`; `canif faults` lists them");
+                return Err(ExitCode::from(2));
+            }
+        }
+    }
+    let kind = match iut {
+        _ if iut.starts_with("exec:") => {
+            if !chosen.is_empty() {
+                eprintln!(
+                    "--fault applies to the soft device only (pass it to the IUT's own command)"
+                );
+                return Err(ExitCode::from(2));
+            }
+            IutKind::Exec {
+                command: iut["exec:".len()..].to_string(),
+                timeout_ms,
+            }
+        }
+        "softdevice" => IutKind::SoftDevice { faults: chosen },
+        "model" if chosen.is_empty() => IutKind::Model,
+        "model" => {
+            eprintln!("--fault applies to the soft device only");
+            return Err(ExitCode::from(2));
+        }
+        other => {
+            eprintln!("unknown IUT `{other}`: use softdevice, model or exec:'COMMAND'");
+            return Err(ExitCode::from(2));
+        }
+    };
+    Ok(kind)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn certify(
+    catalogue: &Catalogue,
+    profile: &str,
+    iut: &str,
+    faults: &[String],
+    seed: u64,
+    timeout_ms: u64,
+    out: &Path,
+) -> ExitCode {
+    let kind = match resolve_iut(iut, faults, timeout_ms) {
+        Ok(kind) => kind,
+        Err(code) => return code,
+    };
+    let Some(profile) = catalogue.profile(profile) else {
+        eprintln!("unknown profile `{profile}`; `canif profiles` lists them");
+        return ExitCode::from(2);
+    };
+    let options = Options {
+        seed,
+        ..Options::default()
+    };
+    let run = run_profile(catalogue, profile, &kind, &options, |r| {
+        eprintln!("  {}", r.scenario)
+    });
+    let scenarios = match run_features(&kind, &[profile]) {
+        Ok(scenarios) => scenarios,
+        Err(error) => {
+            eprintln!("the feature files do not parse: {error}");
+            return ExitCode::from(2);
+        }
+    };
+    let failed = scenarios.iter().filter(|s| s.outcome.is_err()).count();
+    let files: Vec<(String, String)> = canif_spec::embedded_files()
+        .iter()
+        .map(|(p, t)| (p.to_string(), t.to_string()))
+        .collect();
+    let hash = canif_harness::certificate::catalogue_hash(&files);
+    let certificate = canif_harness::certificate::certificate(
+        catalogue,
+        &hash,
+        &run,
+        &kind.name(),
+        seed,
+        (scenarios.len(), failed),
+    );
+    let written = std::fs::create_dir_all(out)
+        .and_then(|_| {
+            std::fs::write(
+                out.join("certificate.json"),
+                serde_json::to_string_pretty(&certificate).unwrap_or_default(),
+            )
+        })
+        .and_then(|_| {
+            std::fs::write(
+                out.join("certificate.html"),
+                canif_harness::certificate::html(&certificate, catalogue),
+            )
+        });
+    if let Err(error) = written {
+        eprintln!("cannot write the certificate to {}: {error}", out.display());
+        return ExitCode::from(2);
+    }
+    println!(
+        "{} {} on {}: {} — {}/certificate.{{json,html}}, seal {}",
+        kind.name(),
+        if certificate["conforms"] == serde_json::json!(true) {
+            "CONFORMS"
+        } else {
+            "DOES NOT CONFORM"
+        },
+        profile.name,
+        certificate["totals"],
+        out.display(),
+        certificate["result_sha256"].as_str().unwrap_or("")
+    );
+    let errors = run
+        .verdicts
+        .values()
+        .any(|v| matches!(v, canif_harness::Verdict::Error(_)));
+    ExitCode::from(if errors {
+        2
+    } else {
+        u8::from(certificate["conforms"] != serde_json::json!(true))
+    })
+}
+
+fn verify_certificate(path: &Path) -> ExitCode {
+    let certificate: serde_json::Value = match std::fs::read_to_string(path)
+        .map_err(|e| e.to_string())
+        .and_then(|t| serde_json::from_str(&t).map_err(|e| e.to_string()))
+    {
+        Ok(value) => value,
+        Err(error) => {
+            eprintln!("{}: {error}", path.display());
+            return ExitCode::from(2);
+        }
+    };
+    match canif_harness::certificate::verify(&certificate) {
+        Ok(()) => {
+            println!(
+                "{}: the seal matches ({})",
+                path.display(),
+                certificate["result_sha256"].as_str().unwrap_or("")
+            );
+            ExitCode::SUCCESS
+        }
+        Err(error) => {
+            println!("{}: {error}", path.display());
+            ExitCode::from(1)
+        }
+    }
 }

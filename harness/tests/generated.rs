@@ -293,3 +293,57 @@ fn traces_are_pcapng_and_candump() {
     }
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// A certificate names the catalogue's hash and every verdict, and its seal
+/// breaks when any of it is edited.
+#[test]
+fn certificates_are_sealed() {
+    use canif_harness::certificate::{catalogue_hash, certificate, html, verify};
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("fc510x").unwrap();
+    let options = Options {
+        seed: 9,
+        cases: 1,
+        generated_cycles: 50,
+        counter_wrap: false,
+        trace_dir: None,
+    };
+    let run = run_profile(
+        &catalogue,
+        profile,
+        &IutKind::SoftDevice { faults: vec![] },
+        &options,
+        |_| {},
+    );
+    let files: Vec<(String, String)> = canif_spec::embedded_files()
+        .iter()
+        .map(|(p, t)| (p.to_string(), t.to_string()))
+        .collect();
+    let hash = catalogue_hash(&files);
+    assert_eq!(hash.len(), 64);
+    let mut changed = files.clone();
+    changed[0].1.push(' ');
+    assert_ne!(
+        catalogue_hash(&changed),
+        hash,
+        "the hash covers the catalogue's text"
+    );
+    let cert = certificate(&catalogue, &hash, &run, "softdevice", 9, (10, 0));
+    assert_eq!(cert["conforms"], serde_json::json!(true));
+    assert_eq!(
+        cert["verdicts"].as_object().unwrap().len(),
+        catalogue.requirements().count()
+    );
+    verify(&cert).unwrap();
+    let reparsed: serde_json::Value =
+        serde_json::from_str(&serde_json::to_string_pretty(&cert).unwrap()).unwrap();
+    verify(&reparsed).expect("the seal survives pretty-printing and reading back");
+    let mut edited = cert.clone();
+    edited["verdicts"]["HS-TX-001"] = serde_json::json!("fail");
+    assert!(verify(&edited).is_err());
+    let mut edited = cert.clone();
+    edited["profile"] = serde_json::json!("fc532x");
+    assert!(verify(&edited).is_err());
+    let page = html(&cert, &catalogue);
+    assert!(page.contains("CONFORMS") && page.contains(&hash) && page.contains("HS-TX-001"));
+}

@@ -22,6 +22,12 @@ pub use catalogue::{
 pub use error::{SpecError, SpecErrors};
 pub use profile::Profile;
 
+/// The embedded catalogue's files (path, text), in load order: what a
+/// certificate's catalogue hash covers.
+pub fn embedded_files() -> &'static [(&'static str, &'static str)] {
+    embedded::EMBEDDED
+}
+
 mod embedded {
     include!(concat!(env!("OUT_DIR"), "/embedded.rs"));
 }
