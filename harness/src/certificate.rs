@@ -122,7 +122,7 @@ pub fn html(certificate: &Value, catalogue: &Catalogue) -> String {
             esc(&requirement.statement)
         ));
     }
-    let field = |name: &str| esc(&certificate[name].to_string().trim_matches('"').to_string());
+    let field = |name: &str| esc(certificate[name].to_string().trim_matches('"'));
     format!(
         r#"<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>canif certificate — {profile}</title>
