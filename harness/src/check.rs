@@ -30,6 +30,24 @@ pub struct Failure {
     pub actual: String,
     /// The last cycles before the failure, oldest first.
     pub context: Vec<String>,
+    /// The same cycles as data, for the timing diagram.
+    pub timeline: Vec<CycleView>,
+}
+
+/// One cycle of a failure's history: the PLC's outputs, the model's (expected)
+/// and the IUT's (actual) input header, and the frames that ended on the bus
+/// since the cycle before.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CycleView {
+    pub cycle: u64,
+    pub time: Nanos,
+    /// Outputs.TxCounter, RxCounter, NoOfTxMessages.
+    pub outputs: [u16; 3],
+    /// Inputs.TxCounter, RxCounter, NoOfRxMessages, TransactionNumber (0 without).
+    pub expected: [u16; 4],
+    pub actual: [u16; 4],
+    /// (end of the frame, sent by the IUT, the frame in candump notation).
+    pub frames: Vec<(Nanos, bool, String)>,
 }
 
 /// How one scenario ended.
@@ -409,7 +427,7 @@ struct Lockstep<'a> {
     /// The last cycles' image headers and the frames around them (bounded),
     /// formatted only when a failure needs them.
     history: VecDeque<CycleRecord>,
-    bus_log: VecDeque<(u64, bool, Frame)>,
+    bus_log: VecDeque<(u64, bool, Frame, Nanos)>,
     /// Frames other nodes sent lately: a slot holding one of them carries a real
     /// frame (the wrong one), anything else is a frame the IUT encoded wrongly.
     recent_rx: VecDeque<Frame>,
@@ -424,6 +442,7 @@ struct CycleRecord {
     outputs: [u16; 3],
     inputs: [u16; 3],
     transaction_number: Option<u16>,
+    expected: [u16; 4],
 }
 
 /// How many frames of bus history a failure can show.
@@ -443,6 +462,7 @@ impl Lockstep<'_> {
             expected: difference.expected,
             actual: difference.actual,
             context: self.context(),
+            timeline: self.timeline(),
         }))
     }
 
@@ -552,7 +572,7 @@ impl Lockstep<'_> {
         if from_iut {
             self.iut.transmit_complete();
             self.model.handle_transmit_complete();
-            self.log(true, frame);
+            self.log(true, frame, end);
         } else {
             self.iut.receive(&frame, end);
             self.model.handle_received(frame, end);
@@ -560,20 +580,31 @@ impl Lockstep<'_> {
             if self.recent_rx.len() > RECENT_RX {
                 self.recent_rx.pop_front();
             }
-            self.log(false, frame);
+            self.log(false, frame, end);
         }
     }
 
-    fn log(&mut self, from_iut: bool, frame: Frame) {
-        self.bus_log.push_back((self.cycle, from_iut, frame));
+    fn log(&mut self, from_iut: bool, frame: Frame, end: Nanos) {
+        self.bus_log.push_back((self.cycle, from_iut, frame, end));
         if self.bus_log.len() > BUS_LOG {
             self.bus_log.pop_front();
         }
     }
 
-    fn remember(&mut self, outputs: &[u8], inputs: &[u8]) {
+    fn remember(&mut self, outputs: &[u8], expected: &[u8], inputs: &[u8]) {
         let header = |b: &[u8]| [0, 2, 4].map(|at| u16::from_le_bytes([b[at], b[at + 1]]));
+        let with_tn = |b: &[u8]| {
+            let [tx, rx, n] = header(b);
+            let tn = if self.layout.transaction_number && b.len() >= 8 {
+                u16::from_le_bytes([b[6], b[7]])
+            } else {
+                0
+            };
+            [tx, rx, n, tn]
+        };
+        let expected = with_tn(expected);
         self.history.push_back(CycleRecord {
+            expected,
             cycle: self.cycle,
             now: self.now,
             outputs: header(outputs),
@@ -588,6 +619,29 @@ impl Lockstep<'_> {
         }
     }
 
+    /// The remembered cycles as data.
+    fn timeline(&self) -> Vec<CycleView> {
+        self.history
+            .iter()
+            .map(|r| {
+                let [tx, rx, n] = r.inputs;
+                CycleView {
+                    cycle: r.cycle,
+                    time: r.now,
+                    outputs: r.outputs,
+                    expected: r.expected,
+                    actual: [tx, rx, n, r.transaction_number.unwrap_or(0)],
+                    frames: self
+                        .bus_log
+                        .iter()
+                        .filter(|(cycle, ..)| *cycle + 1 == r.cycle)
+                        .map(|(_, from_iut, frame, end)| (*end, *from_iut, frame.to_string()))
+                        .collect(),
+                }
+            })
+            .collect()
+    }
+
     /// The remembered cycles as text, each with the frames that ended on the bus
     /// since the cycle before.
     fn context(&self) -> Vec<String> {
@@ -600,8 +654,8 @@ impl Lockstep<'_> {
                 let frames: Vec<String> = self
                     .bus_log
                     .iter()
-                    .filter(|(cycle, _, _)| *cycle + 1 == r.cycle)
-                    .map(|(_, from_iut, f)| format!("{} {f}", if *from_iut { "tx" } else { "rx" }))
+                    .filter(|(cycle, ..)| *cycle + 1 == r.cycle)
+                    .map(|(_, from_iut, f, _)| format!("{} {f}", if *from_iut { "tx" } else { "rx" }))
                     .collect();
                 let bus = if frames.is_empty() { String::new() } else { format!(" | bus: {}", frames.join(", ")) };
                 format!("cycle {:>5} t={:>9.3} ms  out[tx={otx} rx={orx} n={on}]  in[tx={itx} rx={irx} n={inn}{tn}]{bus}", r.cycle, r.now as f64 / 1e6)
@@ -752,7 +806,7 @@ pub fn run_scenario(
             Ok(inputs) => inputs,
             Err(e) => return run(Outcome::Error(e.0), k, state.frames),
         };
-        state.remember(&outputs, &actual);
+        state.remember(&outputs, &expected, &actual);
         let recent = &state.recent_rx;
         if let Some(difference) = compare_inputs(
             &layout,

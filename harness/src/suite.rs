@@ -344,6 +344,7 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
                                         Err(e) => format!("refused: {e}"),
                                     },
                                     context: Vec::new(),
+                                    timeline: Vec::new(),
                                 };
                                 return ScenarioRun {
                                     scenario: "configuration refusals".into(),

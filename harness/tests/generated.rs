@@ -347,3 +347,102 @@ fn certificates_are_sealed() {
     let page = html(&cert, &catalogue);
     assert!(page.contains("CONFORMS") && page.contains(&hash) && page.contains("HS-TX-001"));
 }
+
+/// report.html of a failing run, loaded in headless Chromium: the page's script
+/// runs to the end without an error, and each failure has its timing diagram
+/// with the failing cycle marked. .ci/run installs Chromium; in CI its absence
+/// fails the test.
+#[test]
+fn the_html_report_renders_in_a_browser() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("el6751-mdp").unwrap();
+    let options = Options {
+        seed: 2,
+        cases: 1,
+        generated_cycles: 50,
+        counter_wrap: false,
+        trace_dir: None,
+    };
+    let run = run_profile(
+        &catalogue,
+        profile,
+        &IutKind::SoftDevice {
+            faults: vec![canif_softdevice::Fault::OverwritesUnacknowledgedRx],
+        },
+        &options,
+        |_| {},
+    );
+    assert!(!run.failures.is_empty());
+    let report = RunReport {
+        iut: "softdevice+overwrites".into(),
+        seed: 2,
+        bus: "sim".into(),
+        profiles: vec![run],
+        scenarios: Vec::new(),
+        wall_time_ms: 0,
+    };
+    let dir = std::env::temp_dir().join(format!("canif-html-{}", std::process::id()));
+    report.write(&catalogue, &dir).unwrap();
+    let page = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    assert!(
+        page.contains("<svg")
+            && page.contains("class=\"failing-cycle\"")
+            && page.contains("class=\"mismatch\"")
+    );
+    for external in ["src=\"http", "href=\"http", "src='http", "@import"] {
+        assert!(
+            !page.contains(external),
+            "the page loads nothing from the network ({external})"
+        );
+    }
+
+    let browser = ["chromium", "chromium-browser", "google-chrome"]
+        .into_iter()
+        .find(|b| {
+            std::process::Command::new(b)
+                .arg("--version")
+                .output()
+                .is_ok_and(|o| o.status.success())
+        });
+    let Some(browser) = browser else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "Chromium is not installed in CI (.ci/run installs it)"
+        );
+        eprintln!("SKIPPED the browser check: no Chromium installed (apt-get install chromium; .ci/run does)");
+        return;
+    };
+    let profile_dir = dir.join("browser-profile");
+    let out = std::process::Command::new(browser)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+        ])
+        .arg(format!("--user-data-dir={}", profile_dir.display()))
+        .arg("--dump-dom")
+        .arg(format!("file://{}", dir.join("report.html").display()))
+        .output()
+        .expect("the browser runs");
+    let dom = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        dom.contains("data-ready=\"yes\""),
+        "the page's script did not finish: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!dom.contains("data-errors"), "script errors in the page");
+    assert!(
+        dom.contains("of") && dom.contains("shown"),
+        "the filter counted the rows"
+    );
+    assert!(
+        dom.matches("<svg").count() >= 1 && dom.contains("failing-cycle"),
+        "the failure diagram is in the rendered page"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}
