@@ -10,6 +10,7 @@
 #![forbid(unsafe_code)]
 
 pub mod bus;
+pub mod canopen;
 pub mod certificate;
 pub mod check;
 pub mod compare;

@@ -6,6 +6,7 @@
 //! p. 54), CiA 301 for what they cite (rulings R6, R7, R8).
 
 pub mod cob_id;
+pub mod coupler;
 pub mod guarding;
 pub mod heartbeat;
 pub mod nmt;

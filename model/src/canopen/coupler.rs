@@ -1,0 +1,328 @@
+//! A Beckhoff CANopen bus coupler as the quick start describes it, as a state
+//! machine without I/O: frames in, frames out, time as an argument.
+//!
+//! Source: 002 (NMT start/stop, default identifiers, event-driven digital
+//! inputs, analog inputs by RTR or after 0x6423 > 0, node guarding with toggle
+//! bit, guard time × life time factor, heartbeat 0x1017), 004 (expedited SDO),
+//! rulings R6-R8.
+
+use std::collections::BTreeMap;
+
+use super::cob_id::{classify, default_cob_id, Channel};
+use super::guarding::{life_time, GuardResponder, GUARD_TIME, LIFE_TIME_FACTOR};
+use super::heartbeat::PRODUCER_HEARTBEAT_TIME;
+use super::nmt::{parse_command, NmtState};
+use super::pdo::ANALOG_INPUT_INTERRUPT_ENABLE;
+use super::sdo::{abort_code, SdoRequest, SdoResponse};
+use super::NodeId;
+use crate::frame::{CanId, Frame};
+use crate::Nanos;
+
+/// An object dictionary entry: its bytes and whether the client may write it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct Entry {
+    value: Vec<u8>,
+    writable: bool,
+}
+
+/// Deliberate defects of a coupler, for the CANopen checks' self-test.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum CouplerFault {
+    /// The guarding answer's toggle bit never inverts.
+    ToggleStuck,
+    /// Upload responses always say 4 bytes (0x43), whatever the entry's size.
+    SdoSizeAlways4,
+    /// Unknown objects get no answer instead of an abort.
+    NoAbort,
+}
+
+/// The coupler.
+///
+/// Requirements: NMT-001..NMT-007, COB-001, PDO-001..PDO-003, GRD-001..GRD-005,
+/// HB-001..HB-003, SDO-001..SDO-009.
+#[derive(Debug, Clone)]
+pub struct Coupler {
+    node: NodeId,
+    state: NmtState,
+    objects: BTreeMap<(u16, u8), Entry>,
+    digital_inputs: Vec<u8>,
+    analog_inputs: Vec<i16>,
+    guard: GuardResponder,
+    last_guard_request: Option<Nanos>,
+    life_guarding_lost: bool,
+    last_heartbeat: Option<Nanos>,
+    faults: Vec<CouplerFault>,
+}
+
+impl Coupler {
+    /// A coupler with `digital` input bytes (1..=8) and `analog` input channels (1..=4).
+    pub fn new(node: NodeId, digital: usize, analog: usize) -> Self {
+        let mut objects = BTreeMap::new();
+        let mut put = |index: u16, sub: u8, value: &[u8], writable: bool| {
+            objects.insert(
+                (index, sub),
+                Entry {
+                    value: value.to_vec(),
+                    writable,
+                },
+            );
+        };
+        put(0x1000, 0, &0x0019_0191u32.to_le_bytes(), false); // device type: CiA 401 I/O
+        put(0x1001, 0, &[0], false); // error register
+        put(0x1018, 1, &2u32.to_le_bytes(), false); // vendor id: Beckhoff
+        put(GUARD_TIME, 0, &0u16.to_le_bytes(), true);
+        put(LIFE_TIME_FACTOR, 0, &[0], true);
+        put(PRODUCER_HEARTBEAT_TIME, 0, &0u16.to_le_bytes(), true);
+        put(ANALOG_INPUT_INTERRUPT_ENABLE, 0, &[0], true);
+        Coupler {
+            node,
+            state: NmtState::PreOperational,
+            objects,
+            digital_inputs: vec![0; digital.clamp(1, 8)],
+            analog_inputs: vec![0; analog.clamp(1, 4)],
+            guard: GuardResponder::default(),
+            last_guard_request: None,
+            life_guarding_lost: false,
+            last_heartbeat: None,
+            faults: Vec::new(),
+        }
+    }
+
+    pub fn inject(&mut self, fault: CouplerFault) {
+        self.faults.push(fault);
+    }
+
+    pub fn state(&self) -> NmtState {
+        self.state
+    }
+
+    pub fn node(&self) -> NodeId {
+        self.node
+    }
+
+    /// Did the coupler notice the master's loss (no guarding within guard time × life time factor)?
+    pub fn life_guarding_lost(&self) -> bool {
+        self.life_guarding_lost
+    }
+
+    fn u16_object(&self, index: u16) -> u16 {
+        self.objects.get(&(index, 0)).map_or(0, |e| {
+            u16::from_le_bytes([e.value[0], *e.value.get(1).unwrap_or(&0)])
+        })
+    }
+
+    fn id(&self, channel: Channel) -> CanId {
+        CanId::Standard(default_cob_id(channel, self.node))
+    }
+
+    fn pdo(&self, channel: Channel, data: &[u8]) -> Frame {
+        Frame::classic(self.id(channel), data).expect("at most 8 bytes")
+    }
+
+    fn analog_frame(&self) -> Frame {
+        self.pdo(
+            Channel::AnalogInputs1To4,
+            &super::pdo::analog_payload(&self.analog_inputs),
+        )
+    }
+
+    /// A frame from the bus arrives at `now`; the frames the coupler answers with.
+    pub fn handle(&mut self, frame: &Frame, now: Nanos) -> Vec<Frame> {
+        if let Some((command, target)) = parse_command(frame) {
+            if super::nmt::addresses(target, self.node) {
+                self.state = self.state.apply(command);
+                if matches!(
+                    command,
+                    super::nmt::NmtCommand::ResetNode | super::nmt::NmtCommand::ResetCommunication
+                ) {
+                    self.guard.reset();
+                    return vec![self.pdo(Channel::ErrorControl, &[NmtState::Initialising.code()])];
+                    // boot-up
+                }
+            }
+            return Vec::new();
+        }
+        let CanId::Standard(raw) = frame.id else {
+            return Vec::new();
+        };
+        let Some((channel, node)) = classify(raw) else {
+            return Vec::new();
+        };
+        if node != self.node {
+            return Vec::new();
+        }
+        match channel {
+            Channel::ErrorControl if frame.is_remote() => {
+                self.last_guard_request = Some(now);
+                let mut answer = self.guard.respond(self.node, self.state);
+                if self.faults.contains(&CouplerFault::ToggleStuck) {
+                    self.guard.reset();
+                    answer = self.guard.respond(self.node, self.state);
+                    self.guard.reset();
+                }
+                vec![answer]
+            }
+            Channel::AnalogInputs1To4 if frame.is_remote() && self.state.pdo_allowed() => {
+                vec![self.analog_frame()]
+            }
+            Channel::DigitalOutputs | Channel::AnalogOutputs1To4 if self.state.pdo_allowed() => {
+                Vec::new()
+            }
+            Channel::SdoRequest if !frame.is_remote() => {
+                self.sdo(frame.data()).into_iter().collect()
+            }
+            _ => Vec::new(),
+        }
+    }
+
+    fn sdo(&mut self, data: &[u8]) -> Option<Frame> {
+        let answer_id = self.id(Channel::SdoResponse);
+        let respond = move |response: SdoResponse| {
+            Frame::classic(answer_id, &response.to_bytes()).expect("8 bytes")
+        };
+        let abort = |index, sub_index, code| {
+            Some(respond(SdoResponse::Abort {
+                index,
+                sub_index,
+                code,
+            }))
+        };
+        let request = match SdoRequest::parse(data) {
+            Ok(request) => request,
+            Err(_) => {
+                let index =
+                    u16::from_le_bytes([*data.get(1).unwrap_or(&0), *data.get(2).unwrap_or(&0)]);
+                return abort(
+                    index,
+                    *data.get(3).unwrap_or(&0),
+                    abort_code::COMMAND_SPECIFIER_INVALID,
+                );
+            }
+        };
+        let missing = |index: u16, sub_index: u8, objects: &BTreeMap<(u16, u8), Entry>| {
+            if objects.keys().any(|(i, _)| *i == index) {
+                abort_code::SUB_INDEX_DOES_NOT_EXIST
+            } else {
+                let _ = sub_index;
+                abort_code::OBJECT_DOES_NOT_EXIST
+            }
+        };
+        let no_abort = self.faults.contains(&CouplerFault::NoAbort);
+        match request {
+            SdoRequest::Upload { index, sub_index } => {
+                match self.objects.get(&(index, sub_index)) {
+                    Some(entry) => {
+                        let mut value = [0u8; 4];
+                        value[..entry.value.len()].copy_from_slice(&entry.value);
+                        let size = if self.faults.contains(&CouplerFault::SdoSizeAlways4) {
+                            4
+                        } else {
+                            entry.value.len() as u8
+                        };
+                        Some(respond(SdoResponse::Upload {
+                            index,
+                            sub_index,
+                            data: value,
+                            size,
+                        }))
+                    }
+                    None if no_abort => None,
+                    None => abort(index, sub_index, missing(index, sub_index, &self.objects)),
+                }
+            }
+            SdoRequest::Download {
+                index,
+                sub_index,
+                data,
+                size,
+            } => {
+                let Some(entry) = self.objects.get_mut(&(index, sub_index)) else {
+                    return if no_abort {
+                        None
+                    } else {
+                        abort(index, sub_index, missing(index, sub_index, &self.objects))
+                    };
+                };
+                if !entry.writable {
+                    return abort(index, sub_index, abort_code::READ_ONLY);
+                }
+                // 0x22 writes the entry's length (SDO-004); a stated size must match it.
+                if size.is_some_and(|n| usize::from(n) != entry.value.len()) {
+                    return abort(index, sub_index, abort_code::LENGTH_MISMATCH);
+                }
+                let length = entry.value.len();
+                entry.value.copy_from_slice(&data[..length]);
+                Some(respond(SdoResponse::DownloadAck { index, sub_index }))
+            }
+            SdoRequest::Abort { .. } => None,
+        }
+    }
+
+    /// Sets a digital input byte; in operational state a change goes out at once.
+    ///
+    /// Requirements: NMT-007, PDO-001.
+    pub fn set_digital_input(&mut self, byte: usize, value: u8) -> Vec<Frame> {
+        let Some(slot) = self.digital_inputs.get_mut(byte) else {
+            return Vec::new();
+        };
+        let changed = *slot != value;
+        *slot = value;
+        if changed && self.state.pdo_allowed() {
+            vec![self.pdo(Channel::DigitalInputs, &self.digital_inputs.clone())]
+        } else {
+            Vec::new()
+        }
+    }
+
+    /// Sets an analog input; only with 0x6423 > 0 a change goes out by itself.
+    ///
+    /// Requirements: PDO-003.
+    pub fn set_analog_input(&mut self, channel: usize, value: i16) -> Vec<Frame> {
+        let Some(slot) = self.analog_inputs.get_mut(channel) else {
+            return Vec::new();
+        };
+        let changed = *slot != value;
+        *slot = value;
+        let events = self
+            .objects
+            .get(&(ANALOG_INPUT_INTERRUPT_ENABLE, 0))
+            .is_some_and(|e| e.value[0] > 0);
+        if changed && events && self.state.pdo_allowed() {
+            vec![self.analog_frame()]
+        } else {
+            Vec::new()
+        }
+    }
+
+    /// Time passes: heartbeats when due; life guarding watches the master.
+    ///
+    /// Requirements: HB-001, HB-003, GRD-005.
+    pub fn poll(&mut self, now: Nanos) -> Vec<Frame> {
+        let mut out = Vec::new();
+        if let (Some(limit), Some(last)) = (
+            life_time(
+                self.u16_object(GUARD_TIME),
+                self.objects
+                    .get(&(LIFE_TIME_FACTOR, 0))
+                    .map_or(0, |e| e.value[0]),
+            ),
+            self.last_guard_request,
+        ) {
+            if now.saturating_sub(last) > limit {
+                self.life_guarding_lost = true;
+            }
+        }
+        let period = self.u16_object(PRODUCER_HEARTBEAT_TIME);
+        if period > 0 {
+            let due = match self.last_heartbeat {
+                None => true,
+                Some(last) => super::heartbeat::next_due(last, period).is_some_and(|at| now >= at),
+            };
+            if due {
+                self.last_heartbeat = Some(now);
+                out.push(super::heartbeat::heartbeat(self.node, self.state));
+            }
+        }
+        out
+    }
+}
