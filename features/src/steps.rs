@@ -16,6 +16,7 @@ use canif_model::frame::{CanId, Frame, FrameKind};
 use canif_model::info_data::ControllerStatus;
 use canif_model::sizing;
 use canif_model::timing::{classic_bits, BitCount};
+use canif_model::Nanos;
 use cucumber::gherkin::Step;
 use cucumber::{given, then, when};
 
@@ -1067,4 +1068,243 @@ fn sdo_upload_request(
         u32::from(id) == num(&cob) && request.to_bytes().to_vec() == bytes(&data),
         || format!("0x{id:03X} with {}", hex(&request.to_bytes())),
     )
+}
+
+// ------------------------------------------- CANopen through the CAN interface
+
+#[given(regex = r"^the profile's CAN interface with (\d+) slots$")]
+fn profile_interface(world: &mut CanWorld, slots: u8) {
+    let caps = &world.target.caps;
+    let format = if caps.base11 {
+        FrameFormat::Base11
+    } else if caps.ext29 {
+        FrameFormat::Extended29
+    } else {
+        FrameFormat::Fd
+    };
+    world.config = canif_model::config::InterfaceConfig::new(format, slots);
+}
+
+#[given(regex = r"^a Beckhoff bus coupler with node id (\d+) on the bus$")]
+fn coupler_on_bus(world: &mut CanWorld, node: u8) -> StepResult {
+    let node = NodeId::new(node).ok_or("node ids are 1..63")?;
+    world.coupler = Some(canif_model::canopen::coupler::Coupler::new(node, 2, 4));
+    Ok(())
+}
+
+fn coupler_node(world: &CanWorld) -> Result<NodeId, String> {
+    world
+        .coupler
+        .as_ref()
+        .map(|c| c.node())
+        .ok_or_else(|| "no coupler on the bus".into())
+}
+
+#[when(
+    regex = r"^the PLC sends the NMT command (start|stop|enter pre-operational|reset node|reset communication) to (all nodes|the coupler)$"
+)]
+fn plc_nmt(world: &mut CanWorld, command: String, target: String) -> StepResult {
+    let node = if target == "all nodes" {
+        None
+    } else {
+        Some(coupler_node(world)?)
+    };
+    world.plc_sends(nmt::command_frame(nmt_command(&command), node))
+}
+
+#[when(regex = r"^the PLC writes (0x[0-9A-Fa-f]+):(\d+) = (\d+) to the coupler by SDO$")]
+fn plc_sdo_download(world: &mut CanWorld, index: String, sub: u8, value: u32) -> StepResult {
+    let node = coupler_node(world)?;
+    let request = SdoRequest::Download {
+        index: num(&index) as u16,
+        sub_index: sub,
+        data: value.to_le_bytes(),
+        size: None,
+    };
+    world.plc_sends(
+        Frame::classic(
+            CanId::Standard(default_cob_id(Channel::SdoRequest, node)),
+            &request.to_bytes(),
+        )
+        .expect("8 bytes"),
+    )
+}
+
+#[when(regex = r"^the PLC reads (0x[0-9A-Fa-f]+):(\d+) from the coupler by SDO$")]
+fn plc_sdo_upload(world: &mut CanWorld, index: String, sub: u8) -> StepResult {
+    let node = coupler_node(world)?;
+    let request = SdoRequest::Upload {
+        index: num(&index) as u16,
+        sub_index: sub,
+    };
+    world.plc_sends(
+        Frame::classic(
+            CanId::Standard(default_cob_id(Channel::SdoRequest, node)),
+            &request.to_bytes(),
+        )
+        .expect("8 bytes"),
+    )
+}
+
+#[when("the PLC guards the coupler")]
+fn plc_guards(world: &mut CanWorld) -> StepResult {
+    let node = coupler_node(world)?;
+    world.plc_sends(canif_model::canopen::guarding::request(node))
+}
+
+#[when("the PLC requests the analog inputs")]
+fn plc_requests_analog(world: &mut CanWorld) -> StepResult {
+    let node = coupler_node(world)?;
+    world.plc_sends(
+        Frame::remote(
+            CanId::Standard(default_cob_id(Channel::AnalogInputs1To4, node)),
+            8,
+        )
+        .expect("rtr"),
+    )
+}
+
+#[when(regex = r"^digital input byte (\d+) of the coupler becomes (0x[0-9A-Fa-f]+)$")]
+fn coupler_digital(world: &mut CanWorld, byte: usize, value: String) -> StepResult {
+    world.start()?;
+    let frames = world
+        .coupler
+        .as_mut()
+        .ok_or("no coupler")?
+        .set_digital_input(byte, num(&value) as u8);
+    world.coupler_sends(frames)
+}
+
+#[when(regex = r"^analog input (\d+) of the coupler becomes (-?\d+)$")]
+fn coupler_analog(world: &mut CanWorld, channel: usize, value: i16) -> StepResult {
+    world.start()?;
+    let frames = world
+        .coupler
+        .as_mut()
+        .ok_or("no coupler")?
+        .set_analog_input(channel, value);
+    world.coupler_sends(frames)
+}
+
+#[when("the coupler fails")]
+fn coupler_fails(world: &mut CanWorld) {
+    world.coupler_alive = false;
+    world.coupler_failed_at = Some(world.now);
+}
+
+#[then(regex = r"^the PLC has received the SDO answer ([0-9A-Fa-f ]+)$")]
+fn plc_sdo_answer(world: &mut CanWorld, data: String) -> StepResult {
+    let node = coupler_node(world)?;
+    let id = default_cob_id(Channel::SdoResponse, node);
+    let wanted = bytes(&data);
+    check(
+        world
+            .received
+            .iter()
+            .any(|m| m.frame.id == CanId::Standard(id) && m.frame.data() == wanted),
+        || {
+            format!(
+                "no answer {} on 0x{id:03X} among {:?}",
+                hex(&wanted),
+                world.received.iter().map(|m| m.frame).collect::<Vec<_>>()
+            )
+        },
+    )
+}
+
+#[then(regex = r"^the last guarding answer says (operational|pre-operational|stopped)$")]
+fn guarding_answer(world: &mut CanWorld, state: String) -> StepResult {
+    let node = coupler_node(world)?;
+    let id = CanId::Standard(default_cob_id(Channel::ErrorControl, node));
+    let answer = world
+        .received
+        .iter()
+        .rev()
+        .find(|m| m.frame.id == id && m.frame.data().len() == 1)
+        .ok_or("no guarding answer received")?;
+    let wanted = match state.as_str() {
+        "operational" => NmtState::Operational,
+        "pre-operational" => NmtState::PreOperational,
+        _ => NmtState::Stopped,
+    };
+    check(answer.frame.data()[0] & 0x7F == wanted.code(), || {
+        format!("status byte 0x{:02X}", answer.frame.data()[0])
+    })
+}
+
+/// Heartbeats the PLC received from the coupler, with the cycle time it read them.
+fn heartbeats(world: &CanWorld) -> Result<Vec<Nanos>, String> {
+    let id = CanId::Standard(default_cob_id(Channel::ErrorControl, coupler_node(world)?));
+    Ok(world
+        .received_at
+        .iter()
+        .filter(|(_, f)| f.id == id && !f.is_remote())
+        .map(|(at, _)| *at)
+        .collect())
+}
+
+#[then(regex = r"^the PLC receives a heartbeat every (\d+) ms$")]
+fn heartbeat_every(world: &mut CanWorld, period: u64) -> StepResult {
+    let times = heartbeats(world)?;
+    let gaps: Vec<u64> = times
+        .windows(2)
+        .map(|w| (w[1] - w[0]) / 1_000_000)
+        .collect();
+    check(
+        gaps.len() >= 3 && gaps.iter().all(|g| g.abs_diff(period) <= 2),
+        || format!("heartbeat gaps {gaps:?} ms"),
+    )
+}
+
+/// Covers the master's view (HB-004): no heartbeat for twice the producer time.
+#[then(
+    regex = r"^by heartbeat the PLC notices the coupler's loss within (\d+) ms of (\d+) ms heartbeats$"
+)]
+fn heartbeat_loss(world: &mut CanWorld, within: u64, period: u64) -> StepResult {
+    let failed = world
+        .coupler_failed_at
+        .ok_or("the coupler has not failed")?;
+    let last = heartbeats(world)?
+        .into_iter()
+        .filter(|t| *t <= failed + 2_000_000)
+        .max()
+        .ok_or("no heartbeat before the failure")?;
+    // The master's rule: lost when no heartbeat for twice the producer time.
+    let noticed = last + 2 * period * 1_000_000;
+    let late = heartbeats(world)?
+        .into_iter()
+        .any(|t| t > failed + 2_000_000);
+    check(
+        !late && noticed.saturating_sub(failed) <= within * 1_000_000,
+        || {
+            format!(
+                "last heartbeat at {} ms, noticed at {} ms, failure at {} ms",
+                last / 1_000_000,
+                noticed / 1_000_000,
+                failed / 1_000_000
+            )
+        },
+    )
+}
+
+#[then("by guarding the PLC notices the coupler's loss at the next request")]
+fn guarding_loss(world: &mut CanWorld) -> StepResult {
+    let failed = world
+        .coupler_failed_at
+        .ok_or("the coupler has not failed")?;
+    let node = coupler_node(world)?;
+    let id = CanId::Standard(default_cob_id(Channel::ErrorControl, node));
+    let answered_after = world
+        .received_at
+        .iter()
+        .any(|(at, f)| *at > failed + 2_000_000 && f.id == id);
+    let asked_after = world
+        .on_bus
+        .iter()
+        .filter(|f| f.id == id && f.is_remote())
+        .count()
+        >= 2;
+    check(asked_after && !answered_after, || {
+        format!("asked again: {asked_after}, answered after the failure: {answered_after}")
+    })
 }

@@ -77,6 +77,13 @@ pub struct CanWorld {
     pub value: Vec<u8>,
     /// The last cycles, shown when a step fails (bounded).
     pub trace: std::collections::VecDeque<String>,
+    /// A CANopen bus coupler on the bus (the quick start), and whether it still runs.
+    pub coupler: Option<canif_model::canopen::coupler::Coupler>,
+    pub coupler_alive: bool,
+    /// When the coupler stopped, for loss detection times.
+    pub coupler_failed_at: Option<Nanos>,
+    /// Every message the PLC read, with the cycle's time, for CANopen timing.
+    pub received_at: Vec<(Nanos, Frame)>,
 }
 
 impl std::fmt::Debug for CanWorld {
@@ -126,6 +133,10 @@ impl CanWorld {
             pending_increment: None,
             value: Vec::new(),
             trace: std::collections::VecDeque::new(),
+            coupler: None,
+            coupler_alive: true,
+            coupler_failed_at: None,
+            received_at: Vec::new(),
         }
     }
 
@@ -192,7 +203,10 @@ impl CanWorld {
             if after != before && self.pending_increment.is_none() {
                 self.pending_increment = Some((self.cycle, after));
             }
-            self.received.extend(plc.take_received());
+            let read = plc.take_received();
+            self.received_at
+                .extend(read.iter().map(|m| (self.now, m.frame)));
+            self.received.extend(read);
         }
         let outputs = plc.outputs().to_vec();
         let iut = self.iut.as_mut().expect("started");
@@ -229,6 +243,12 @@ impl CanWorld {
             self.trace.pop_front();
         }
         result?;
+        if let (Some(coupler), true) = (self.coupler.as_mut(), self.coupler_alive) {
+            let iut = self.iut.as_mut().expect("started");
+            for (i, frame) in coupler.poll(self.now + CYCLE / 2).into_iter().enumerate() {
+                iut.receive(&frame, self.now + CYCLE / 2 + i as u64 * 200);
+            }
+        }
         self.now += CYCLE;
         self.cycle += 1;
         Ok(())
@@ -268,6 +288,12 @@ impl CanWorld {
                     self.on_bus.push(frame);
                     iut.transmit_complete();
                     at += 1_000;
+                    if let (Some(coupler), true) = (self.coupler.as_mut(), self.coupler_alive) {
+                        for answer in coupler.handle(&frame, at) {
+                            at += 200;
+                            iut.receive(&answer, at);
+                        }
+                    }
                 }
                 Some(Err(invalid)) => {
                     return Err(format!(
@@ -284,6 +310,19 @@ impl CanWorld {
                 None => return Ok(()),
             }
         }
+    }
+
+    /// The coupler's own frames (an input changed) go on the bus now.
+    pub fn coupler_sends(&mut self, frames: Vec<Frame>) -> Result<(), String> {
+        self.start()?;
+        if !self.coupler_alive {
+            return Ok(());
+        }
+        let iut = self.iut.as_mut().expect("started");
+        for (i, frame) in frames.iter().enumerate() {
+            iut.receive(frame, self.now + 5_000 + i as u64 * 200);
+        }
+        Ok(())
     }
 
     /// A frame from another node ends its reception now (plus a few µs per frame).
