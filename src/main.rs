@@ -88,6 +88,19 @@ enum Command {
     Compare { base: PathBuf, new: PathBuf },
     /// The soft device's deliberate faults.
     Faults,
+    /// A simulated Beckhoff CANopen coupler for tools by others, behind
+    /// socketcand's protocol on 127.0.0.1 (python-can's `socketcand` interface).
+    Coupler {
+        /// TCP port on 127.0.0.1 (0: any free port, printed on stdout).
+        #[arg(long)]
+        socketcand: u16,
+        /// The coupler's node id (1..63).
+        #[arg(long, default_value_t = 5)]
+        node: u8,
+        /// A deliberate defect: toggle-stuck, sdo-size-always-4 or no-abort.
+        #[arg(long)]
+        fault: Option<String>,
+    },
     /// Run the soft device on its own, behind the adapter protocol on stdin/stdout.
     Device {
         /// Speak the adapter protocol (docs/adapter-protocol.md) on stdin/stdout.
@@ -211,6 +224,24 @@ fn main() -> ExitCode {
         }
         Command::SelfCheck { seed } => self_check(&catalogue, seed),
         Command::Compare { base, new } => compare(&base, &new),
+        Command::Coupler {
+            socketcand,
+            node,
+            fault,
+        } => {
+            use canif_model::canopen::coupler::CouplerFault;
+            let fault = match fault.as_deref() {
+                None => None,
+                Some("toggle-stuck") => Some(CouplerFault::ToggleStuck),
+                Some("sdo-size-always-4") => Some(CouplerFault::SdoSizeAlways4),
+                Some("no-abort") => Some(CouplerFault::NoAbort),
+                Some(other) => {
+                    eprintln!("unknown coupler fault `{other}`: toggle-stuck, sdo-size-always-4 or no-abort");
+                    return ExitCode::from(2);
+                }
+            };
+            serve_coupler(socketcand, node, fault)
+        }
         Command::Certify {
             profile,
             iut,
@@ -997,6 +1028,120 @@ fn verify_certificate(path: &Path) -> ExitCode {
         Err(error) => {
             println!("{}: {error}", path.display());
             ExitCode::from(1)
+        }
+    }
+}
+
+/// The simulated coupler behind socketcand's text protocol on loopback TCP, so
+/// that CANopen tools written by others (python-can's `socketcand` interface,
+/// the `canopen` package) can talk to it. Real time drives its heartbeat.
+fn serve_coupler(
+    port: u16,
+    node: u8,
+    fault: Option<canif_model::canopen::coupler::CouplerFault>,
+) -> ExitCode {
+    use canif_model::canopen::coupler::Coupler;
+    use canif_model::frame::{CanId, Frame};
+    use std::io::{BufRead, BufReader, Write};
+    let Some(node) = canif_model::canopen::NodeId::new(node) else {
+        eprintln!("node ids are 1..63");
+        return ExitCode::from(2);
+    };
+    let listener = match std::net::TcpListener::bind(("127.0.0.1", port)) {
+        Ok(listener) => listener,
+        Err(error) => {
+            eprintln!("cannot listen on 127.0.0.1:{port}: {error}");
+            return ExitCode::from(2);
+        }
+    };
+    // The port goes to stdout first, so a caller that asked for port 0 learns it.
+    println!(
+        "{}",
+        listener.local_addr().map(|a| a.port()).unwrap_or(port)
+    );
+    let _ = std::io::stdout().flush();
+    let Ok((stream, _)) = listener.accept() else {
+        return ExitCode::from(2);
+    };
+    let _ = stream.set_read_timeout(Some(std::time::Duration::from_millis(5)));
+    let mut writer = match stream.try_clone() {
+        Ok(writer) => writer,
+        Err(_) => return ExitCode::from(2),
+    };
+    let started = std::time::Instant::now();
+    let now = || started.elapsed().as_nanos() as u64;
+    let frame_text = |frame: &Frame, at: u64| {
+        let id = match frame.id {
+            CanId::Standard(id) => format!("{id:03X}"),
+            CanId::Extended(id) => format!("{id:08X}"),
+        };
+        let data: String = frame.data().iter().map(|b| format!("{b:02X}")).collect();
+        format!(
+            "< frame {id} {}.{:06} {data} >",
+            at / 1_000_000_000,
+            (at % 1_000_000_000) / 1_000
+        )
+    };
+    let mut coupler = Coupler::new(node, 2, 4);
+    if let Some(fault) = fault {
+        coupler.inject(fault);
+    }
+    let mut reader = BufReader::new(stream);
+    let mut pending = String::new();
+    if writer.write_all(b"< hi >").is_err() {
+        return ExitCode::from(2);
+    }
+    loop {
+        let mut chunk = Vec::new();
+        match reader.read_until(b'>', &mut chunk) {
+            Ok(0) => return ExitCode::SUCCESS, // the client left
+            Ok(_) => pending.push_str(&String::from_utf8_lossy(&chunk)),
+            Err(error)
+                if matches!(
+                    error.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) =>
+            {
+                pending.push_str(&String::from_utf8_lossy(&chunk));
+            }
+            Err(_) => return ExitCode::SUCCESS,
+        }
+        let mut out = Vec::new();
+        while let (Some(start), Some(end)) = (pending.find('<'), pending.find('>')) {
+            if end < start {
+                pending.drain(..=end);
+                continue;
+            }
+            let command: Vec<String> = pending[start + 1..end]
+                .split_whitespace()
+                .map(String::from)
+                .collect();
+            pending.drain(..=end);
+            match command.first().map(String::as_str) {
+                Some("open") | Some("rawmode") => out.push("< ok >".to_string()),
+                Some("send") if command.len() >= 3 => {
+                    let raw = u32::from_str_radix(&command[1], 16).unwrap_or(0);
+                    let id = if command[1].len() > 3 {
+                        CanId::extended(raw)
+                    } else {
+                        CanId::standard(raw)
+                    };
+                    let data: Vec<u8> = command[3..]
+                        .iter()
+                        .filter_map(|b| u8::from_str_radix(b, 16).ok())
+                        .collect();
+                    if let Some(frame) = id.and_then(|id| Frame::classic(id, &data).ok()) {
+                        let at = now();
+                        out.extend(coupler.handle(&frame, at).iter().map(|f| frame_text(f, at)));
+                    }
+                }
+                _ => out.push("< error unknown command >".to_string()),
+            }
+        }
+        let at = now();
+        out.extend(coupler.poll(at).iter().map(|f| frame_text(f, at)));
+        if !out.is_empty() && writer.write_all(out.concat().as_bytes()).is_err() {
+            return ExitCode::SUCCESS;
         }
     }
 }
