@@ -46,12 +46,7 @@ fn failures_and_errors(kind: &IutKind, profile: &str) -> (Vec<String>, Vec<Strin
         &quick(),
         |_| {},
     );
-    let failed = run
-        .verdicts
-        .iter()
-        .filter(|(_, v)| matches!(v, Verdict::Fail(_)))
-        .map(|(id, _)| id.clone())
-        .collect();
+    let failed = run.failed_requirements();
     let errors = run
         .runs
         .iter()

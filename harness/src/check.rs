@@ -4,7 +4,7 @@
 use std::collections::VecDeque;
 
 use canif_model::client::PlcClient;
-use canif_model::config::{Capabilities, InterfaceConfig};
+use canif_model::config::Capabilities;
 use canif_model::device::Device;
 use canif_model::exchange::ProcessDataExchange;
 use canif_model::frame::Frame;
@@ -866,9 +866,4 @@ pub fn declare_lengths(layout: &ImageLayout, lengths: &[(u16, u8)], outputs: &mu
             *byte = 0xEE;
         }
     }
-}
-
-/// The interface configuration a scenario needs, checked against the profile.
-pub fn allowed(caps: &Capabilities, config: &InterfaceConfig) -> bool {
-    config.validate(caps).is_ok()
 }

@@ -27,6 +27,19 @@ pub struct Options {
     pub trace_dir: Option<std::path::PathBuf>,
 }
 
+impl Options {
+    /// A short run for tests: one generated case of 100 cycles, no counter wrap.
+    pub fn quick(seed: u64) -> Self {
+        Options {
+            seed,
+            cases: 1,
+            generated_cycles: 100,
+            counter_wrap: false,
+            trace_dir: None,
+        }
+    }
+}
+
 impl Default for Options {
     fn default() -> Self {
         Options {
@@ -74,6 +87,15 @@ pub struct ProfileRun {
 }
 
 impl ProfileRun {
+    /// The requirements that failed on this profile.
+    pub fn failed_requirements(&self) -> Vec<String> {
+        self.verdicts
+            .iter()
+            .filter(|(_, v)| matches!(v, Verdict::Fail(_)))
+            .map(|(id, _)| id.clone())
+            .collect()
+    }
+
     pub fn frames_checked(&self) -> u64 {
         self.runs.iter().map(|r| r.frames_checked).sum()
     }
@@ -502,12 +524,7 @@ pub fn kill_matrix(
                 .iter()
                 .map(|profile| {
                     let run = run_profile(catalogue, profile, &kind, &options, |_| {});
-                    let failed = run
-                        .verdicts
-                        .iter()
-                        .filter(|(_, v)| matches!(v, Verdict::Fail(_)))
-                        .map(|(id, _)| id.clone())
-                        .collect();
+                    let failed = run.failed_requirements();
                     (profile.name.clone(), failed)
                 })
                 .collect();

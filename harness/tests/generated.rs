@@ -301,13 +301,7 @@ fn certificates_are_sealed() {
     use canif_harness::certificate::{catalogue_hash, certificate, html, verify};
     let catalogue = Catalogue::embedded().unwrap();
     let profile = catalogue.profile("fc510x").unwrap();
-    let options = Options {
-        seed: 9,
-        cases: 1,
-        generated_cycles: 50,
-        counter_wrap: false,
-        trace_dir: None,
-    };
+    let options = Options::quick(9);
     let run = run_profile(
         &catalogue,
         profile,
@@ -356,13 +350,7 @@ fn certificates_are_sealed() {
 fn the_html_report_renders_in_a_browser() {
     let catalogue = Catalogue::embedded().unwrap();
     let profile = catalogue.profile("el6751-mdp").unwrap();
-    let options = Options {
-        seed: 2,
-        cases: 1,
-        generated_cycles: 50,
-        counter_wrap: false,
-        trace_dir: None,
-    };
+    let options = Options::quick(2);
     let run = run_profile(
         &catalogue,
         profile,

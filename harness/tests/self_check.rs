@@ -143,12 +143,7 @@ fn every_fault_is_caught_on_the_requirement_it_breaks() {
             profile,
             &options,
         );
-        let failed: Vec<&String> = result
-            .verdicts
-            .iter()
-            .filter(|(_, v)| matches!(v, Verdict::Fail(_)))
-            .map(|(id, _)| id)
-            .collect();
+        let failed = result.failed_requirements();
         if !expected.iter().any(|id| failed.iter().any(|f| f == id)) {
             misses.push(format!(
                 "{}: expected a failure on {:?}, failed: {:?}\n{}",
