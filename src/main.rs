@@ -708,11 +708,16 @@ fn run(
             return ExitCode::from(2);
         }
     };
-    let failed = scenarios.iter().filter(|s| s.outcome.is_err()).count();
+    let failed = scenarios
+        .iter()
+        .filter(|s| s.outcome.is_err() && !s.error)
+        .count();
+    let broken = scenarios.iter().filter(|s| s.error).count();
     eprintln!(
-        "Gherkin scenarios: {} run, {} failed",
+        "Gherkin scenarios: {} run, {} failed, {} error",
         scenarios.len(),
-        failed
+        failed,
+        broken
     );
     let report = RunReport {
         iut: kind.name(),
@@ -838,11 +843,12 @@ fn run_features(
                 profile: suite.clone(),
                 caps,
             };
-            let outcome = match canif_features::run_scenario(&scenario.file, scenario.line, target)
-            {
-                canif_features::ScenarioOutcome::Passed => Ok(()),
-                canif_features::ScenarioOutcome::Failed(report) => Err(report),
-            };
+            let (outcome, error) =
+                match canif_features::run_scenario(&scenario.file, scenario.line, target) {
+                    canif_features::ScenarioOutcome::Passed => (Ok(()), false),
+                    canif_features::ScenarioOutcome::Failed(report) => (Err(report), false),
+                    canif_features::ScenarioOutcome::Error(report) => (Err(report), true),
+                };
             results.push(ScenarioResult {
                 suite,
                 name: scenario.name.clone(),
@@ -850,6 +856,7 @@ fn run_features(
                 line: scenario.line,
                 requirements: scenario.requirements.clone(),
                 outcome,
+                error,
             });
         }
     }

@@ -61,6 +61,8 @@ pub enum ScenarioOutcome {
     Passed,
     /// Cucumber's report of the failing step.
     Failed(String),
+    /// The IUT itself broke (could not start, broke the protocol): not a non-conformance.
+    Error(String),
 }
 
 /// Runs the scenario at `line` of `file` against `target`.
@@ -74,6 +76,7 @@ pub fn run_scenario(file: &str, line: usize, target: Target) -> ScenarioOutcome 
         Err(error) => return ScenarioOutcome::Failed(format!("{file}:{line}: {error}")),
     };
     set_target(target);
+    let _ = world::take_iut_error();
     let captured = Captured::default();
     let writer =
         writer::Basic::new(captured.clone(), Coloring::Never, Verbosity::ShowWorld).summarized();
@@ -88,7 +91,9 @@ pub fn run_scenario(file: &str, line: usize, target: Target) -> ScenarioOutcome 
     let output = String::from_utf8_lossy(&captured.0.lock().map(|b| b.clone()).unwrap_or_default())
         .into_owned();
     let stats = result.scenarios_stats();
-    if result.execution_has_failed() || stats.failed > 0 || result.parsing_errors() > 0 {
+    if let Some(error) = world::take_iut_error() {
+        ScenarioOutcome::Error(format!("the IUT broke: {error}\n{output}"))
+    } else if result.execution_has_failed() || stats.failed > 0 || result.parsing_errors() > 0 {
         ScenarioOutcome::Failed(output)
     } else if stats.passed == 0 {
         ScenarioOutcome::Failed(format!("no scenario ran at line {line} (skipped steps mean a step has no definition):\n{output}"))

@@ -22,6 +22,18 @@ pub struct Target {
 
 thread_local! {
     static TARGET: RefCell<Option<Target>> = const { RefCell::new(None) };
+    /// Set when the IUT itself broke (could not start, broke the protocol):
+    /// the scenario's verdict is then `error`, not `fail`.
+    static IUT_ERROR: RefCell<Option<String>> = const { RefCell::new(None) };
+}
+
+/// Takes the IUT error of the last scenario on this thread, if any.
+pub fn take_iut_error() -> Option<String> {
+    IUT_ERROR.with(|e| e.borrow_mut().take())
+}
+
+fn record_iut_error(message: &str) {
+    IUT_ERROR.with(|e| *e.borrow_mut() = Some(message.to_string()));
 }
 
 /// Sets the target for scenarios run on this thread.
@@ -159,6 +171,9 @@ impl CanWorld {
                 Ok(())
             }
             Err(error) => {
+                if let canif_harness::BuildError::Failed(reason) = &error {
+                    record_iut_error(reason);
+                }
                 let reason = error.to_string();
                 self.refused = Some(reason.clone());
                 Err(reason)
@@ -213,7 +228,10 @@ impl CanWorld {
         if let Some(status) = self.status.take() {
             iut.controller_status(&status);
         }
-        self.inputs = iut.cycle(&outputs, self.now).map_err(|e| e.0)?;
+        self.inputs = iut.cycle(&outputs, self.now).map_err(|e| {
+            record_iut_error(&e.0);
+            e.0
+        })?;
         exchange.device_cycle_done(&self.inputs);
         let sent_before = self.on_bus.len();
         let result = self.run_bus();

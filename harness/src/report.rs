@@ -20,6 +20,8 @@ pub struct ScenarioResult {
     pub requirements: Vec<String>,
     /// `Err` holds cucumber's report of the failing step.
     pub outcome: Result<(), String>,
+    /// The IUT broke during the scenario: an error, not a failure.
+    pub error: bool,
 }
 
 /// What a whole run produced, and how it was asked for.
@@ -59,13 +61,20 @@ impl RunReport {
     }
 
     pub fn failed_scenarios(&self) -> usize {
-        self.scenarios.iter().filter(|s| s.outcome.is_err()).count()
+        self.scenarios
+            .iter()
+            .filter(|s| s.outcome.is_err() && !s.error)
+            .count()
+    }
+
+    pub fn scenario_errors(&self) -> usize {
+        self.scenarios.iter().filter(|s| s.error).count()
     }
 
     /// 0 when everything conforms, 1 on any failure, 2 on any error.
     pub fn exit_code(&self) -> u8 {
         let totals = self.totals();
-        if totals.error > 0 {
+        if totals.error > 0 || self.scenario_errors() > 0 {
             2
         } else if totals.fail > 0 || self.failed_scenarios() > 0 {
             1
@@ -187,6 +196,13 @@ impl RunReport {
                 );
                 match &case.outcome {
                     Ok(()) => xml.push_str("/>\n"),
+                    Err(report) if case.error => {
+                        let _ = writeln!(
+                            xml,
+                            ">\n      <error message=\"the IUT broke\">{}</error>\n    </testcase>",
+                            escape(report)
+                        );
+                    }
                     Err(report) => {
                         let _ = writeln!(xml, ">\n      <failure message=\"scenario failed\">{}</failure>\n    </testcase>", escape(report));
                     }
@@ -212,7 +228,7 @@ impl RunReport {
             },
             "scenarios": self.scenarios.iter().map(|s| json!({
                 "suite": s.suite, "file": s.file, "line": s.line, "name": s.name, "requirements": s.requirements,
-                "outcome": match &s.outcome { Ok(()) => "pass".to_string(), Err(_) => "fail".to_string() },
+                "outcome": match &s.outcome { Ok(()) => "pass".to_string(), Err(_) if s.error => "error".to_string(), Err(_) => "fail".to_string() },
                 "report": s.outcome.as_ref().err(),
             })).collect::<Vec<_>>(),
             "profiles": self.profiles.iter().map(|p| json!({
@@ -252,9 +268,10 @@ impl RunReport {
         );
         let _ = writeln!(
             md,
-            "Gherkin scenarios: {} run, {} failed.\n",
+            "Gherkin scenarios: {} run, {} failed, {} error.\n",
             self.scenarios.len(),
-            self.failed_scenarios()
+            self.failed_scenarios(),
+            self.scenario_errors()
         );
         md.push_str("| profile | pass | fail | error | n/a | not testable | cycles | frames checked |\n|---|---|---|---|---|---|---|---|\n");
         for p in &self.profiles {
