@@ -95,3 +95,28 @@ fn every_fault_is_caught_by_a_scenario() {
     }
     assert!(uncaught.is_empty(), "no scenario catches: {uncaught:?}");
 }
+
+/// A scenario against an IUT that hangs is an error, not a failure.
+#[test]
+fn a_broken_iut_makes_a_scenario_an_error() {
+    let scenario = scenarios()
+        .unwrap()
+        .into_iter()
+        .find(|s| s.file.ends_with("tx-handshake.feature"))
+        .unwrap();
+    let target = Target {
+        iut: IutKind::Exec {
+            command: "echo stuck >&2; sleep 30".into(),
+            timeout_ms: 200,
+        },
+        profile: "el6751-mdp".into(),
+        caps: canif_model::config::Capabilities::everything(),
+    };
+    match run_scenario(&scenario.file, scenario.line, target) {
+        ScenarioOutcome::Error(report) => assert!(
+            report.contains("no answer to `configure`") && report.contains("stuck"),
+            "{report}"
+        ),
+        other => panic!("expected an error, got {other:?}"),
+    }
+}
