@@ -29,6 +29,15 @@ Feature: Process-data exchange
     When the PLC sends 2 messages
     And a cycle passes
     Then the bus carries 0x100, 0x101 in that order
+    And the first frame of the last cycle started 300 µs after the cycle began
+
+  @fast_queue @PDX-003
+  Scenario: Without Distributed Clocks the first message starts with the cycle
+    Given the interface is set up for 11-bit messages with 4 slots
+    And the Fast CAN Queue
+    When the PLC sends 2 messages
+    And a cycle passes
+    Then the first frame of the last cycle started 0 µs after the cycle began
 
   @distributed_clocks @PDX-005
   Scenario: Distributed Clocks only with the Fast CAN Queue

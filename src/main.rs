@@ -254,20 +254,10 @@ fn main() -> ExitCode {
             socketcand,
             node,
             fault,
-        } => {
-            use canif_model::canopen::coupler::CouplerFault;
-            let fault = match fault.as_deref() {
-                None => None,
-                Some("toggle-stuck") => Some(CouplerFault::ToggleStuck),
-                Some("sdo-size-always-4") => Some(CouplerFault::SdoSizeAlways4),
-                Some("no-abort") => Some(CouplerFault::NoAbort),
-                Some(other) => {
-                    eprintln!("unknown coupler fault `{other}`: toggle-stuck, sdo-size-always-4 or no-abort");
-                    return ExitCode::from(2);
-                }
-            };
-            serve_coupler(socketcand, node, fault)
-        }
+        } => match coupler_fault(fault.as_deref()) {
+            Ok(fault) => serve_coupler(socketcand, node, fault),
+            Err(code) => code,
+        },
         Command::Certify {
             profile,
             iut,
@@ -869,16 +859,10 @@ fn device(stdio: bool, faults: &[String]) -> ExitCode {
         eprintln!("canif device needs --stdio (a SocketCAN bus comes with the SocketCAN issue)");
         return ExitCode::from(2);
     }
-    let mut chosen = Vec::new();
-    for name in faults {
-        match Fault::from_name(name) {
-            Some(fault) => chosen.push(fault),
-            None => {
-                eprintln!("unknown fault `{name}`; `canif faults` lists them");
-                return ExitCode::from(2);
-            }
-        }
-    }
+    let chosen = match soft_device_faults(faults) {
+        Ok(chosen) => chosen,
+        Err(code) => return code,
+    };
     let stdin = std::io::stdin();
     match canif_harness::exec::serve(
         &IutKind::SoftDevice { faults: chosen },
@@ -914,16 +898,7 @@ fn compare(base: &Path, new: &Path) -> ExitCode {
 
 /// The IUT named on the command line, or the exit code of a usage error.
 fn resolve_iut(iut: &str, faults: &[String], timeout_ms: u64) -> Result<IutKind, ExitCode> {
-    let mut chosen = Vec::new();
-    for name in faults {
-        match Fault::from_name(name) {
-            Some(fault) => chosen.push(fault),
-            None => {
-                eprintln!("unknown fault `{name}`; `canif faults` lists them");
-                return Err(ExitCode::from(2));
-            }
-        }
-    }
+    let chosen = soft_device_faults(faults)?;
     let kind = match iut {
         _ if iut.starts_with("exec:") => {
             if !chosen.is_empty() {
@@ -1198,7 +1173,7 @@ fn socketcan_unavailable(bus: &str) -> ExitCode {
 
 /// `canif run --suite canopen`: the CANopen node checks (002, 004).
 fn canopen_suite(bus: &str, node: u8, fault: Option<&str>) -> ExitCode {
-    use canif_model::canopen::coupler::{Coupler, CouplerFault};
+    use canif_model::canopen::coupler::Coupler;
     let Some(node) = canif_model::canopen::NodeId::new(node) else {
         eprintln!("node ids are 1..63");
         return ExitCode::from(2);
@@ -1207,17 +1182,10 @@ fn canopen_suite(bus: &str, node: u8, fault: Option<&str>) -> ExitCode {
         return socketcan_unavailable(bus);
     }
     let mut coupler = Coupler::new(node, 2, 4);
-    match fault {
-        None => {}
-        Some("toggle-stuck") => coupler.inject(CouplerFault::ToggleStuck),
-        Some("sdo-size-always-4") => coupler.inject(CouplerFault::SdoSizeAlways4),
-        Some("no-abort") => coupler.inject(CouplerFault::NoAbort),
-        Some(other) => {
-            eprintln!(
-                "unknown coupler fault `{other}`: toggle-stuck, sdo-size-always-4 or no-abort"
-            );
-            return ExitCode::from(2);
-        }
+    match coupler_fault(fault) {
+        Ok(Some(fault)) => coupler.inject(fault),
+        Ok(None) => {}
+        Err(code) => return code,
     }
     let results = canif_harness::canopen::check_node(&mut coupler, node);
     let mut failed = 0;
@@ -1241,4 +1209,32 @@ fn canopen_suite(bus: &str, node: u8, fault: Option<&str>) -> ExitCode {
         results.len()
     );
     ExitCode::from(u8::from(failed > 0))
+}
+
+/// The soft-device faults named on the command line, or the exit code of a usage error.
+fn soft_device_faults(names: &[String]) -> Result<Vec<Fault>, ExitCode> {
+    names
+        .iter()
+        .map(|name| {
+            Fault::from_name(name).ok_or_else(|| {
+                eprintln!("unknown fault `{name}`; `canif faults` lists them");
+                ExitCode::from(2)
+            })
+        })
+        .collect()
+}
+
+/// The coupler fault named on the command line, or the exit code of a usage error.
+fn coupler_fault(
+    name: Option<&str>,
+) -> Result<Option<canif_model::canopen::coupler::CouplerFault>, ExitCode> {
+    use canif_model::canopen::coupler::CouplerFault;
+    match name {
+        None => Ok(None),
+        Some(name) => CouplerFault::from_name(name).map(Some).ok_or_else(|| {
+            let known: Vec<&str> = CouplerFault::ALL.iter().map(|f| f.name()).collect();
+            eprintln!("unknown coupler fault `{name}`: {}", known.join(", "));
+            ExitCode::from(2)
+        }),
+    }
 }

@@ -50,6 +50,11 @@ fn id(text: &str, extended: bool) -> CanId {
     }
 }
 
+/// The identifier a step names: 29-bit when the value needs more than 11 bits.
+fn id_of(cob: &str) -> CanId {
+    id(cob, num(cob) > 0x7FF)
+}
+
 fn check(condition: bool, message: impl FnOnce() -> String) -> StepResult {
     if condition {
         Ok(())
@@ -191,8 +196,7 @@ fn plc_sends_n(world: &mut CanWorld, n: u32) -> StepResult {
 
 #[when(regex = r"^the PLC sends (0x[0-9A-Fa-f]+) with data ?([0-9A-Fa-f ]*)$")]
 fn plc_sends(world: &mut CanWorld, cob: String, data: String) -> StepResult {
-    let frame =
-        Frame::classic(id(&cob, num(&cob) > 0x7FF), &bytes(&data)).map_err(|e| e.to_string())?;
+    let frame = Frame::classic(id_of(&cob), &bytes(&data)).map_err(|e| e.to_string())?;
     world.plc_sends(frame)
 }
 
@@ -203,7 +207,7 @@ fn plc_sends_extended(world: &mut CanWorld, cob: String, data: String) -> StepRe
 
 #[when(regex = r"^the PLC sends a remote request for (0x[0-9A-Fa-f]+) with length (\d+)$")]
 fn plc_sends_remote(world: &mut CanWorld, cob: String, len: u8) -> StepResult {
-    world.plc_sends(Frame::remote(id(&cob, num(&cob) > 0x7FF), len).map_err(|e| e.to_string())?)
+    world.plc_sends(Frame::remote(id_of(&cob), len).map_err(|e| e.to_string())?)
 }
 
 #[when(
@@ -219,13 +223,8 @@ fn plc_sends_fd(
     let size = dlc::fd_round_up(len).ok_or("more than 64 bytes")?;
     let mut data: Vec<u8> = (0..len).map(|i| i ^ 0x5A).collect();
     data.resize(usize::from(size), 0);
-    let frame = Frame::fd(
-        id(&cob, num(&cob) > 0x7FF),
-        !brs.is_empty(),
-        !esi.is_empty(),
-        &data,
-    )
-    .map_err(|e| e.to_string())?;
+    let frame = Frame::fd(id_of(&cob), !brs.is_empty(), !esi.is_empty(), &data)
+        .map_err(|e| e.to_string())?;
     // The PLC gives the real byte count; the bytes past it are stale junk.
     world.declared_lengths.push((world.next_tn, len));
     world.plc_sends(frame)
@@ -253,9 +252,7 @@ fn plc_busy(world: &mut CanWorld, n: u32) -> StepResult {
 
 #[when(regex = r"^node (0x[0-9A-Fa-f]+) transmits (0x[0-9A-Fa-f]+) with data ?([0-9A-Fa-f ]*)$")]
 fn node_transmits(world: &mut CanWorld, _node: String, cob: String, data: String) -> StepResult {
-    world.node_sends(
-        Frame::classic(id(&cob, num(&cob) > 0x7FF), &bytes(&data)).map_err(|e| e.to_string())?,
-    )
+    world.node_sends(Frame::classic(id_of(&cob), &bytes(&data)).map_err(|e| e.to_string())?)
 }
 
 #[when(regex = r"^a node transmits the 29-bit (0x[0-9A-Fa-f]+) with data ?([0-9A-Fa-f ]*)$")]
@@ -265,7 +262,7 @@ fn node_transmits_extended(world: &mut CanWorld, cob: String, data: String) -> S
 
 #[when(regex = r"^a node transmits a remote request for (0x[0-9A-Fa-f]+) with length (\d+)$")]
 fn node_transmits_remote(world: &mut CanWorld, cob: String, len: u8) -> StepResult {
-    world.node_sends(Frame::remote(id(&cob, num(&cob) > 0x7FF), len).map_err(|e| e.to_string())?)
+    world.node_sends(Frame::remote(id_of(&cob), len).map_err(|e| e.to_string())?)
 }
 
 #[when(
@@ -280,21 +277,14 @@ fn node_transmits_fd(
 ) -> StepResult {
     let data: Vec<u8> = (0..len).map(|i| (i as u8).wrapping_mul(3)).collect();
     world.node_sends(
-        Frame::fd(
-            id(&cob, num(&cob) > 0x7FF),
-            !brs.is_empty(),
-            !esi.is_empty(),
-            &data,
-        )
-        .map_err(|e| e.to_string())?,
+        Frame::fd(id_of(&cob), !brs.is_empty(), !esi.is_empty(), &data)
+            .map_err(|e| e.to_string())?,
     )
 }
 
 #[when(regex = r"^other nodes transmit (\d+) frames$")]
 fn nodes_transmit(world: &mut CanWorld, n: u32) -> StepResult {
     for i in 0..n {
-        let seq = world.sent_by_nodes.len() as u32 + i;
-        let _ = seq;
         let frame = Frame::classic(
             CanId::Standard(((world.sent_by_nodes.len() as u32) % 0x7FF) as u16 + 1),
             &[i as u8],
@@ -641,9 +631,21 @@ fn confirmation(world: &mut CanWorld, cycles: u64) -> StepResult {
     })
 }
 
-#[then(regex = r"^the first frame goes on the bus at SYNC1$")]
-fn at_sync1(world: &mut CanWorld) -> StepResult {
-    check(!world.on_bus.is_empty(), || "nothing on the bus".into())
+#[then(regex = r"^the first frame of the last cycle started (\d+) µs after the cycle began$")]
+fn first_frame_at(world: &mut CanWorld, micros: u64) -> StepResult {
+    let cycle_start = world.now.saturating_sub(crate::world::CYCLE);
+    let started = world
+        .bus_times
+        .iter()
+        .copied()
+        .find(|t| *t >= cycle_start)
+        .ok_or("nothing went on the bus in the last cycle")?;
+    let offset = started - cycle_start;
+    // 003: the first Tx message starts at SYNC1 with a jitter of at most 500 ns.
+    check(
+        offset.abs_diff(micros * 1_000) <= canif_model::exchange::SYNC1_TX_JITTER,
+        || format!("the first frame started {offset} ns after the cycle began, not {micros} µs"),
+    )
 }
 
 // ------------------------------------------------------- the model's tables
@@ -709,6 +711,15 @@ fn sizing_example(
     })
 }
 
+/// The NMT state a step names (its regex allows only these three).
+fn nmt_state_named(name: &str) -> NmtState {
+    match name {
+        "operational" => NmtState::Operational,
+        "pre-operational" => NmtState::PreOperational,
+        _ => NmtState::Stopped,
+    }
+}
+
 fn nmt_command(name: &str) -> NmtCommand {
     match name {
         "start" => NmtCommand::StartRemoteNode,
@@ -748,14 +759,9 @@ fn nmt_state(
     to: String,
     code: String,
 ) -> StepResult {
-    let state = |s: &str| match s {
-        "pre-operational" => NmtState::PreOperational,
-        "operational" => NmtState::Operational,
-        _ => NmtState::Stopped,
-    };
-    let after = state(&from).apply(nmt_command(&command));
+    let after = nmt_state_named(&from).apply(nmt_command(&command));
     check(
-        after == state(&to) && u32::from(after.code()) == num(&code),
+        after == nmt_state_named(&to) && u32::from(after.code()) == num(&code),
         || format!("the node is {after:?} (0x{:02X})", after.code()),
     )
 }
@@ -887,11 +893,7 @@ fn guarding(
     state: String,
     answers: String,
 ) -> StepResult {
-    let state = match state.as_str() {
-        "operational" => NmtState::Operational,
-        "pre-operational" => NmtState::PreOperational,
-        _ => NmtState::Stopped,
-    };
+    let state = nmt_state_named(&state);
     let node = NodeId::new(node).ok_or("node")?;
     let mut responder = GuardResponder::default();
     let actual: Vec<u8> = (0..n)
@@ -916,11 +918,7 @@ fn heartbeat_frame(
     cob: String,
     data: String,
 ) -> StepResult {
-    let state = match state.as_str() {
-        "operational" => NmtState::Operational,
-        "pre-operational" => NmtState::PreOperational,
-        _ => NmtState::Stopped,
-    };
+    let state = nmt_state_named(&state);
     let frame = heartbeat::heartbeat(NodeId::new(node).ok_or("node")?, state);
     check(
         frame.id.raw() == num(&cob) && frame.data() == bytes(&data),
@@ -1222,11 +1220,7 @@ fn guarding_answer(world: &mut CanWorld, state: String) -> StepResult {
         .rev()
         .find(|m| m.frame.id == id && m.frame.data().len() == 1)
         .ok_or("no guarding answer received")?;
-    let wanted = match state.as_str() {
-        "operational" => NmtState::Operational,
-        "pre-operational" => NmtState::PreOperational,
-        _ => NmtState::Stopped,
-    };
+    let wanted = nmt_state_named(&state);
     check(answer.frame.data()[0] & 0x7F == wanted.code(), || {
         format!("status byte 0x{:02X}", answer.frame.data()[0])
     })

@@ -72,8 +72,9 @@ pub struct CanWorld {
     pub bus_blocked: bool,
     /// The frame the controller took but could not finish while the bus was blocked.
     pub in_controller: Option<Frame>,
-    /// Frames the IUT put on the bus, in order.
+    /// Frames the IUT put on the bus, in order, and when each started.
     pub on_bus: Vec<Frame>,
+    pub bus_times: Vec<Nanos>,
     /// Frames other nodes sent, with the end of their reception.
     pub sent_by_nodes: Vec<(Frame, Nanos)>,
     /// Messages the PLC read, in order.
@@ -85,8 +86,6 @@ pub struct CanWorld {
     /// Cycles from the PLC's TxCounter increment to its confirmation, as the PLC saw it.
     pub confirmation_delay: Option<u64>,
     pending_increment: Option<(u64, u16)>,
-    /// What a model-level step computed, for the `Then` that follows.
-    pub value: Vec<u8>,
     /// The last cycles, shown when a step fails (bounded).
     pub trace: std::collections::VecDeque<String>,
     /// A CANopen bus coupler on the bus (the quick start), and whether it still runs.
@@ -135,6 +134,7 @@ impl CanWorld {
             bus_blocked: false,
             in_controller: None,
             on_bus: Vec::new(),
+            bus_times: Vec::new(),
             sent_by_nodes: Vec::new(),
             received: Vec::new(),
             tx_counter_override: None,
@@ -143,7 +143,6 @@ impl CanWorld {
             status: None,
             confirmation_delay: None,
             pending_increment: None,
-            value: Vec::new(),
             trace: std::collections::VecDeque::new(),
             coupler: None,
             coupler_alive: true,
@@ -294,6 +293,7 @@ impl CanWorld {
         }
         if let Some(frame) = self.in_controller.take() {
             self.on_bus.push(frame);
+            self.bus_times.push(self.now);
             iut.transmit_complete();
         }
         let mut at = self.now;
@@ -304,6 +304,7 @@ impl CanWorld {
             match iut.poll_transmit(at) {
                 Some(Ok(frame)) => {
                     self.on_bus.push(frame);
+                    self.bus_times.push(at);
                     iut.transmit_complete();
                     at += 1_000;
                     if let (Some(coupler), true) = (self.coupler.as_mut(), self.coupler_alive) {

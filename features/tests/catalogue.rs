@@ -33,36 +33,13 @@ fn every_tag_is_a_requirement_a_capability_or_a_run_mode() {
     }
 }
 
-/// Each fault with a profile that has the feature it breaks.
-const FAULTS: [(Fault, &str); 20] = [
-    (Fault::AckBeforeAccept, "el6751-mdp"),
-    (Fault::OverwritesUnacknowledgedRx, "el6751-mdp"),
-    (Fault::FdLengthRoundsDown, "fc532x"),
-    (Fault::FdLength32As36, "fc532x"),
-    (Fault::RtrBitMisplaced, "el6751-mdp"),
-    (Fault::ExtendedFlagMissing, "ccat"),
-    (Fault::TransactionNumberOfFirstFrame, "ccat"),
-    (Fault::TransactionNumberOnHandover, "ccat"),
-    (Fault::TimeStampInMicroseconds, "ccat"),
-    (Fault::HeadDropWhenFull, "el6751-mdp"),
-    (Fault::FilterLastMatchWins, "ccat"),
-    (Fault::FastQueueWaitsForAck, "el6751-mdp"),
-    (Fault::CounterDoesNotWrap, "el6751-mdp"),
-    (Fault::RxCounterCountsEmptyCycles, "el6751-mdp"),
-    (Fault::SendsBatchReversed, "el6751-mdp"),
-    (Fault::SendsOneMoreThanAsked, "el6751-mdp"),
-    (Fault::FdPaddingFf, "fc532x"),
-    (Fault::CobIdWordBigEndian, "el6751-mdp"),
-    (Fault::BrsEsiSwapped, "fc532x"),
-    (Fault::ReceiveFifoNotReported, "fc532x"),
-];
-
 #[test]
 fn every_fault_is_caught_by_a_scenario() {
     let catalogue = Catalogue::embedded().unwrap();
     let list = scenarios().unwrap();
     let mut uncaught = Vec::new();
-    for (fault, profile_name) in FAULTS {
+    for fault in Fault::ALL {
+        let profile_name = canif_harness::suite::profile_for(fault);
         let profile = catalogue.profile(profile_name).unwrap();
         let caught: Vec<String> = list
             .iter()

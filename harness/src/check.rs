@@ -136,6 +136,7 @@ mod blame {
         "HS-TX-006",
         "HS-TX-007",
         "HS-TX-009",
+        "PDX-003",
         "PDX-005",
     ];
     pub const TX_EXTRA: &[&str] = &["HS-TX-006", "HS-TX-009", "HS-TX-011", "PDX-004", "PDX-005"];

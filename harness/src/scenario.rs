@@ -133,7 +133,6 @@ fn layout_ids(config: &InterfaceConfig) -> Vec<&'static str> {
         "LAY-GEN-004",
         "LAY-GEN-007",
         "PDX-003",
-        "PDX-002",
     ];
     match config.format {
         FrameFormat::Base11 => ids.extend([
@@ -360,12 +359,7 @@ pub fn tx_batches(config: &InterfaceConfig, seed: u64) -> Scenario {
         "HS-TX-007",
         "HS-TX-009",
         "HS-TX-011",
-        "ERR-R5",
         "FD-LEN-001",
-        "FD-LEN-003",
-        "FD-LEN-004",
-        "FD-LEN-005",
-        "ERR-R1",
     ];
     scenario("tx-batches", config, &covers, Steps::Scripted(steps))
 }
@@ -428,7 +422,6 @@ pub fn lrw_exchange(config: &InterfaceConfig) -> Scenario {
     scenario.exchange = ExchangeMode::Lrw;
     scenario.check_confirmation_delay = true;
     scenario.covers.push("PDX-001".into());
-    scenario.covers.retain(|id| id != "PDX-002");
     scenario
 }
 
@@ -437,6 +430,7 @@ pub fn separate_input_update(config: &InterfaceConfig) -> Scenario {
     let mut scenario = tx_batches(config, 8);
     scenario.name = "separate-input-update".into();
     scenario.check_confirmation_delay = true;
+    scenario.covers.push("PDX-002".into());
     scenario
 }
 
@@ -538,7 +532,7 @@ pub fn remote_frames(config: &InterfaceConfig) -> Scenario {
     scenario(
         "remote-frames",
         config,
-        &["LAY-11-003", "LAY-29-004", "GRD-001"],
+        &["LAY-11-003", "LAY-29-004"],
         Steps::Scripted(steps),
     )
 }
@@ -767,7 +761,6 @@ pub fn generated(config: &InterfaceConfig, seed: u64, cycles: u64, load_percent:
         "FQ-004",
         "RXQ-003",
         "RXQ-004",
-        "FD-LEN-003",
         "FD-LEN-005",
     ];
     scenario(

@@ -494,6 +494,24 @@ pub fn checked_ids(caps: &Capabilities, options: &Options) -> Vec<String> {
     ids
 }
 
+/// A profile that has the feature `fault` breaks, for tests that need one.
+pub fn profile_for(fault: canif_softdevice::Fault) -> &'static str {
+    use canif_softdevice::Fault::*;
+    match fault {
+        FdLengthRoundsDown
+        | FdLength32As36
+        | FdPaddingFf
+        | BrsEsiSwapped
+        | ReceiveFifoNotReported => "fc532x",
+        ExtendedFlagMissing
+        | TransactionNumberOfFirstFrame
+        | TransactionNumberOnHandover
+        | TimeStampInMicroseconds
+        | FilterLastMatchWins => "ccat",
+        _ => "el6751-mdp",
+    }
+}
+
 /// One row of the kill matrix: a fault and what it broke on each profile.
 #[derive(Debug, Clone)]
 pub struct KillRow {

@@ -36,6 +36,27 @@ pub enum CouplerFault {
     NoAbort,
 }
 
+impl CouplerFault {
+    pub const ALL: [CouplerFault; 3] = [
+        CouplerFault::ToggleStuck,
+        CouplerFault::SdoSizeAlways4,
+        CouplerFault::NoAbort,
+    ];
+
+    /// The name used on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            CouplerFault::ToggleStuck => "toggle-stuck",
+            CouplerFault::SdoSizeAlways4 => "sdo-size-always-4",
+            CouplerFault::NoAbort => "no-abort",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|f| f.name() == name)
+    }
+}
+
 /// The coupler.
 ///
 /// Requirements: NMT-001..NMT-007, COB-001, PDO-001..PDO-003, GRD-001..GRD-005,
@@ -199,11 +220,11 @@ impl Coupler {
                 );
             }
         };
-        let missing = |index: u16, sub_index: u8, objects: &BTreeMap<(u16, u8), Entry>| {
+        // The object exists with other sub-indexes, or not at all.
+        let missing = |index: u16, objects: &BTreeMap<(u16, u8), Entry>| {
             if objects.keys().any(|(i, _)| *i == index) {
                 abort_code::SUB_INDEX_DOES_NOT_EXIST
             } else {
-                let _ = sub_index;
                 abort_code::OBJECT_DOES_NOT_EXIST
             }
         };
@@ -227,7 +248,7 @@ impl Coupler {
                         }))
                     }
                     None if no_abort => None,
-                    None => abort(index, sub_index, missing(index, sub_index, &self.objects)),
+                    None => abort(index, sub_index, missing(index, &self.objects)),
                 }
             }
             SdoRequest::Download {
@@ -240,7 +261,7 @@ impl Coupler {
                     return if no_abort {
                         None
                     } else {
-                        abort(index, sub_index, missing(index, sub_index, &self.objects))
+                        abort(index, sub_index, missing(index, &self.objects))
                     };
                 };
                 if !entry.writable {
