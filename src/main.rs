@@ -65,9 +65,23 @@ enum Command {
         /// `interface` (the CAN interface, default) or `canopen` (check a CANopen node).
         #[arg(long, default_value = "interface")]
         suite: String,
-        /// `sim` (the simulated bus) or `socketcan:IFACE`.
+        /// `sim` (the simulated bus, virtual time) or `socketcan:IFACE` (a Linux
+        /// SocketCAN interface, real time; `socketcan:IUT_IFACE,OTHER_IFACE` for
+        /// two controllers on one bus).
         #[arg(long, default_value = "sim")]
         bus: String,
+        /// On a SocketCAN bus: the real cycle time in microseconds.
+        #[arg(long, default_value_t = 2000)]
+        cycle_us: u64,
+        /// On a SocketCAN bus: how far the IUT's receive time stamps may be from the harness's, in µs.
+        #[arg(long, default_value_t = 1000)]
+        time_stamp_tolerance_us: u64,
+        /// On a SocketCAN bus: how long a frame may take to cross the kernel, in ms.
+        #[arg(long, default_value_t = 2000)]
+        frame_timeout_ms: u64,
+        /// Only scenarios whose name contains this text.
+        #[arg(long, value_name = "TEXT")]
+        scenario: Option<String>,
         /// With --suite canopen: the node id to check.
         #[arg(long, default_value_t = 5)]
         node: u8,
@@ -100,12 +114,16 @@ enum Command {
     Compare { base: PathBuf, new: PathBuf },
     /// The soft device's deliberate faults.
     Faults,
-    /// A simulated Beckhoff CANopen coupler for tools by others, behind
-    /// socketcand's protocol on 127.0.0.1 (python-can's `socketcand` interface).
+    /// A simulated Beckhoff CANopen coupler for tools by others: behind
+    /// socketcand's protocol on 127.0.0.1 (python-can's `socketcand` interface),
+    /// or as a node on a SocketCAN interface.
     Coupler {
         /// TCP port on 127.0.0.1 (0: any free port, printed on stdout).
+        #[arg(long, required_unless_present = "bus", conflicts_with = "bus")]
+        socketcand: Option<u16>,
+        /// `socketcan:IFACE`: be a node on that interface (real time) until stopped.
         #[arg(long)]
-        socketcand: u16,
+        bus: Option<String>,
         /// The coupler's node id (1..63).
         #[arg(long, default_value_t = 5)]
         node: u8,
@@ -121,6 +139,11 @@ enum Command {
         /// Switch on a fault (repeatable).
         #[arg(long)]
         fault: Vec<String>,
+        /// Put the device's CAN side on a SocketCAN interface (`socketcan:IFACE`):
+        /// it sends and receives real frames there, and the adapter protocol
+        /// carries only configure, cycle and controller_status.
+        #[arg(long)]
+        bus: Option<String>,
     },
     /// The suite's power: run every fault on every profile; exit 1 if one goes uncaught.
     SelfCheck {
@@ -224,25 +247,43 @@ fn main() -> ExitCode {
             trace,
             suite,
             bus,
+            cycle_us,
+            time_stamp_tolerance_us,
+            frame_timeout_ms,
+            scenario,
             node,
             coupler_fault,
         } => {
+            let kernel = match bus.as_str() {
+                "sim" => None,
+                other => match canif_kernel::BusSpec::parse(other) {
+                    Ok(spec) => Some(canif_harness::kernel_bus::KernelBusOptions {
+                        spec,
+                        cycle_time: cycle_us.max(100) * 1_000,
+                        time_stamp_tolerance: time_stamp_tolerance_us * 1_000,
+                        timeout: std::time::Duration::from_millis(frame_timeout_ms),
+                    }),
+                    Err(error) => {
+                        eprintln!("--bus {error}");
+                        return ExitCode::from(2);
+                    }
+                },
+            };
             if suite == "canopen" {
-                return canopen_suite(&bus, node, coupler_fault.as_deref());
+                return canopen_suite(kernel.as_ref(), node, coupler_fault.as_deref());
             }
             if suite != "interface" {
                 eprintln!("unknown suite `{suite}`: interface or canopen");
                 return ExitCode::from(2);
             }
-            if bus != "sim" {
-                return socketcan_unavailable(&bus);
-            }
             let options = Options {
                 seed,
                 cases: if duration.is_some() { 1 } else { cases },
                 generated_cycles: duration.map_or(200, |s| (s * 1000.0).max(1.0) as u64),
-                counter_wrap: !no_counter_wrap,
+                counter_wrap: !no_counter_wrap && kernel.is_none(),
                 trace_dir: trace,
+                kernel,
+                only: scenario,
             };
             run(
                 &catalogue, &iut, &fault, &profile, &options, &report, timeout_ms,
@@ -252,11 +293,14 @@ fn main() -> ExitCode {
         Command::Compare { base, new } => compare(&base, &new),
         Command::Coupler {
             socketcand,
+            bus,
             node,
             fault,
-        } => match coupler_fault(fault.as_deref()) {
-            Ok(fault) => serve_coupler(socketcand, node, fault),
-            Err(code) => code,
+        } => match (coupler_fault(fault.as_deref()), socketcand, bus) {
+            (Err(code), ..) => code,
+            (Ok(fault), Some(port), _) => serve_coupler(port, node, fault),
+            (Ok(fault), None, Some(bus)) => coupler_on_bus(&bus, node, fault),
+            (Ok(_), None, None) => ExitCode::from(2),
         },
         Command::Certify {
             profile,
@@ -278,7 +322,7 @@ fn main() -> ExitCode {
                 &out,
             ),
         },
-        Command::Device { stdio, fault } => device(stdio, &fault),
+        Command::Device { stdio, fault, bus } => device(stdio, &fault, bus.as_deref()),
         Command::Faults => {
             for fault in Fault::ALL {
                 println!("{:<36} {}", fault.name(), fault.description());
@@ -643,6 +687,17 @@ fn run(
             }
         }
     };
+    if let Some(kernel) = &options.kernel {
+        // A bus that cannot be opened at all is one error, not one per scenario.
+        let opened = canif_kernel::probe().and_then(|()| {
+            canif_kernel::KernelSocket::open(&kernel.spec.iut, false)?;
+            canif_kernel::KernelSocket::open(&kernel.spec.tester, false).map(|_| ())
+        });
+        if let Err(error) = opened {
+            eprintln!("error: --bus {}: {error}", kernel.spec.describe());
+            return ExitCode::from(2);
+        }
+    }
     let started = std::time::Instant::now();
     let terminal = std::io::stderr().is_terminal();
     let mut results = Vec::new();
@@ -691,11 +746,17 @@ fn run(
         );
         results.push(result);
     }
-    let scenarios = match run_features(&kind, &profiles) {
-        Ok(scenarios) => scenarios,
-        Err(error) => {
-            eprintln!("the feature files do not parse: {error}");
-            return ExitCode::from(2);
+    let scenarios = if options.kernel.is_some() || options.only.is_some() {
+        // The Gherkin scenarios run on the simulated bus; a SocketCAN or filtered run leaves them out.
+        eprintln!("Gherkin scenarios: not run (they use the simulated bus; run without --bus/--scenario)");
+        Vec::new()
+    } else {
+        match run_features(&kind, &profiles) {
+            Ok(scenarios) => scenarios,
+            Err(error) => {
+                eprintln!("the feature files do not parse: {error}");
+                return ExitCode::from(2);
+            }
         }
     };
     let failed = scenarios
@@ -703,16 +764,27 @@ fn run(
         .filter(|s| s.outcome.is_err() && !s.error)
         .count();
     let broken = scenarios.iter().filter(|s| s.error).count();
-    eprintln!(
-        "Gherkin scenarios: {} run, {} failed, {} error",
-        scenarios.len(),
-        failed,
-        broken
-    );
+    if !scenarios.is_empty() {
+        eprintln!(
+            "Gherkin scenarios: {} run, {} failed, {} error",
+            scenarios.len(),
+            failed,
+            broken
+        );
+    }
     let report = RunReport {
         iut: kind.name(),
         seed: options.seed,
-        bus: "simulated bus (virtual time)".into(),
+        bus: match &options.kernel {
+            None => "simulated bus (virtual time)".into(),
+            Some(k) => format!(
+                "{} on Linux {}, real time, {} µs cycle, time stamps within {} µs",
+                k.spec.describe(),
+                canif_kernel::kernel_release(),
+                k.cycle_time / 1_000,
+                k.time_stamp_tolerance / 1_000
+            ),
+        },
         profiles: results,
         scenarios,
         wall_time_ms: started.elapsed().as_millis(),
@@ -745,6 +817,8 @@ fn self_check(catalogue: &Catalogue, seed: u64) -> ExitCode {
         generated_cycles: 150,
         counter_wrap: false,
         trace_dir: None,
+        kernel: None,
+        only: None,
     };
     let rows = canif_harness::suite::kill_matrix(catalogue, &options, |fault| {
         eprintln!("running {fault} on every profile")
@@ -854,15 +928,38 @@ fn run_features(
     Ok(results)
 }
 
-fn device(stdio: bool, faults: &[String]) -> ExitCode {
+fn device(stdio: bool, faults: &[String], bus: Option<&str>) -> ExitCode {
     if !stdio {
-        eprintln!("canif device needs --stdio (a SocketCAN bus comes with the SocketCAN issue)");
+        eprintln!("canif device needs --stdio: its process image is served over the adapter protocol (docs/adapter-protocol.md)");
         return ExitCode::from(2);
     }
     let chosen = match soft_device_faults(faults) {
         Ok(chosen) => chosen,
         Err(code) => return code,
     };
+    if let Some(bus) = bus {
+        let spec = match canif_kernel::BusSpec::parse(bus) {
+            Ok(spec) => spec,
+            Err(error) => {
+                eprintln!("--bus {error}");
+                return ExitCode::from(2);
+            }
+        };
+        if let Err(error) = canif_kernel::probe() {
+            eprintln!("canif device --bus {bus}: {error}");
+            return ExitCode::from(2);
+        }
+        return match canif_harness::exec::serve_on_bus(
+            &IutKind::SoftDevice { faults: chosen },
+            Some(&spec.iut),
+        ) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(error) => {
+                eprintln!("canif device: {error}");
+                ExitCode::from(2)
+            }
+        };
+    }
     let stdin = std::io::stdin();
     match canif_harness::exec::serve(
         &IutKind::SoftDevice { faults: chosen },
@@ -1154,40 +1251,113 @@ fn serve_coupler(
     }
 }
 
-/// Says why a SocketCAN bus cannot be used here, with the kernel's own answer.
-fn socketcan_unavailable(bus: &str) -> ExitCode {
-    // SAFETY: a plain socket(2) call whose descriptor is closed right away.
-    let (fd, errno) = unsafe {
-        let fd = libc::socket(libc::AF_CAN, libc::SOCK_RAW, libc::CAN_RAW);
-        (fd, std::io::Error::last_os_error())
-    };
-    if fd >= 0 {
-        // SAFETY: closing the descriptor just opened.
-        unsafe { libc::close(fd) };
-        eprintln!("{bus}: this kernel has SocketCAN, but canif's SocketCAN bus comes with the kernel-lane issue; not run");
-    } else {
-        eprintln!("{bus}: socket(AF_CAN, SOCK_RAW, CAN_RAW) fails here: {errno}. SocketCAN runs in the kernel lane (the SocketCAN issue); not run");
-    }
-    ExitCode::from(2)
-}
-
-/// `canif run --suite canopen`: the CANopen node checks (002, 004).
-fn canopen_suite(bus: &str, node: u8, fault: Option<&str>) -> ExitCode {
+/// The simulated coupler as a node on a SocketCAN interface, in real time,
+/// until it is stopped. Prints `ready` once it listens.
+fn coupler_on_bus(
+    bus: &str,
+    node: u8,
+    fault: Option<canif_model::canopen::coupler::CouplerFault>,
+) -> ExitCode {
     use canif_model::canopen::coupler::Coupler;
     let Some(node) = canif_model::canopen::NodeId::new(node) else {
         eprintln!("node ids are 1..63");
         return ExitCode::from(2);
     };
-    if bus != "sim" {
-        return socketcan_unavailable(bus);
-    }
+    let opened = canif_kernel::BusSpec::parse(bus)
+        .and_then(|spec| canif_kernel::probe().map(|()| spec))
+        .and_then(|spec| canif_kernel::KernelSocket::open(&spec.iut, false));
+    let socket = match opened {
+        Ok(socket) => socket,
+        Err(error) => {
+            eprintln!("canif coupler --bus {bus}: {error}");
+            return ExitCode::from(2);
+        }
+    };
     let mut coupler = Coupler::new(node, 2, 4);
-    match coupler_fault(fault) {
-        Ok(Some(fault)) => coupler.inject(fault),
-        Ok(None) => {}
-        Err(code) => return code,
+    if let Some(fault) = fault {
+        coupler.inject(fault);
     }
-    let results = canif_harness::canopen::check_node(&mut coupler, node);
+    let epoch = canif_kernel::realtime_ns();
+    println!("ready: node {} on {}", node.get(), socket.interface);
+    let _ = std::io::stdout().flush();
+    loop {
+        let _ = canif_kernel::KernelSocket::wait(&[&socket], std::time::Duration::from_millis(1));
+        let mut out = Vec::new();
+        loop {
+            match socket.recv() {
+                Ok(Some(canif_kernel::Received::Frame { frame, at, .. })) => {
+                    out.extend(coupler.handle(&frame, at.saturating_sub(epoch)))
+                }
+                Ok(Some(_)) => {}
+                Ok(None) => break,
+                Err(error) => {
+                    eprintln!("{}: {error}", socket.interface);
+                    return ExitCode::from(2);
+                }
+            }
+        }
+        out.extend(coupler.poll(canif_kernel::realtime_ns().saturating_sub(epoch)));
+        for frame in out {
+            if let Err(error) = socket.send(&frame) {
+                eprintln!("{}: sending {frame}: {error}", socket.interface);
+            }
+        }
+    }
+}
+
+/// `canif run --suite canopen`: the CANopen node checks (002, 004), on the
+/// simulated coupler or on a node on a SocketCAN interface.
+fn canopen_suite(
+    kernel: Option<&canif_harness::kernel_bus::KernelBusOptions>,
+    node: u8,
+    fault: Option<&str>,
+) -> ExitCode {
+    use canif_model::canopen::coupler::Coupler;
+    let Some(node) = canif_model::canopen::NodeId::new(node) else {
+        eprintln!("node ids are 1..63");
+        return ExitCode::from(2);
+    };
+    let (results, target) = match kernel {
+        None => {
+            let mut coupler = Coupler::new(node, 2, 4);
+            match coupler_fault(fault) {
+                Ok(Some(fault)) => coupler.inject(fault),
+                Ok(None) => {}
+                Err(code) => return code,
+            }
+            let results = canif_harness::canopen::check_node(&mut coupler, node, 0);
+            let target = format!(
+                "simulated coupler, node {}{}",
+                node.get(),
+                fault.map_or(String::new(), |f| format!(" with {f}"))
+            );
+            (results, target)
+        }
+        Some(options) => {
+            if fault.is_some() {
+                eprintln!("--coupler-fault applies to the simulated coupler; on a SocketCAN bus, start `canif coupler --bus … --fault …` instead");
+                return ExitCode::from(2);
+            }
+            let mut remote =
+                match canif_harness::canopen::SocketCanNode::open(&options.spec.tester, node) {
+                    Ok(remote) => remote,
+                    Err(error) => {
+                        eprintln!("error: {error}");
+                        return ExitCode::from(2);
+                    }
+                };
+            remote.answer_timeout = options.timeout.min(std::time::Duration::from_millis(500));
+            // Real time: heartbeats are seen at the 10 ms poll step, plus scheduling jitter.
+            let results = canif_harness::canopen::check_node(&mut remote, node, 30_000_000);
+            let target = format!(
+                "node {} on {} (Linux {})",
+                node.get(),
+                options.spec.tester,
+                canif_kernel::kernel_release()
+            );
+            (results, target)
+        }
+    };
     let mut failed = 0;
     for result in &results {
         match &result.outcome {
@@ -1202,12 +1372,7 @@ fn canopen_suite(bus: &str, node: u8, fault: Option<&str>) -> ExitCode {
             }
         }
     }
-    println!(
-        "simulated coupler, node {}{}: {} checks, {failed} failed",
-        node.get(),
-        fault.map_or(String::new(), |f| format!(" with {f}")),
-        results.len()
-    );
+    println!("{target}: {} checks, {failed} failed", results.len());
     ExitCode::from(u8::from(failed > 0))
 }
 

@@ -20,6 +20,8 @@ fn quick() -> Options {
         generated_cycles: 100,
         counter_wrap: false,
         trace_dir: None,
+        kernel: None,
+        only: None,
     }
 }
 

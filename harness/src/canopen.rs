@@ -1,7 +1,7 @@
 //! CANopen as a conformance target: the telegrams of the quick start (002) and
 //! the SDO page (004) sent to a node, and its answers checked. Any node that
-//! takes frames and time works: the simulated coupler of the model today, a
-//! node on a SocketCAN interface later.
+//! takes frames and time works: the simulated coupler of the model, or a node
+//! on a SocketCAN interface ([`SocketCanNode`], real time).
 
 use canif_model::canopen::cob_id::{default_cob_id, Channel};
 use canif_model::canopen::coupler::Coupler;
@@ -27,6 +27,111 @@ impl CanNode for Coupler {
     }
     fn poll(&mut self, now: Nanos) -> Vec<Frame> {
         Coupler::poll(self, now)
+    }
+}
+
+/// A CANopen node on a SocketCAN interface, checked in real time: `now` is
+/// time since the node was opened; requests go out when their time has come.
+pub struct SocketCanNode {
+    socket: canif_kernel::KernelSocket,
+    epoch: Nanos,
+    /// How long to wait for the first answer to a request.
+    pub answer_timeout: std::time::Duration,
+    /// Frames that came but answered nothing (heartbeats, emergencies), for `poll`.
+    backlog: Vec<Frame>,
+    node: NodeId,
+}
+
+impl SocketCanNode {
+    pub fn open(interface: &str, node: NodeId) -> Result<Self, String> {
+        canif_kernel::probe()?;
+        Ok(SocketCanNode {
+            socket: canif_kernel::KernelSocket::open(interface, false)?,
+            epoch: canif_kernel::realtime_ns(),
+            answer_timeout: std::time::Duration::from_millis(200),
+            backlog: Vec::new(),
+            node,
+        })
+    }
+
+    fn wait_until(&self, now: Nanos) {
+        let at = self.epoch + now;
+        let real = canif_kernel::realtime_ns();
+        if at > real {
+            std::thread::sleep(std::time::Duration::from_nanos(at - real));
+        }
+    }
+
+    fn drain(&mut self) -> Vec<Frame> {
+        let mut frames = Vec::new();
+        while let Ok(Some(received)) = self.socket.recv() {
+            if let canif_kernel::Received::Frame { frame, .. } = received {
+                frames.push(frame);
+            }
+        }
+        frames
+    }
+
+    /// The identifier a request's answer comes on, if it has one.
+    fn answer_id(&self, request: &Frame) -> Option<CanId> {
+        let sdo_request = CanId::Standard(default_cob_id(Channel::SdoRequest, self.node));
+        match request.id {
+            CanId::Standard(0) => None, // NMT commands are not answered
+            id if id == sdo_request => Some(CanId::Standard(default_cob_id(
+                Channel::SdoResponse,
+                self.node,
+            ))),
+            id if request.is_remote() => Some(id),
+            _ => None,
+        }
+    }
+}
+
+impl CanNode for SocketCanNode {
+    fn handle(&mut self, frame: &Frame, now: Nanos) -> Vec<Frame> {
+        self.wait_until(now);
+        let stale = self.drain();
+        self.backlog.extend(stale);
+        if self.socket.send(frame).is_err() {
+            return Vec::new();
+        }
+        let Some(answer_id) = self.answer_id(frame) else {
+            // Give the node a moment to act on an unanswered command.
+            std::thread::sleep(std::time::Duration::from_millis(20));
+            return Vec::new();
+        };
+        let started = std::time::Instant::now();
+        let mut answers = Vec::new();
+        let mut quiet_since: Option<std::time::Instant> = None;
+        loop {
+            for received in self.drain() {
+                if received.id == answer_id {
+                    answers.push(received);
+                    quiet_since = Some(std::time::Instant::now());
+                } else {
+                    self.backlog.push(received);
+                }
+            }
+            // After the first answer, a short quiet time shows whether a second one follows.
+            let done = match quiet_since {
+                Some(t) => t.elapsed() > std::time::Duration::from_millis(10),
+                None => started.elapsed() > self.answer_timeout,
+            };
+            if done {
+                return answers;
+            }
+            let _ = canif_kernel::KernelSocket::wait(
+                &[&self.socket],
+                std::time::Duration::from_millis(2),
+            );
+        }
+    }
+
+    fn poll(&mut self, now: Nanos) -> Vec<Frame> {
+        self.wait_until(now);
+        let mut frames = std::mem::take(&mut self.backlog);
+        frames.extend(self.drain());
+        frames
     }
 }
 
@@ -84,8 +189,10 @@ fn guard_state(
     checker.check(answer)
 }
 
-/// Runs every check against `target`, a node with id `node`, from its boot state.
-pub fn check_node(target: &mut dyn CanNode, node: NodeId) -> Vec<CheckResult> {
+/// Runs every check against `target`, a node with id `node`, from its boot
+/// state. `tolerance`: how far a heartbeat may be from its due time (0 in
+/// virtual time; a real bus needs the poll step plus scheduling jitter).
+pub fn check_node(target: &mut dyn CanNode, node: NodeId, tolerance: Nanos) -> Vec<CheckResult> {
     let mut results = Vec::new();
     let mut now: Nanos = 0;
     let mut record = |name, requirements, outcome| {
@@ -214,7 +321,13 @@ pub fn check_node(target: &mut dyn CanNode, node: NodeId) -> Vec<CheckResult> {
             let states_ok = beats
                 .iter()
                 .all(|(_, data)| data == &[NmtState::Operational.code()]);
-            if times == [0, 100_000_000, 200_000_000, 300_000_000] && states_ok {
+            let period = Nanos::from(period_ms) * 1_000_000;
+            let on_time = times.len() == 4
+                && times
+                    .iter()
+                    .zip(0..)
+                    .all(|(t, k)| t.abs_diff(k * period) <= tolerance);
+            if on_time && states_ok {
                 Ok(())
             } else {
                 Err(format!(
@@ -225,6 +338,33 @@ pub fn check_node(target: &mut dyn CanNode, node: NodeId) -> Vec<CheckResult> {
         },
     );
     now = start + 400_000_000;
+    let stop = sdo(target, node, heartbeat::set_producer_time(0), now);
+    record(
+        "producer time 0 stops the heartbeat",
+        &["HB-002", "SDO-006"],
+        match stop {
+            Ok(SdoResponse::DownloadAck {
+                index: 0x1017,
+                sub_index: 0,
+            }) => {
+                now += 300_000_000;
+                let late: Vec<Frame> = target
+                    .poll(now)
+                    .into_iter()
+                    .filter(|f| {
+                        f.id == CanId::Standard(default_cob_id(Channel::ErrorControl, node))
+                    })
+                    .collect();
+                // One beat may have been on its way when the download arrived.
+                if late.len() <= 1 {
+                    Ok(())
+                } else {
+                    Err(format!("{} heartbeats after the stop", late.len()))
+                }
+            }
+            other => Err(format!("answer {other:?}")),
+        },
+    );
 
     for (name, index, sub_index, code) in [
         (

@@ -12,7 +12,13 @@ use canif_model::image::{field, ImageLayout, InputImage, LengthField, MessageRep
 use canif_model::Nanos;
 
 use crate::bus::{arbitration_key, duration, Nodes};
-use crate::iut::{Iut, IutKind};
+use crate::iut::{InvalidFrame, Iut, IutKind};
+use crate::kernel_bus::{InFlight, KernelBus, Side};
+use canif_kernel::KernelSocket;
+
+fn libc_enobufs() -> i32 {
+    canif_kernel::ENOBUFS
+}
 use crate::scenario::{Scenario, Step};
 
 /// How many cycles of history a failure shows.
@@ -433,6 +439,8 @@ struct Lockstep<'a> {
     /// frame (the wrong one), anything else is a frame the IUT encoded wrongly.
     recent_rx: VecDeque<Frame>,
     trace: Option<crate::trace::TraceWriter>,
+    /// Set when the bus is a SocketCAN interface (real time) instead of the simulation.
+    kernel: Option<KernelBus>,
 }
 
 /// What one cycle looked like, kept raw until a failure shows it.
@@ -474,12 +482,24 @@ impl Lockstep<'_> {
         }
         let expected = self.model.poll_transmit(self.now);
         let actual = self.iut.poll_transmit(self.now);
-        let difference = match (expected, actual) {
-            (None, None) => return Ok(()),
-            (Some(e), Some(Ok(a))) if e == a => {
-                self.iut_pending = Some(a);
-                return Ok(());
+        match self.transmit_difference(expected, actual) {
+            Ok(frame) => {
+                self.iut_pending = frame;
+                Ok(())
             }
+            Err(difference) => Err(self.fail(difference)),
+        }
+    }
+
+    /// The frame both devices agree to send (or none), or how they differ.
+    fn transmit_difference(
+        &self,
+        expected: Option<Frame>,
+        actual: Option<Result<Frame, InvalidFrame>>,
+    ) -> Result<Option<Frame>, Difference> {
+        Err(match (expected, actual) {
+            (None, None) => return Ok(None),
+            (Some(e), Some(Ok(a))) if e == a => return Ok(Some(a)),
             (Some(e), Some(Ok(a))) => {
                 // A frame the model still holds is a real message sent out of turn.
                 let queued_later = self.model.send_queue().any(|f| *f == a);
@@ -512,12 +532,14 @@ impl Lockstep<'_> {
                 expected: "no frame".into(),
                 actual: a.to_string(),
             },
-        };
-        Err(self.fail(difference))
+        })
     }
 
     /// Runs the bus up to `until`: completes frames, starts the next winner.
     fn run_bus(&mut self, until: Nanos) -> Result<(), Outcome> {
+        if self.kernel.is_some() {
+            return self.run_kernel(until);
+        }
         loop {
             self.poll()?;
             if self.on_bus.is_none() {
@@ -563,13 +585,290 @@ impl Lockstep<'_> {
         }
     }
 
-    fn complete(&mut self, frame: Frame, from_iut: bool, end: Nanos) {
-        self.frames += 1;
-        if let Some(trace) = self.trace.as_mut() {
-            if trace.frame(end, &frame).is_err() {
-                self.trace = None; // a full disk ends the trace, not the run
+    fn kernel(&mut self) -> &mut KernelBus {
+        self.kernel.as_mut().expect("only called on a SocketCAN bus")
+    }
+
+    /// Runs the SocketCAN bus in real time up to scenario time `until`: writes
+    /// the other nodes' frames when due, hands the IUT what its socket gets,
+    /// sends what it sends, and returns once everything written has arrived.
+    fn run_kernel(&mut self, until: Nanos) -> Result<(), Outcome> {
+        let owned = matches!(self.kernel().side, Side::Owned);
+        loop {
+            self.now = self.now.max(self.kernel().now());
+            if !owned && self.kernel().iut_in_flight.is_none() {
+                self.poll()?;
+                if let Some(frame) = self.iut_pending.take() {
+                    self.kernel_send_iut(frame)?;
+                }
+            }
+            self.kernel_send_due()?;
+            self.kernel_read(owned)?;
+            if owned {
+                self.kernel_model_waits()?;
+            }
+            let bus = self.kernel();
+            if let Some(why) = bus.overdue() {
+                return Err(Outcome::Error(why));
+            }
+            let due_now = bus.waiting.front().is_some_and(|(t, _)| *t <= until);
+            if bus.reached(until) && bus.settled() && !due_now {
+                self.now = self.now.max(until);
+                return Ok(());
+            }
+            let wait = until
+                .saturating_sub(bus.now())
+                .clamp(50_000, 1_000_000);
+            let result = match &bus.side {
+                Side::Attached(iut) => KernelSocket::wait(
+                    &[iut, &bus.tester],
+                    std::time::Duration::from_nanos(wait),
+                ),
+                Side::Owned => {
+                    KernelSocket::wait(&[&bus.tester], std::time::Duration::from_nanos(wait))
+                }
+            };
+            if let Err(error) = result {
+                return Err(Outcome::Error(format!("poll on the CAN sockets: {error}")));
             }
         }
+    }
+
+    fn kernel_error(&mut self, interface: &str, error: std::io::Error) -> Outcome {
+        Outcome::Error(format!(
+            "{interface}: {error} (while {})",
+            if self.kernel().settled() {
+                "idle"
+            } else {
+                "frames were on their way"
+            }
+        ))
+    }
+
+    fn kernel_send_iut(&mut self, frame: Frame) -> Result<(), Outcome> {
+        let bus = self.kernel();
+        let Side::Attached(socket) = &bus.side else {
+            return Ok(());
+        };
+        loop {
+            match socket.send(&frame) {
+                Ok(()) => break,
+                Err(error) if error.raw_os_error() == Some(libc_enobufs()) => {
+                    // The controller's queue is full: wait for it, within the timeout.
+                    let since = *bus.blocked_since.get_or_insert_with(std::time::Instant::now);
+                    if since.elapsed() > bus.options.timeout {
+                        let name = socket.interface.clone();
+                        return Err(Outcome::Error(format!(
+                            "{name}: the send buffer stayed full (ENOBUFS) for {:?}",
+                            since.elapsed()
+                        )));
+                    }
+                    std::thread::sleep(std::time::Duration::from_micros(200));
+                }
+                Err(error) => {
+                    let name = socket.interface.clone();
+                    return Err(self.kernel_error(&name, error));
+                }
+            }
+        }
+        bus.blocked_since = None;
+        bus.iut_in_flight = Some(InFlight {
+            frame,
+            since: std::time::Instant::now(),
+        });
+        Ok(())
+    }
+
+    /// Writes the other nodes' frames that are due.
+    fn kernel_send_due(&mut self) -> Result<(), Outcome> {
+        loop {
+            let bus = self.kernel();
+            let now = bus.now();
+            let Some((at, frame)) = bus.waiting.front().cloned() else {
+                return Ok(());
+            };
+            if at > now {
+                return Ok(());
+            }
+            match bus.tester.send(&frame) {
+                Ok(()) => {
+                    bus.waiting.pop_front();
+                    bus.blocked_since = None;
+                    bus.tester_in_flight.push_back(InFlight {
+                        frame,
+                        since: std::time::Instant::now(),
+                    });
+                }
+                Err(error) if error.raw_os_error() == Some(libc_enobufs()) => {
+                    bus.blocked_since.get_or_insert_with(std::time::Instant::now);
+                    return Ok(()); // the queue drains; overdue() ends a stuck run
+                }
+                Err(error) => {
+                    let name = bus.tester.interface.clone();
+                    return Err(self.kernel_error(&name, error));
+                }
+            }
+        }
+    }
+
+    /// Reads both sockets dry and turns what arrived into bus events.
+    fn kernel_read(&mut self, owned: bool) -> Result<(), Outcome> {
+        loop {
+            let bus = self.kernel();
+            let epoch = bus.epoch;
+            let from_iut = match &bus.side {
+                Side::Attached(socket) => socket
+                    .recv()
+                    .map_err(|e| (socket.interface.clone(), e))
+                    .map(|r| r.map(|r| (true, r))),
+                Side::Owned => Ok(None),
+            };
+            let received = match from_iut {
+                Ok(Some(event)) => Some(event),
+                Ok(None) => match bus.tester.recv() {
+                    Ok(r) => r.map(|r| (false, r)),
+                    Err(e) => {
+                        let name = bus.tester.interface.clone();
+                        return Err(self.kernel_error(&name, e));
+                    }
+                },
+                Err((name, e)) => return Err(self.kernel_error(&name, e)),
+            };
+            let Some((on_iut_socket, received)) = received else {
+                return Ok(());
+            };
+            let (frame, at, own) = match received {
+                canif_kernel::Received::Frame { frame, at, own } => {
+                    (frame, at.saturating_sub(epoch), own)
+                }
+                canif_kernel::Received::Error { class, data, .. } => {
+                    if class & canif_kernel::CAN_ERR_BUSOFF != 0 {
+                        let bus = self.kernel();
+                        let name = if on_iut_socket {
+                            bus.options.spec.iut.clone()
+                        } else {
+                            bus.options.spec.tester.clone()
+                        };
+                        return Err(Outcome::Error(format!(
+                            "{name}: the controller went bus-off (error frame class 0x{class:X}, data {})",
+                            hex(&data)
+                        )));
+                    }
+                    continue; // other error frames: the driver's retries go on
+                }
+            };
+            self.now = self.now.max(at);
+            let bus = self.kernel();
+            let mismatch = |bus: &KernelBus, expected: Option<&InFlight>, side: &str| {
+                Outcome::Error(format!(
+                    "the kernel delivered {frame} on {side}, but {}",
+                    expected.map_or("nothing was on its way".to_string(), |f| format!(
+                        "{} was on its way",
+                        f.frame
+                    ))
+                ) + &format!(" ({})", bus.options.spec.describe()))
+            };
+            match (owned, on_iut_socket, own) {
+                // Attached: the IUT's own frame is on the bus.
+                (false, true, true) => {
+                    if bus.iut_in_flight.as_ref().map(|f| f.frame) != Some(frame) {
+                        return Err(mismatch(bus, bus.iut_in_flight.as_ref(), "the IUT's socket (echo)"));
+                    }
+                    bus.iut_in_flight = None;
+                    bus.crossing.push_back(InFlight {
+                        frame,
+                        since: std::time::Instant::now(),
+                    });
+                    self.complete(frame, true, at);
+                }
+                // Attached: another node's frame reached the IUT.
+                (false, true, false) => {
+                    if bus.tester_in_flight.front().map(|f| f.frame) != Some(frame) {
+                        return Err(mismatch(bus, bus.tester_in_flight.front(), "the IUT's socket"));
+                    }
+                    bus.tester_in_flight.pop_front();
+                    self.complete(frame, false, at);
+                }
+                // Attached: the IUT's frame reached the other nodes.
+                (false, false, _) => {
+                    if bus.crossing.front().map(|f| f.frame) != Some(frame) {
+                        return Err(mismatch(bus, bus.crossing.front(), "the tester's socket"));
+                    }
+                    bus.crossing.pop_front();
+                }
+                // Owned: the harness's own frame is on the bus; the IUT has it too.
+                (true, _, true) => {
+                    if bus.tester_in_flight.front().map(|f| f.frame) != Some(frame) {
+                        return Err(mismatch(bus, bus.tester_in_flight.front(), "the tester's socket (echo)"));
+                    }
+                    bus.tester_in_flight.pop_front();
+                    self.frames += 1;
+                    self.model.handle_received(frame, at);
+                    self.recent_rx.push_back(frame);
+                    if self.recent_rx.len() > RECENT_RX {
+                        self.recent_rx.pop_front();
+                    }
+                    self.log(false, frame, at);
+                    self.write_trace(at, &frame);
+                }
+                // Owned: a frame the IUT sent.
+                (true, _, false) => {
+                    let expected = match bus.model_next.take() {
+                        Some((frame, _)) => Some(frame),
+                        None => self.model.poll_transmit(at),
+                    };
+                    match self.transmit_difference(expected, Some(Ok(frame))) {
+                        Ok(_) => {
+                            self.frames += 1;
+                            self.model.handle_transmit_complete();
+                            self.log(true, frame, at);
+                            self.write_trace(at, &frame);
+                        }
+                        Err(difference) => return Err(self.fail(difference)),
+                    }
+                }
+            }
+        }
+    }
+
+    /// Owned: a frame the model sent long ago that the IUT has not sent is missing.
+    fn kernel_model_waits(&mut self) -> Result<(), Outcome> {
+        let now = self.now;
+        if self.kernel().model_next.is_none() {
+            let next = self.model.poll_transmit(now);
+            self.kernel().model_next = next.map(|f| (f, now));
+        }
+        let bus = self.kernel();
+        let patience = 3 * bus.options.cycle_time;
+        if let Some((frame, since)) = bus.model_next {
+            if now.saturating_sub(since) > patience {
+                let difference = Difference {
+                    candidates: blame::TX_MISSING,
+                    what: format!(
+                        "frame on {} within {} ms",
+                        bus.options.spec.tester,
+                        patience / 1_000_000
+                    ),
+                    expected: frame.to_string(),
+                    actual: "no frame".into(),
+                };
+                return Err(self.fail(difference));
+            }
+        }
+        Ok(())
+    }
+
+    fn write_trace(&mut self, at: Nanos, frame: &Frame) {
+        if let Some(trace) = self.trace.as_mut() {
+            if trace.frame(at, frame).is_err() {
+                self.trace = None;
+            }
+        }
+    }
+
+    fn complete(&mut self, frame: Frame, from_iut: bool, end: Nanos) {
+        self.frames += 1;
+        self.write_trace(end, &frame); // a full disk ends the trace, not the run
         if from_iut {
             self.iut.transmit_complete();
             self.model.handle_transmit_complete();
@@ -691,7 +990,18 @@ pub fn run_scenario(
             )
         }
     };
-    let iut = match kind.build(caps, &scenario.interface) {
+    let kernel = match &scenario.kernel {
+        None => None,
+        Some(options) => match KernelBus::open(options, matches!(kind, IutKind::Exec { .. })) {
+            Ok(bus) => Some(bus),
+            Err(reason) => return run(Outcome::Error(reason), 0, 0),
+        },
+    };
+    let owned_bus = kernel.as_ref().map(|bus| crate::iut::OwnedBus {
+        interface: bus.options.spec.iut.clone(),
+        epoch_ns: bus.epoch,
+    });
+    let iut = match kind.build_on(caps, &scenario.interface, owned_bus.as_ref()) {
         Ok(iut) => iut,
         Err(crate::iut::BuildError::Refused(reason)) => {
             return run(
@@ -725,15 +1035,29 @@ pub fn run_scenario(
             .trace
             .as_ref()
             .and_then(|(dir, name)| crate::trace::TraceWriter::create(dir, name).ok()),
+        kernel,
     };
+    // On a SocketCAN bus the cycle is real time, and the scenario's offsets scale with it.
+    let cycle_time = scenario
+        .kernel
+        .as_ref()
+        .map_or(scenario.cycle_time, |k| k.cycle_time);
+    let scale = |offset: Nanos| offset * cycle_time / scenario.cycle_time.max(1);
+    let time_stamp_tolerance = scenario
+        .kernel
+        .as_ref()
+        .map_or(scenario.time_stamp_tolerance, |k| {
+            k.time_stamp_tolerance.max(scenario.time_stamp_tolerance)
+        });
     let mut outputs = plc.outputs().to_vec();
     let mut increment_at: Option<(u64, u16)> = None;
     for (k, step) in steps.enumerate() {
         let k = k as u64;
-        let t = k * scenario.cycle_time;
+        let t = k * cycle_time;
         if let Err(outcome) = state.run_bus(t) {
             return run(outcome, k, state.frames);
         }
+        let t = if state.kernel.is_some() { state.now } else { t };
         state.cycle = k;
         for message in step.send {
             if plc.send(message).is_err() {
@@ -814,7 +1138,7 @@ pub fn run_scenario(
             &expected,
             &actual,
             |f| recent.contains(f),
-            scenario.time_stamp_tolerance,
+            time_stamp_tolerance,
             rx_state,
         ) {
             return run(state.fail(difference), k, state.frames);
@@ -830,7 +1154,10 @@ pub fn run_scenario(
         // The checker judges the images; what the PLC read is not kept (bounded memory).
         drop(plc.take_received());
         for (offset, frame) in step.bus {
-            state.nodes.schedule(t + offset, frame);
+            match state.kernel.as_mut() {
+                Some(bus) => bus.schedule(k * cycle_time + scale(offset), frame),
+                None => state.nodes.schedule(t + offset, frame),
+            }
         }
     }
     let cycles = state.cycle + 1;

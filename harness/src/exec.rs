@@ -184,14 +184,18 @@ impl ExecIut {
         &mut self,
         caps: &Capabilities,
         config: &InterfaceConfig,
+        bus: Option<&crate::iut::OwnedBus>,
     ) -> Result<Result<(), String>, String> {
         let layout = ImageLayout::new(config, caps.info_data);
-        let request = json!({
+        let mut request = json!({
             "type": "configure",
             "protocol": PROTOCOL_VERSION,
             "config": config_json(config, &layout),
             "capabilities": caps_json(caps),
         });
+        if let Some(bus) = bus {
+            request["bus"] = json!({"socketcan": bus.interface, "epoch_ns": bus.epoch_ns});
+        }
         let answer = self.exchange(request, "configured")?;
         if answer["protocol"].as_u64() != Some(PROTOCOL_VERSION) {
             return Err(self.fail(format!(
@@ -497,68 +501,203 @@ pub fn serve(
         if line.trim().is_empty() {
             continue;
         }
-        let request: Value = match serde_json::from_str(&line) {
-            Ok(value) => value,
-            Err(error) => {
-                writeln!(
-                    output,
-                    "{}",
-                    json!({"type": "error", "message": format!("not JSON: {error}")})
-                )?;
-                continue;
-            }
-        };
-        let answer = match (request["type"].as_str(), iut.as_mut()) {
-            (Some("bye"), _) => return Ok(()),
-            (Some("configure"), _) => match config_from_json(&request) {
-                Ok((caps, config)) => match kind.build(&caps, &config) {
-                    Ok(built) => {
-                        iut = Some(built);
-                        json!({"type": "configured", "protocol": PROTOCOL_VERSION, "accepted": true})
-                    }
-                    Err(error) => {
-                        iut = None;
-                        json!({"type": "configured", "protocol": PROTOCOL_VERSION, "accepted": false, "reason": error.to_string()})
-                    }
-                },
-                Err(error) => json!({"type": "error", "message": error}),
-            },
-            (Some(_), None) => json!({"type": "error", "message": "configure first"}),
-            (Some("cycle"), Some(iut)) => {
-                let outputs =
-                    hex_decode(request["outputs"].as_str().unwrap_or("")).unwrap_or_default();
-                match iut.cycle(&outputs, request["now_ns"].as_u64().unwrap_or(0)) {
-                    Ok(inputs) => json!({"type": "inputs", "inputs": hex_encode(&inputs)}),
-                    Err(error) => json!({"type": "error", "message": error.0}),
-                }
-            }
-            (Some("receive"), Some(iut)) => match frame_from_json(&request["frame"]) {
-                Ok(frame) => {
-                    iut.receive(&frame, request["end_ns"].as_u64().unwrap_or(0));
-                    json!({"type": "ok"})
-                }
-                Err(error) => json!({"type": "error", "message": error}),
-            },
-            (Some("poll_transmit"), Some(iut)) => {
-                let frame = match iut.poll_transmit(request["now_ns"].as_u64().unwrap_or(0)) {
-                    Some(Ok(frame)) => frame_json(&frame),
-                    Some(Err(invalid)) => json!({"invalid": invalid.0}),
-                    None => Value::Null,
-                };
-                json!({"type": "transmit", "frame": frame, "next_ns": iut.poll_timeout()})
-            }
-            (Some("transmit_complete"), Some(iut)) => {
-                iut.transmit_complete();
-                json!({"type": "ok"})
-            }
-            (Some("controller_status"), Some(iut)) => {
-                iut.controller_status(&status_from_json(&request["status"]));
-                json!({"type": "ok"})
-            }
-            (other, _) => json!({"type": "error", "message": format!("unknown request {other:?}")}),
+        let Some(answer) = answer(kind, &mut iut, &line, true) else {
+            return Ok(());
         };
         writeln!(output, "{answer}")?;
         output.flush()?;
     }
     Ok(())
+}
+
+/// The answer to one request line; `None` for `bye`. `drives_bus`: the
+/// harness drives the CAN side through the protocol (no SocketCAN bus).
+fn answer(
+    kind: &crate::iut::IutKind,
+    iut: &mut Option<Box<dyn Iut>>,
+    line: &str,
+    drives_bus: bool,
+) -> Option<Value> {
+    let request: Value = match serde_json::from_str(line) {
+        Ok(value) => value,
+        Err(error) => {
+            return Some(json!({"type": "error", "message": format!("not JSON: {error}")}))
+        }
+    };
+    let bus_request = matches!(
+        request["type"].as_str(),
+        Some("receive" | "poll_transmit" | "transmit_complete")
+    );
+    Some(match (request["type"].as_str(), iut.as_mut()) {
+        (Some("bye"), _) => return None,
+        (Some("configure"), _) => match config_from_json(&request) {
+            Ok((caps, config)) => match kind.build(&caps, &config) {
+                Ok(built) => {
+                    *iut = Some(built);
+                    json!({"type": "configured", "protocol": PROTOCOL_VERSION, "accepted": true})
+                }
+                Err(error) => {
+                    *iut = None;
+                    json!({"type": "configured", "protocol": PROTOCOL_VERSION, "accepted": false, "reason": error.to_string()})
+                }
+            },
+            Err(error) => json!({"type": "error", "message": error}),
+        },
+        (Some(_), None) => json!({"type": "error", "message": "configure first"}),
+        (Some(kind), _) if bus_request && !drives_bus => json!({
+            "type": "error",
+            "message": format!("`{kind}`: this device is on a SocketCAN bus and owns its CAN side")
+        }),
+        (Some("cycle"), Some(iut)) => {
+            let outputs = hex_decode(request["outputs"].as_str().unwrap_or("")).unwrap_or_default();
+            match iut.cycle(&outputs, request["now_ns"].as_u64().unwrap_or(0)) {
+                Ok(inputs) => json!({"type": "inputs", "inputs": hex_encode(&inputs)}),
+                Err(error) => json!({"type": "error", "message": error.0}),
+            }
+        }
+        (Some("receive"), Some(iut)) => match frame_from_json(&request["frame"]) {
+            Ok(frame) => {
+                iut.receive(&frame, request["end_ns"].as_u64().unwrap_or(0));
+                json!({"type": "ok"})
+            }
+            Err(error) => json!({"type": "error", "message": error}),
+        },
+        (Some("poll_transmit"), Some(iut)) => {
+            let frame = match iut.poll_transmit(request["now_ns"].as_u64().unwrap_or(0)) {
+                Some(Ok(frame)) => frame_json(&frame),
+                Some(Err(invalid)) => json!({"invalid": invalid.0}),
+                None => Value::Null,
+            };
+            json!({"type": "transmit", "frame": frame, "next_ns": iut.poll_timeout()})
+        }
+        (Some("transmit_complete"), Some(iut)) => {
+            iut.transmit_complete();
+            json!({"type": "ok"})
+        }
+        (Some("controller_status"), Some(iut)) => {
+            iut.controller_status(&status_from_json(&request["status"]));
+            json!({"type": "ok"})
+        }
+        (other, _) => json!({"type": "error", "message": format!("unknown request {other:?}")}),
+    })
+}
+
+/// The device's CAN side on a SocketCAN interface, while `serve_on_bus` runs.
+struct DeviceBus {
+    socket: canif_kernel::KernelSocket,
+    epoch: Nanos,
+    /// The frame the controller is sending, and whether the kernel took it.
+    sending: Option<Frame>,
+    written: bool,
+}
+
+impl DeviceBus {
+    fn open(interface: &str, epoch: Nanos) -> Result<Self, String> {
+        canif_kernel::probe()?;
+        Ok(DeviceBus {
+            socket: canif_kernel::KernelSocket::open(interface, true)?,
+            epoch,
+            sending: None,
+            written: false,
+        })
+    }
+
+    fn now(&self) -> Nanos {
+        canif_kernel::realtime_ns().saturating_sub(self.epoch)
+    }
+
+    /// The controller's interrupts: frames received (with the kernel's time
+    /// stamp), the frame sent confirmed, the next one started.
+    fn pump(&mut self, iut: &mut dyn Iut) -> Result<(), String> {
+        let name = &self.socket.interface;
+        while let Some(received) = self.socket.recv().map_err(|e| format!("{name}: {e}"))? {
+            match received {
+                canif_kernel::Received::Frame { frame, at, own: false } => {
+                    iut.receive(&frame, at.saturating_sub(self.epoch))
+                }
+                canif_kernel::Received::Frame { own: true, .. } => {
+                    self.sending = None;
+                    self.written = false;
+                    iut.transmit_complete();
+                }
+                canif_kernel::Received::Error { .. } => {}
+            }
+        }
+        loop {
+            let frame = match (self.sending, self.written) {
+                (Some(_), true) => return Ok(()),
+                (Some(frame), false) => frame,
+                (None, _) => match iut.poll_transmit(self.now()) {
+                    None => return Ok(()),
+                    Some(Err(invalid)) => {
+                        eprintln!("{name}: the device produced an invalid frame, not sent: {}", invalid.0);
+                        continue;
+                    }
+                    Some(Ok(frame)) => frame,
+                },
+            };
+            self.sending = Some(frame);
+            match self.socket.send(&frame) {
+                Ok(()) => self.written = true,
+                // The queue is full: the frame goes out on a later pump.
+                Err(error) if error.raw_os_error() == Some(canif_kernel::ENOBUFS) => {
+                    self.written = false;
+                    return Ok(());
+                }
+                Err(error) => return Err(format!("{name}: {error}")),
+            }
+        }
+    }
+}
+
+/// Serves an in-process IUT over the adapter protocol on stdin/stdout with its
+/// CAN side on a SocketCAN interface: `canif device --stdio --bus socketcan:IFACE`.
+/// The interface is the one `configure.bus.socketcan` names, else `interface`.
+pub fn serve_on_bus(kind: &crate::iut::IutKind, interface: Option<&str>) -> Result<(), String> {
+    let (lines, requests) = std::sync::mpsc::channel::<String>();
+    std::thread::spawn(move || {
+        for line in std::io::stdin().lines().map_while(Result::ok) {
+            if lines.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let mut output = std::io::stdout();
+    let mut iut: Option<Box<dyn Iut>> = None;
+    let mut bus: Option<DeviceBus> = None;
+    loop {
+        let line = match requests.recv_timeout(Duration::from_micros(500)) {
+            Ok(line) => Some(line),
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => None,
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => return Ok(()),
+        };
+        if let (Some(bus), Some(device)) = (bus.as_mut(), iut.as_mut()) {
+            // Frames the kernel delivered before a request count as received before it.
+            bus.pump(device.as_mut())?;
+        }
+        let Some(line) = line.filter(|l| !l.trim().is_empty()) else {
+            continue;
+        };
+        let request: Value = serde_json::from_str(&line).unwrap_or(Value::Null);
+        let Some(mut reply) = answer(kind, &mut iut, &line, false) else {
+            return Ok(());
+        };
+        if request["type"] == "configure" && iut.is_some() {
+            let name = request["bus"]["socketcan"].as_str().or(interface);
+            let epoch = request["bus"]["epoch_ns"].as_u64().unwrap_or(0);
+            bus = None;
+            match name.map(|name| DeviceBus::open(name, epoch)) {
+                Some(Ok(opened)) => bus = Some(opened),
+                Some(Err(error)) => reply = json!({"type": "error", "message": error}),
+                None => {
+                    reply = json!({"type": "error", "message": "no SocketCAN interface: start with --bus socketcan:IFACE or send configure.bus"})
+                }
+            }
+        }
+        writeln!(output, "{reply}").map_err(|e| e.to_string())?;
+        output.flush().map_err(|e| e.to_string())?;
+        if let (Some(bus), Some(device)) = (bus.as_mut(), iut.as_mut()) {
+            bus.pump(device.as_mut())?;
+        }
+    }
 }

@@ -71,12 +71,31 @@ impl std::fmt::Display for BuildError {
 /// Asks an IUT, configuration after configuration, whether it accepts.
 pub type Configurer = Box<dyn FnMut(&Capabilities, &InterfaceConfig) -> Result<(), BuildError>>;
 
+/// A SocketCAN interface an external IUT opens itself (adapter protocol,
+/// `configure.bus`): its time stamps count from `epoch_ns` of CLOCK_REALTIME.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct OwnedBus {
+    pub interface: String,
+    pub epoch_ns: u64,
+}
+
 impl IutKind {
     /// Builds the IUT for a configuration.
     pub fn build(
         &self,
         caps: &Capabilities,
         config: &InterfaceConfig,
+    ) -> Result<Box<dyn Iut>, BuildError> {
+        self.build_on(caps, config, None)
+    }
+
+    /// Builds the IUT; with `bus`, an external IUT is told to open that
+    /// interface itself (in-process IUTs are attached by the harness instead).
+    pub fn build_on(
+        &self,
+        caps: &Capabilities,
+        config: &InterfaceConfig,
+        bus: Option<&OwnedBus>,
     ) -> Result<Box<dyn Iut>, BuildError> {
         let refused = |e: &dyn std::fmt::Display| BuildError::Refused(e.to_string());
         match self {
@@ -98,7 +117,7 @@ impl IutKind {
                 let mut iut =
                     ExecIut::spawn(command, std::time::Duration::from_millis(*timeout_ms))
                         .map_err(BuildError::Failed)?;
-                match iut.configure(caps, config).map_err(BuildError::Failed)? {
+                match iut.configure(caps, config, bus).map_err(BuildError::Failed)? {
                     Ok(()) => Ok(Box::new(iut)),
                     Err(reason) => Err(BuildError::Refused(reason)),
                 }
@@ -125,7 +144,7 @@ impl IutKind {
                             Some(ExecIut::spawn(&command, timeout).map_err(BuildError::Failed)?);
                     }
                     let iut = process.as_mut().expect("just started");
-                    match iut.configure(caps, config).map_err(BuildError::Failed)? {
+                    match iut.configure(caps, config, None).map_err(BuildError::Failed)? {
                         Ok(()) => Ok(()),
                         Err(reason) => Err(BuildError::Refused(reason)),
                     }

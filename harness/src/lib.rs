@@ -16,6 +16,7 @@ pub mod check;
 pub mod compare;
 pub mod exec;
 pub mod iut;
+pub mod kernel_bus;
 pub mod report;
 pub mod scenario;
 pub mod suite;

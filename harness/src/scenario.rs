@@ -88,6 +88,8 @@ pub struct Scenario {
     pub time_stamp_tolerance: Nanos,
     /// Write the bus as `DIR/NAME.log` (candump) and `DIR/NAME.pcapng`.
     pub trace: Option<(std::path::PathBuf, String)>,
+    /// Run on a SocketCAN interface in real time instead of the simulated bus.
+    pub kernel: Option<crate::kernel_bus::KernelBusOptions>,
     pub steps: Steps,
 }
 
@@ -225,6 +227,7 @@ fn scenario(name: &str, config: &InterfaceConfig, covers: &[&str], steps: Steps)
         declared_lengths: Vec::new(),
         time_stamp_tolerance: 0,
         trace: None,
+        kernel: None,
         steps,
     }
 }

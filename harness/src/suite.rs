@@ -25,6 +25,10 @@ pub struct Options {
     pub counter_wrap: bool,
     /// Write each scenario's bus trace under this folder (`PROFILE/SCENARIO.{log,pcapng}`).
     pub trace_dir: Option<std::path::PathBuf>,
+    /// Run on a SocketCAN interface in real time instead of the simulated bus.
+    pub kernel: Option<crate::kernel_bus::KernelBusOptions>,
+    /// Only scenarios whose name contains this.
+    pub only: Option<String>,
 }
 
 impl Options {
@@ -36,6 +40,8 @@ impl Options {
             generated_cycles: 100,
             counter_wrap: false,
             trace_dir: None,
+            kernel: None,
+            only: None,
         }
     }
 }
@@ -48,6 +54,8 @@ impl Default for Options {
             generated_cycles: 200,
             counter_wrap: true,
             trace_dir: None,
+            kernel: None,
+            only: None,
         }
     }
 }
@@ -407,7 +415,15 @@ pub fn run_profile(
     let mut runs = vec![check_refusals(kind, &caps)];
     progress(&runs[0]);
     for mut scenario in scenarios(&caps, options) {
+        if options
+            .only
+            .as_ref()
+            .is_some_and(|only| !scenario.name.contains(only.as_str()))
+        {
+            continue;
+        }
         scenario.time_stamp_tolerance = profile.timestamp_tolerance_ns;
+        scenario.kernel = options.kernel.clone();
         if let Some(dir) = &options.trace_dir {
             let name: String = scenario
                 .name

@@ -11,7 +11,7 @@ fn failed(fault: Option<CouplerFault>) -> Vec<(&'static str, Vec<&'static str>)>
     if let Some(fault) = fault {
         coupler.inject(fault);
     }
-    check_node(&mut coupler, node)
+    check_node(&mut coupler, node, 0)
         .into_iter()
         .filter(|r| r.outcome.is_err())
         .map(|r| (r.name, r.requirements.to_vec()))

@@ -75,6 +75,7 @@ fn scenario_of(cycles: &[Cycle]) -> Scenario {
         declared_lengths: Vec::new(),
         time_stamp_tolerance: 0,
         trace: None,
+        kernel: None,
         steps: Steps::Scripted(steps),
     }
 }
@@ -145,6 +146,8 @@ fn report(seed: u64) -> serde_json::Value {
         generated_cycles: 150,
         counter_wrap: false,
         trace_dir: None,
+        kernel: None,
+        only: None,
     };
     let run = run_profile(
         &catalogue,

@@ -14,6 +14,8 @@ fn quick() -> Options {
         generated_cycles: 120,
         counter_wrap: false,
         trace_dir: None,
+        kernel: None,
+        only: None,
     }
 }
 

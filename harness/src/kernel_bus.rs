@@ -1,0 +1,150 @@
+//! The harness's bus on a Linux SocketCAN interface, in real time.
+//!
+//! Two ways to sit on it:
+//! - **attached**: an in-process IUT (the soft device, the model) gets a
+//!   socket of its own on the IUT interface; the harness hands it what that
+//!   socket receives (with the kernel's time stamp) and writes what it sends,
+//!   completing a transmission when the kernel echoes it back.
+//! - **owned**: an external IUT (`exec:`) opens its own socket; the harness
+//!   sees its frames only as another node does, on the tester interface.
+//!
+//! Either way the harness plays the other nodes on the tester socket and the
+//! model is fed the same events, at the times the kernel stamped them.
+
+use std::collections::VecDeque;
+use std::time::{Duration, Instant};
+
+use canif_kernel::{BusSpec, KernelSocket};
+use canif_model::frame::Frame;
+use canif_model::Nanos;
+
+/// How scenarios run on a SocketCAN bus.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct KernelBusOptions {
+    pub spec: BusSpec,
+    /// The real cycle time (scenario offsets are scaled to it).
+    pub cycle_time: Nanos,
+    /// How far the IUT's receive time stamps may be from the harness's.
+    pub time_stamp_tolerance: Nanos,
+    /// How long a frame may take to cross the kernel before the run is an error.
+    pub timeout: Duration,
+}
+
+impl KernelBusOptions {
+    pub fn new(spec: BusSpec) -> Self {
+        KernelBusOptions {
+            spec,
+            cycle_time: 2_000_000,
+            time_stamp_tolerance: 1_000_000,
+            timeout: Duration::from_secs(2),
+        }
+    }
+}
+
+/// Where the IUT sits on the kernel bus.
+pub(crate) enum Side {
+    Attached(KernelSocket),
+    Owned,
+}
+
+/// A frame written to a socket, waiting to show up on the other side.
+pub(crate) struct InFlight {
+    pub frame: Frame,
+    pub since: Instant,
+}
+
+pub(crate) struct KernelBus {
+    pub options: KernelBusOptions,
+    pub side: Side,
+    pub tester: KernelSocket,
+    /// CLOCK_REALTIME at scenario time 0.
+    pub epoch: Nanos,
+    /// Other nodes' frames not yet written, by the time they are due.
+    pub waiting: VecDeque<(Nanos, Frame)>,
+    /// Since when the tester socket has answered ENOBUFS.
+    pub blocked_since: Option<Instant>,
+    /// Written by the tester, not yet seen by the IUT's socket (attached) or
+    /// echoed (owned).
+    pub tester_in_flight: VecDeque<InFlight>,
+    /// Attached: the IUT's frame written, not yet echoed.
+    pub iut_in_flight: Option<InFlight>,
+    /// Attached: IUT frames echoed, not yet seen on the tester socket.
+    pub crossing: VecDeque<InFlight>,
+    /// Owned: the model's frame waiting for the IUT to send it.
+    pub model_next: Option<(Frame, Nanos)>,
+}
+
+impl KernelBus {
+    /// Opens the sockets; `owned`: the IUT opens its own.
+    pub fn open(options: &KernelBusOptions, owned: bool) -> Result<Self, String> {
+        canif_kernel::probe()?;
+        let side = if owned {
+            Side::Owned
+        } else {
+            Side::Attached(KernelSocket::open(&options.spec.iut, true)?)
+        };
+        let tester = KernelSocket::open(&options.spec.tester, owned)?;
+        Ok(KernelBus {
+            options: options.clone(),
+            side,
+            tester,
+            epoch: canif_kernel::realtime_ns(),
+            waiting: VecDeque::new(),
+            blocked_since: None,
+            tester_in_flight: VecDeque::new(),
+            iut_in_flight: None,
+            crossing: VecDeque::new(),
+            model_next: None,
+        })
+    }
+
+    pub fn now(&self) -> Nanos {
+        canif_kernel::realtime_ns().saturating_sub(self.epoch)
+    }
+
+    /// Scenario time `t` has come in real time.
+    pub fn reached(&self, t: Nanos) -> bool {
+        self.now() >= t
+    }
+
+    pub fn schedule(&mut self, at: Nanos, frame: Frame) {
+        let index = self.waiting.partition_point(|(t, _)| *t <= at);
+        self.waiting.insert(index, (at, frame));
+    }
+
+    /// Nothing written is still on its way.
+    pub fn settled(&self) -> bool {
+        self.tester_in_flight.is_empty() && self.iut_in_flight.is_none() && self.crossing.is_empty()
+    }
+
+    /// A frame that has been on its way longer than the timeout, described.
+    pub fn overdue(&self) -> Option<String> {
+        let late = |f: &InFlight| f.since.elapsed() > self.options.timeout;
+        let (iut, tester) = (&self.options.spec.iut, &self.options.spec.tester);
+        if let Some(f) = self.tester_in_flight.front().filter(|f| late(f)) {
+            return Some(format!(
+                "{} written on {tester} did not arrive on {iut} within {:?}",
+                f.frame, self.options.timeout
+            ));
+        }
+        if let Some(f) = self.iut_in_flight.as_ref().filter(|f| late(f)) {
+            return Some(format!(
+                "{} written on {iut} was not confirmed as sent within {:?} (no ACK on the bus, bus-off, or the interface is down)",
+                f.frame, self.options.timeout
+            ));
+        }
+        if let Some(f) = self.crossing.front().filter(|f| late(f)) {
+            return Some(format!(
+                "{} sent on {iut} did not arrive on {tester} within {:?}",
+                f.frame, self.options.timeout
+            ));
+        }
+        if let Some(since) = self.blocked_since.filter(|s| s.elapsed() > self.options.timeout) {
+            return Some(format!(
+                "{tester}: the send buffer stayed full (ENOBUFS) for {:?}",
+                since.elapsed()
+            ));
+        }
+        None
+    }
+}
