@@ -676,6 +676,11 @@ impl Lockstep<'_> {
             frame,
             since: std::time::Instant::now(),
         });
+        // On one interface the other nodes may see it before the IUT's echo.
+        bus.crossing.push_back(InFlight {
+            frame,
+            since: std::time::Instant::now(),
+        });
         Ok(())
     }
 
@@ -687,7 +692,7 @@ impl Lockstep<'_> {
             let Some((at, frame)) = bus.waiting.front().cloned() else {
                 return Ok(());
             };
-            if at > now {
+            if at > now || bus.tester_in_flight.len() >= bus.window() {
                 return Ok(());
             }
             match bus.tester.send(&frame) {
@@ -742,6 +747,10 @@ impl Lockstep<'_> {
                     (frame, at.saturating_sub(epoch), own)
                 }
                 canif_kernel::Received::Error { class, data, .. } => {
+                    self.kernel().last_error = Some(format!(
+                        "the driver's last error frame: class 0x{class:X}, data {}",
+                        hex(&data)
+                    ));
                     if class & canif_kernel::CAN_ERR_BUSOFF != 0 {
                         let bus = self.kernel();
                         let name = if on_iut_socket {
@@ -766,7 +775,13 @@ impl Lockstep<'_> {
                         "{} was on its way",
                         f.frame
                     ))
-                ) + &format!(" ({})", bus.options.spec.describe()))
+                ) + &format!(
+                    " ({}{})",
+                    bus.options.spec.describe(),
+                    bus.last_error
+                        .as_ref()
+                        .map_or(String::new(), |e| format!("; {e}"))
+                ))
             };
             match (owned, on_iut_socket, own) {
                 // Attached: the IUT's own frame is on the bus.
@@ -775,10 +790,6 @@ impl Lockstep<'_> {
                         return Err(mismatch(bus, bus.iut_in_flight.as_ref(), "the IUT's socket (echo)"));
                     }
                     bus.iut_in_flight = None;
-                    bus.crossing.push_back(InFlight {
-                        frame,
-                        since: std::time::Instant::now(),
-                    });
                     self.complete(frame, true, at);
                 }
                 // Attached: another node's frame reached the IUT.
@@ -839,7 +850,7 @@ impl Lockstep<'_> {
             self.kernel().model_next = next.map(|f| (f, now));
         }
         let bus = self.kernel();
-        let patience = 3 * bus.options.cycle_time;
+        let patience = bus.options.timeout.as_nanos() as Nanos;
         if let Some((frame, since)) = bus.model_next {
             if now.saturating_sub(since) > patience {
                 let difference = Difference {

@@ -72,6 +72,8 @@ pub(crate) struct KernelBus {
     pub crossing: VecDeque<InFlight>,
     /// Owned: the model's frame waiting for the IUT to send it.
     pub model_next: Option<(Frame, Nanos)>,
+    /// The driver's last error frame, described, for messages.
+    pub last_error: Option<String>,
 }
 
 impl KernelBus {
@@ -95,6 +97,7 @@ impl KernelBus {
             iut_in_flight: None,
             crossing: VecDeque::new(),
             model_next: None,
+            last_error: None,
         })
     }
 
@@ -112,9 +115,25 @@ impl KernelBus {
         self.waiting.insert(index, (at, frame));
     }
 
-    /// Nothing written is still on its way.
+    /// Nothing written is still on its way, and (owned) the IUT has sent what
+    /// the model says is due: the IUT acts on a cycle before the next one.
     pub fn settled(&self) -> bool {
-        self.tester_in_flight.is_empty() && self.iut_in_flight.is_none() && self.crossing.is_empty()
+        self.tester_in_flight.is_empty()
+            && self.iut_in_flight.is_none()
+            && self.crossing.is_empty()
+            && self.model_next.is_none()
+    }
+
+    /// How many of the other nodes' frames may be on their way at once. Two
+    /// controllers are paced one frame at a time: a burst would overrun the
+    /// receiving controller's FIFO when its driver is slow (as under emulation),
+    /// which a real bus paces by its bit rate.
+    pub fn window(&self) -> usize {
+        if self.options.spec.iut == self.options.spec.tester {
+            256
+        } else {
+            1
+        }
     }
 
     /// A frame that has been on its way longer than the timeout, described.

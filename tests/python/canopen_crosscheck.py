@@ -1,19 +1,24 @@
 #!/usr/bin/env python3
 """Python's canopen package (an SDO/NMT client written by others) drives the
-simulated coupler over python-can's socketcand interface. Prints one JSON
-object with every check; exits 1 if any disagrees with the quick start (002)
-or the SDO page (004).
+simulated coupler over python-can's socketcand interface (a TCP port), or over
+a SocketCAN interface (python-can's `socketcan` interface, in the kernel lane).
+Prints one JSON object with every check; exits 1 if any disagrees with the
+quick start (002) or the SDO page (004).
 
 Usage: canopen_crosscheck.py PORT NODE
+       canopen_crosscheck.py socketcan:IFACE NODE
 """
 import json
 import sys
 
 import canopen
 
-port, node_id = int(sys.argv[1]), int(sys.argv[2])
+where, node_id = sys.argv[1], int(sys.argv[2])
 network = canopen.Network()
-network.connect(interface="socketcand", channel="can0", host="127.0.0.1", port=port)
+if where.startswith("socketcan:"):
+    network.connect(interface="socketcan", channel=where.split(":", 1)[1])
+else:
+    network.connect(interface="socketcand", channel="can0", host="127.0.0.1", port=int(where))
 node = canopen.RemoteNode(node_id, canopen.ObjectDictionary())
 network.add_node(node)
 checks = {}

@@ -1,0 +1,456 @@
+//! The suite on a real Linux CAN stack, end to end as a user runs it: `canif
+//! run --bus socketcan:…` with the soft device attached and as its own process
+//! (`canif device --bus …`), over vcan and over two emulated SJA1000
+//! controllers; the CANopen checks and the quick start against `canif coupler
+//! --bus …`; Python's canopen package over SocketCAN; and what must end in an
+//! `error` verdict: an interface going down, a bus without acknowledgement.
+//!
+//! Interfaces come from the kernel lane (`scripts/kernel-can-lane`):
+//! CANIF_LANE_FD (vcan0, mtu 72), CANIF_LANE_CLASSIC (vcan1) and
+//! CANIF_LANE_CONTROLLERS (can0,can1). Without AF_CAN or without the
+//! interface, a trial is listed as ignored with the reason (the errno).
+
+use std::io::{BufRead, BufReader};
+use std::path::PathBuf;
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use canif_harness::canopen::quick_start;
+use canif_harness::exec::ExecIut;
+use canif_harness::iut::OwnedBus;
+use canif_model::canopen::NodeId;
+use canif_model::config::{FrameFormat, InterfaceConfig};
+use canif_model::image::ImageLayout;
+use libtest_mimic::{Arguments, Failed, Trial};
+
+const CANIF: &str = env!("CARGO_BIN_EXE_canif");
+
+fn canif(args: &[&str]) -> Output {
+    Command::new(CANIF)
+        .args(args)
+        .output()
+        .expect("canif starts")
+}
+
+fn text(output: &Output) -> String {
+    format!(
+        "exit {:?}\nstdout:\n{}\nstderr:\n{}",
+        output.status.code(),
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    )
+}
+
+fn report_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("canif-lane-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+fn report(dir: &std::path::Path) -> Result<serde_json::Value, String> {
+    let path = dir.join("report.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// A run's totals from its report, and frames checked per second of wall time.
+fn totals(report: &serde_json::Value) -> (String, f64) {
+    let frames: u64 = report["profiles"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .map(|p| p["frames_checked"].as_u64().unwrap_or(0))
+        .sum();
+    let seconds = report["wall_time_ms"].as_f64().unwrap_or(1.0) / 1000.0;
+    (report["totals"].to_string(), frames as f64 / seconds)
+}
+
+/// `canif run` on a SocketCAN bus must conform, and say which bus and kernel it used.
+fn conforms_on(bus: &str, iut: &str, profile: &str, extra: &[&str]) -> Result<(), Failed> {
+    let dir = report_dir(&format!("{profile}-{}", bus.replace([':', ','], "-")));
+    let dir_text = dir.display().to_string();
+    let mut args = vec![
+        "run", "--iut", iut, "--bus", bus, "--profile", profile, "--cases", "1", "--duration",
+        "0.1", "--cycle-us", "5000", "--report", &dir_text,
+    ];
+    args.extend_from_slice(extra);
+    let started = Instant::now();
+    let output = canif(&args);
+    let report = report(&dir).map_err(|e| format!("{e}\n{}", text(&output)))?;
+    let (totals, rate) = totals(&report);
+    eprintln!(
+        "{iut} on {bus} ({profile}): {totals}, {rate:.0} checked frames/s, {:?}",
+        started.elapsed()
+    );
+    if output.status.code() != Some(0) {
+        let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap_or_default();
+        let summary: Vec<&str> = summary.lines().take(80).collect();
+        return Err(format!(
+            "expected conformance\n{}\nsummary:\n{}",
+            text(&output),
+            summary.join("\n")
+        )
+        .into());
+    }
+    let bus_text = report["bus"].as_str().unwrap_or_default();
+    let interface = bus.trim_start_matches("socketcan:").split(',').next().unwrap_or_default();
+    if !bus_text.contains(interface) || !bus_text.contains("Linux") {
+        return Err(format!("the report does not name the bus and kernel: {bus_text:?}").into());
+    }
+    if report["totals"]["pass"].as_u64().unwrap_or(0) < 20 {
+        return Err(format!("too little checked: {totals}").into());
+    }
+    Ok(())
+}
+
+fn device_command(interface: &str, fault: Option<&str>) -> String {
+    format!(
+        "exec:{CANIF} device --stdio --bus socketcan:{interface}{}",
+        fault.map_or(String::new(), |f| format!(" --fault {f}"))
+    )
+}
+
+/// A faulty device on its own socket is rejected by the requirement it breaks.
+fn fault_caught_over(interface: &str) -> Result<(), Failed> {
+    let dir = report_dir("fault");
+    let output = canif(&[
+        "run",
+        "--iut",
+        &device_command(interface, Some("sends-batch-reversed")),
+        "--bus",
+        &format!("socketcan:{interface}"),
+        "--profile",
+        "fc510x",
+        "--scenario",
+        "tx-batches",
+        "--cycle-us",
+        "5000",
+        "--report",
+        &dir.display().to_string(),
+    ]);
+    let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap_or_default();
+    if output.status.code() != Some(1) || !summary.contains("HS-TX-006") {
+        return Err(format!(
+            "expected a failure of HS-TX-006\n{}\nsummary:\n{summary}",
+            text(&output)
+        )
+        .into());
+    }
+    Ok(())
+}
+
+/// `ip link set IFACE up|down`, through the socketcan crate's netlink.
+fn link(interface: &str, up: bool) -> Result<(), Failed> {
+    canif_kernel::set_link(interface, up).map_err(Failed::from)
+}
+
+/// An interface going down mid-run ends the run with an error naming it; the
+/// report is still written.
+fn interface_down_is_an_error(interface: &str) -> Result<(), Failed> {
+    let dir = report_dir("down");
+    let child = Command::new(CANIF)
+        .args([
+            "run",
+            "--bus",
+            &format!("socketcan:{interface}"),
+            "--profile",
+            "fc510x",
+            "--scenario",
+            "generated",
+            "--duration",
+            "20",
+            "--cycle-us",
+            "2000",
+            "--report",
+            &dir.display().to_string(),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()?;
+    std::thread::sleep(Duration::from_millis(1500));
+    let downed = link(interface, false);
+    let output = wait_with_timeout(child, Duration::from_secs(60));
+    link(interface, true)?;
+    downed?;
+    let output = output?;
+    let report = report(&dir).map_err(|e| format!("{e}\n{}", text(&output)))?;
+    let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap_or_default();
+    if output.status.code() != Some(2) || !summary.contains(interface) {
+        return Err(format!(
+            "expected exit 2 and an error naming {interface}\n{}\ntotals {}\nsummary:\n{summary}",
+            text(&output),
+            report["totals"]
+        )
+        .into());
+    }
+    eprintln!(
+        "{interface} down mid-run: exit 2, {}",
+        summary
+            .lines()
+            .find(|l| l.contains(interface))
+            .unwrap_or_default()
+    );
+    Ok(())
+}
+
+/// Alone on a controller bus (the other controller down), nothing acknowledges
+/// the IUT's frames: an error naming the cause, not a hang.
+fn no_acknowledge_is_an_error(iut: &str, other: &str) -> Result<(), Failed> {
+    link(other, false)?;
+    let dir = report_dir("noack");
+    let started = Instant::now();
+    let output = canif(&[
+        "run",
+        "--bus",
+        &format!("socketcan:{iut}"),
+        "--profile",
+        "fc510x",
+        "--scenario",
+        "tx-batches",
+        "--cycle-us",
+        "5000",
+        "--frame-timeout-ms",
+        "1000",
+        "--report",
+        &dir.display().to_string(),
+    ]);
+    link(other, true)?;
+    // Frames left in the controller's queue go out now; let them pass.
+    std::thread::sleep(Duration::from_millis(500));
+    let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap_or_default();
+    if output.status.code() != Some(2) || !summary.contains("not confirmed as sent") {
+        return Err(format!(
+            "expected exit 2 naming the unacknowledged frame\n{}\nsummary:\n{summary}",
+            text(&output)
+        )
+        .into());
+    }
+    eprintln!("{iut} without acknowledgement: error verdict in {:?}", started.elapsed());
+    Ok(())
+}
+
+fn wait_with_timeout(mut child: Child, timeout: Duration) -> Result<Output, Failed> {
+    let started = Instant::now();
+    loop {
+        if child.try_wait()?.is_some() {
+            return Ok(child.wait_with_output()?);
+        }
+        if started.elapsed() > timeout {
+            let _ = child.kill();
+            return Err(format!("no end within {timeout:?}: the harness hangs").into());
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// `canif coupler --bus` on an interface, until dropped.
+struct CouplerProcess(Child);
+
+impl CouplerProcess {
+    fn start(interface: &str, fault: Option<&str>) -> Result<Self, Failed> {
+        let mut command = Command::new(CANIF);
+        command.args(["coupler", "--bus", &format!("socketcan:{interface}"), "--node", "5"]);
+        if let Some(fault) = fault {
+            command.args(["--fault", fault]);
+        }
+        let mut child = command.stdout(Stdio::piped()).stderr(Stdio::inherit()).spawn()?;
+        let mut line = String::new();
+        BufReader::new(child.stdout.take().ok_or("no stdout")?).read_line(&mut line)?;
+        if !line.starts_with("ready") {
+            let _ = child.kill();
+            return Err(format!("the coupler did not start: {line:?}").into());
+        }
+        Ok(CouplerProcess(child))
+    }
+}
+
+impl Drop for CouplerProcess {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// `canif run --suite canopen` checks a node on the interface: the coupler
+/// passes, each faulty variant fails on the requirement it breaks.
+fn canopen_checks_over(interface: &str) -> Result<(), Failed> {
+    let bus = format!("socketcan:{interface}");
+    let check = |fault: Option<&str>| -> Result<Output, Failed> {
+        let _coupler = CouplerProcess::start(interface, fault)?;
+        Ok(canif(&["run", "--suite", "canopen", "--bus", &bus, "--node", "5"]))
+    };
+    let output = check(None)?;
+    if output.status.code() != Some(0) {
+        return Err(format!("the coupler should pass\n{}", text(&output)).into());
+    }
+    for (fault, requirement) in [
+        ("toggle-stuck", "GRD-004"),
+        ("sdo-size-always-4", "SDO-008"),
+        ("no-abort", "SDO-007"),
+    ] {
+        let output = check(Some(fault))?;
+        let stdout = String::from_utf8_lossy(&output.stdout);
+        let caught = stdout
+            .lines()
+            .any(|l| l.starts_with("FAIL") && l.contains(requirement));
+        if output.status.code() != Some(1) || !caught {
+            return Err(format!("{fault} must fail {requirement}\n{}", text(&output)).into());
+        }
+    }
+    Ok(())
+}
+
+/// The quick start through the CAN interface of every profile: the PLC has only
+/// the process image of `canif device` (its own socket), the coupler is another
+/// process on the same interface.
+fn quick_start_over(interface: &str) -> Result<(), Failed> {
+    let catalogue = canif_spec::Catalogue::embedded().map_err(|e| e.to_string())?;
+    let node = NodeId::new(5).expect("node 5");
+    let mut failures = Vec::new();
+    for profile in &catalogue.profiles {
+        let caps = profile.model_capabilities();
+        let format = if caps.base11 {
+            FrameFormat::Base11
+        } else if caps.ext29 {
+            FrameFormat::Extended29
+        } else {
+            FrameFormat::Fd
+        };
+        let config = InterfaceConfig::new(format, 8);
+        // A coupler from boot for each profile (its guarding toggle starts at 0).
+        let _coupler = CouplerProcess::start(interface, None)?;
+        let layout = ImageLayout::new(&config, caps.info_data);
+        let mut iut = ExecIut::spawn(
+            &device_command(interface, None)["exec:".len()..],
+            Duration::from_secs(5),
+        )?;
+        let epoch = canif_kernel::realtime_ns();
+        let bus = OwnedBus {
+            interface: interface.to_string(),
+            epoch_ns: epoch,
+        };
+        if let Err(reason) = iut.configure(&caps, &config, Some(&bus))? {
+            return Err(format!("{}: the device refuses {config:?}: {reason}", profile.name).into());
+        }
+        let cycle_time = 4_000_000;
+        let mut next = canif_kernel::realtime_ns();
+        let mut cycle = || {
+            next += cycle_time;
+            let now = canif_kernel::realtime_ns();
+            if next > now {
+                std::thread::sleep(Duration::from_nanos(next - now));
+            }
+            canif_kernel::realtime_ns() - epoch
+        };
+        let results = quick_start(&mut iut, layout, node, &mut cycle);
+        for result in results {
+            match result.outcome {
+                Ok(()) => {}
+                Err(why) => failures.push(format!(
+                    "{}: {} ({}): {why}",
+                    profile.name,
+                    result.name,
+                    result.requirements.join(", ")
+                )),
+            }
+        }
+    }
+    if failures.is_empty() {
+        eprintln!("quick start over {interface}: every telegram answered on all {} profiles", catalogue.profiles.len());
+        Ok(())
+    } else {
+        Err(failures.join("\n").into())
+    }
+}
+
+/// Python's canopen package (python-can's socketcan interface) against the coupler.
+fn python_canopen_over(interface: &str) -> Result<(), Failed> {
+    let _coupler = CouplerProcess::start(interface, None)?;
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/python/canopen_crosscheck.py");
+    let output = Command::new("python3")
+        .args([script, &format!("socketcan:{interface}"), "5"])
+        .output()?;
+    let checks: serde_json::Value =
+        serde_json::from_slice(&output.stdout).map_err(|e| format!("{e}\n{}", text(&output)))?;
+    if output.status.code() != Some(0) {
+        return Err(format!("canopen disagrees: {checks:#}").into());
+    }
+    eprintln!(
+        "python canopen over {interface}: {} checks agree",
+        checks.as_object().map_or(0, |o| o.len())
+    );
+    Ok(())
+}
+
+fn python_canopen_available() -> Result<(), String> {
+    let ok = Command::new("python3")
+        .args(["-c", "import canopen, can.interfaces.socketcan"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    match (ok, std::env::var("CI").is_ok()) {
+        (true, _) => Ok(()),
+        // CI installs it (.ci/run): missing there is a failure, not a skip.
+        (false, true) => Ok(()),
+        (false, false) => Err("python3 with canopen and python-can not installed (pip install canopen)".into()),
+    }
+}
+
+type Check = Box<dyn Fn() -> Result<(), Failed> + Send + Sync>;
+
+fn main() {
+    let args = Arguments::from_args();
+    let fd = canif_kernel::test_interface("CANIF_LANE_FD", "vcan0");
+    let classic = canif_kernel::test_interface("CANIF_LANE_CLASSIC", "vcan1");
+    let controllers = std::env::var("CANIF_LANE_CONTROLLERS")
+        .map_err(|_| "no emulated controllers (CANIF_LANE_CONTROLLERS=can0,can1; scripts/kernel-can-lane sets it)".to_string())
+        .and_then(|pair| {
+            let (a, b) = pair.split_once(',').ok_or("CANIF_LANE_CONTROLLERS is IFACE,IFACE")?;
+            canif_kernel::test_interface("CANIF_LANE_CONTROLLER_A", a)?;
+            canif_kernel::test_interface("CANIF_LANE_CONTROLLER_B", b)?;
+            Ok((a.to_string(), b.to_string()))
+        });
+    let mut trials: Vec<(&str, Result<Check, String>)> = Vec::new();
+    let on = |interface: &Result<String, String>, f: fn(&str) -> Result<(), Failed>| {
+        interface.clone().map(|i| Box::new(move || f(&i)) as Check)
+    };
+    trials.push(("conformance_attached_over_vcan_fd", on(&fd, |i| {
+        conforms_on(&format!("socketcan:{i}"), "softdevice", "fc532x", &[])
+    })));
+    trials.push(("conformance_of_device_process_over_vcan", on(&fd, |i| {
+        conforms_on(&format!("socketcan:{i}"), &device_command(i, None), "fc532x", &[])
+    })));
+    trials.push(("fault_caught_over_vcan", on(&classic, fault_caught_over)));
+    trials.push((
+        "conformance_over_sja1000_controllers",
+        controllers.clone().map(|(a, b)| {
+            Box::new(move || {
+                conforms_on(&format!("socketcan:{a},{b}"), "softdevice", "fc510x", &["--scenario", "rx-"])?;
+                conforms_on(&format!("socketcan:{a},{b}"), &device_command(&a, None), "fc510x", &["--scenario", "tx-batches"])
+            }) as Check
+        }),
+    ));
+    trials.push(("canopen_checks_over_vcan", on(&classic, canopen_checks_over)));
+    trials.push(("quick_start_through_every_profile_over_vcan", on(&classic, quick_start_over)));
+    trials.push((
+        "python_canopen_over_vcan",
+        classic.clone().and_then(|i| {
+            python_canopen_available()?;
+            Ok(Box::new(move || python_canopen_over(&i)) as Check)
+        }),
+    ));
+    trials.push(("interface_down_is_an_error", on(&classic, interface_down_is_an_error)));
+    trials.push((
+        "no_acknowledge_is_an_error",
+        controllers.map(|(a, b)| Box::new(move || no_acknowledge_is_an_error(&a, &b)) as Check),
+    ));
+    let trials = trials
+        .into_iter()
+        .map(|(name, check)| match check {
+            Ok(check) => Trial::test(name, move || check()),
+            Err(why) => Trial::test(name, || Ok(()))
+                .with_kind(format!("skipped: {why}"))
+                .with_ignored_flag(true),
+        })
+        .collect();
+    libtest_mimic::run(&args, trials).exit();
+}
