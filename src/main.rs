@@ -79,6 +79,10 @@ enum Command {
         /// On a SocketCAN bus: how long a frame may take to cross the kernel, in ms.
         #[arg(long, default_value_t = 2000)]
         frame_timeout_ms: u64,
+        /// On a SocketCAN bus: send the scenarios' remote frames as data frames
+        /// (for controllers that cannot carry them, such as QEMU's SJA1000).
+        #[arg(long)]
+        no_remote_frames: bool,
         /// Only scenarios whose name contains this text.
         #[arg(long, value_name = "TEXT")]
         scenario: Option<String>,
@@ -250,6 +254,7 @@ fn main() -> ExitCode {
             cycle_us,
             time_stamp_tolerance_us,
             frame_timeout_ms,
+            no_remote_frames,
             scenario,
             node,
             coupler_fault,
@@ -262,6 +267,7 @@ fn main() -> ExitCode {
                         cycle_time: cycle_us.max(100) * 1_000,
                         time_stamp_tolerance: time_stamp_tolerance_us * 1_000,
                         timeout: std::time::Duration::from_millis(frame_timeout_ms),
+                        remote_frames: !no_remote_frames,
                     }),
                     Err(error) => {
                         eprintln!("--bus {error}");
@@ -748,7 +754,9 @@ fn run(
     }
     let scenarios = if options.kernel.is_some() || options.only.is_some() {
         // The Gherkin scenarios run on the simulated bus; a SocketCAN or filtered run leaves them out.
-        eprintln!("Gherkin scenarios: not run (they use the simulated bus; run without --bus/--scenario)");
+        eprintln!(
+            "Gherkin scenarios: not run (they use the simulated bus; run without --bus/--scenario)"
+        );
         Vec::new()
     } else {
         match run_features(&kind, &profiles) {
@@ -778,11 +786,16 @@ fn run(
         bus: match &options.kernel {
             None => "simulated bus (virtual time)".into(),
             Some(k) => format!(
-                "{} on Linux {}, real time, {} µs cycle, time stamps within {} µs",
+                "{} on Linux {}, real time, {} µs cycle, time stamps within {} µs{}",
                 k.spec.describe(),
                 canif_kernel::kernel_release(),
                 k.cycle_time / 1_000,
-                k.time_stamp_tolerance / 1_000
+                k.time_stamp_tolerance / 1_000,
+                if k.remote_frames {
+                    ""
+                } else {
+                    ", remote frames sent as data frames"
+                }
             ),
         },
         profiles: results,

@@ -3,7 +3,7 @@
 //! (`canif device --bus …`), over vcan and over two emulated SJA1000
 //! controllers; the CANopen checks and the quick start against `canif coupler
 //! --bus …`; Python's canopen package over SocketCAN; and what must end in an
-//! `error` verdict: an interface going down, a bus without acknowledgement.
+//! `error` verdict: an interface going down, a send buffer that stays full.
 //!
 //! Interfaces come from the kernel lane (`scripts/kernel-can-lane`):
 //! CANIF_LANE_FD (vcan0, mtu 72), CANIF_LANE_CLASSIC (vcan1) and
@@ -23,10 +23,14 @@ use canif_model::config::{FrameFormat, InterfaceConfig};
 use canif_model::image::ImageLayout;
 use libtest_mimic::{Arguments, Failed, Trial};
 
-const CANIF: &str = env!("CARGO_BIN_EXE_canif");
+/// The `canif` under test: this build's, or CANIF_BIN (the kernel lane points
+/// it at the release build: under emulation a debug build is several times slower).
+fn canif_bin() -> String {
+    std::env::var("CANIF_BIN").unwrap_or_else(|_| env!("CARGO_BIN_EXE_canif").to_string())
+}
 
 fn canif(args: &[&str]) -> Output {
-    Command::new(CANIF)
+    Command::new(canif_bin())
         .args(args)
         .output()
         .expect("canif starts")
@@ -70,8 +74,21 @@ fn conforms_on(bus: &str, iut: &str, profile: &str, extra: &[&str]) -> Result<()
     let dir = report_dir(&format!("{profile}-{}", bus.replace([':', ','], "-")));
     let dir_text = dir.display().to_string();
     let mut args = vec![
-        "run", "--iut", iut, "--bus", bus, "--profile", profile, "--cases", "1", "--duration",
-        "0.1", "--cycle-us", "5000", "--report", &dir_text,
+        "run",
+        "--iut",
+        iut,
+        "--bus",
+        bus,
+        "--profile",
+        profile,
+        "--cases",
+        "1",
+        "--duration",
+        "0.1",
+        "--cycle-us",
+        "5000",
+        "--report",
+        &dir_text,
     ];
     args.extend_from_slice(extra);
     let started = Instant::now();
@@ -93,7 +110,11 @@ fn conforms_on(bus: &str, iut: &str, profile: &str, extra: &[&str]) -> Result<()
         .into());
     }
     let bus_text = report["bus"].as_str().unwrap_or_default();
-    let interface = bus.trim_start_matches("socketcan:").split(',').next().unwrap_or_default();
+    let interface = bus
+        .trim_start_matches("socketcan:")
+        .split(',')
+        .next()
+        .unwrap_or_default();
     if !bus_text.contains(interface) || !bus_text.contains("Linux") {
         return Err(format!("the report does not name the bus and kernel: {bus_text:?}").into());
     }
@@ -105,7 +126,8 @@ fn conforms_on(bus: &str, iut: &str, profile: &str, extra: &[&str]) -> Result<()
 
 fn device_command(interface: &str, fault: Option<&str>) -> String {
     format!(
-        "exec:{CANIF} device --stdio --bus socketcan:{interface}{}",
+        "exec:{} device --stdio --bus socketcan:{interface}{}",
+        canif_bin(),
         fault.map_or(String::new(), |f| format!(" --fault {f}"))
     )
 }
@@ -148,7 +170,7 @@ fn link(interface: &str, up: bool) -> Result<(), Failed> {
 /// report is still written.
 fn interface_down_is_an_error(interface: &str) -> Result<(), Failed> {
     let dir = report_dir("down");
-    let child = Command::new(CANIF)
+    let child = Command::new(canif_bin())
         .args([
             "run",
             "--bus",
@@ -193,20 +215,33 @@ fn interface_down_is_an_error(interface: &str) -> Result<(), Failed> {
     Ok(())
 }
 
-/// Alone on a controller bus (the other controller down), nothing acknowledges
-/// the IUT's frames: an error naming the cause, not a hang.
-fn no_acknowledge_is_an_error(iut: &str, other: &str) -> Result<(), Failed> {
-    link(other, false)?;
-    let dir = report_dir("noack");
+/// A bus the kernel cannot send on (a token-bucket qdisc of 8 bit/s on the
+/// interface, about one frame in 16 s): writes fail with ENOBUFS. Short
+/// backpressure is waited out (seen at 1 kbit/s: the run conforms, slowly);
+/// when it lasts past the frame timeout the run ends with an error naming it.
+fn send_buffer_full_is_an_error(interface: &str) -> Result<(), Failed> {
+    let tc = |args: &[&str]| -> Result<(), Failed> {
+        let output = Command::new("tc").args(args).output()?;
+        if output.status.success() {
+            Ok(())
+        } else {
+            Err(format!("tc {}: {}", args.join(" "), text(&output)).into())
+        }
+    };
+    tc(&[
+        "qdisc", "add", "dev", interface, "root", "tbf", "rate", "8bit", "burst", "32", "limit",
+        "32",
+    ])?;
+    let dir = report_dir("enobufs");
     let started = Instant::now();
     let output = canif(&[
         "run",
         "--bus",
-        &format!("socketcan:{iut}"),
+        &format!("socketcan:{interface}"),
         "--profile",
         "fc510x",
         "--scenario",
-        "tx-batches",
+        "rx-overflow",
         "--cycle-us",
         "5000",
         "--frame-timeout-ms",
@@ -214,18 +249,19 @@ fn no_acknowledge_is_an_error(iut: &str, other: &str) -> Result<(), Failed> {
         "--report",
         &dir.display().to_string(),
     ]);
-    link(other, true)?;
-    // Frames left in the controller's queue go out now; let them pass.
-    std::thread::sleep(Duration::from_millis(500));
+    tc(&["qdisc", "del", "dev", interface, "root"])?;
     let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap_or_default();
-    if output.status.code() != Some(2) || !summary.contains("not confirmed as sent") {
+    if output.status.code() != Some(2) || !summary.contains("ENOBUFS") {
         return Err(format!(
-            "expected exit 2 naming the unacknowledged frame\n{}\nsummary:\n{summary}",
+            "expected exit 2 naming ENOBUFS\n{}\nsummary:\n{summary}",
             text(&output)
         )
         .into());
     }
-    eprintln!("{iut} without acknowledgement: error verdict in {:?}", started.elapsed());
+    eprintln!(
+        "{interface} throttled: ENOBUFS error verdict in {:?}",
+        started.elapsed()
+    );
     Ok(())
 }
 
@@ -248,12 +284,21 @@ struct CouplerProcess(Child);
 
 impl CouplerProcess {
     fn start(interface: &str, fault: Option<&str>) -> Result<Self, Failed> {
-        let mut command = Command::new(CANIF);
-        command.args(["coupler", "--bus", &format!("socketcan:{interface}"), "--node", "5"]);
+        let mut command = Command::new(canif_bin());
+        command.args([
+            "coupler",
+            "--bus",
+            &format!("socketcan:{interface}"),
+            "--node",
+            "5",
+        ]);
         if let Some(fault) = fault {
             command.args(["--fault", fault]);
         }
-        let mut child = command.stdout(Stdio::piped()).stderr(Stdio::inherit()).spawn()?;
+        let mut child = command
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()?;
         let mut line = String::new();
         BufReader::new(child.stdout.take().ok_or("no stdout")?).read_line(&mut line)?;
         if !line.starts_with("ready") {
@@ -277,7 +322,9 @@ fn canopen_checks_over(interface: &str) -> Result<(), Failed> {
     let bus = format!("socketcan:{interface}");
     let check = |fault: Option<&str>| -> Result<Output, Failed> {
         let _coupler = CouplerProcess::start(interface, fault)?;
-        Ok(canif(&["run", "--suite", "canopen", "--bus", &bus, "--node", "5"]))
+        Ok(canif(&[
+            "run", "--suite", "canopen", "--bus", &bus, "--node", "5",
+        ]))
     };
     let output = check(None)?;
     if output.status.code() != Some(0) {
@@ -330,7 +377,9 @@ fn quick_start_over(interface: &str) -> Result<(), Failed> {
             epoch_ns: epoch,
         };
         if let Err(reason) = iut.configure(&caps, &config, Some(&bus))? {
-            return Err(format!("{}: the device refuses {config:?}: {reason}", profile.name).into());
+            return Err(
+                format!("{}: the device refuses {config:?}: {reason}", profile.name).into(),
+            );
         }
         let cycle_time = 4_000_000;
         let mut next = canif_kernel::realtime_ns();
@@ -356,7 +405,10 @@ fn quick_start_over(interface: &str) -> Result<(), Failed> {
         }
     }
     if failures.is_empty() {
-        eprintln!("quick start over {interface}: every telegram answered on all {} profiles", catalogue.profiles.len());
+        eprintln!(
+            "quick start over {interface}: every telegram answered on all {} profiles",
+            catalogue.profiles.len()
+        );
         Ok(())
     } else {
         Err(failures.join("\n").into())
@@ -366,7 +418,10 @@ fn quick_start_over(interface: &str) -> Result<(), Failed> {
 /// Python's canopen package (python-can's socketcan interface) against the coupler.
 fn python_canopen_over(interface: &str) -> Result<(), Failed> {
     let _coupler = CouplerProcess::start(interface, None)?;
-    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/python/canopen_crosscheck.py");
+    let script = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/python/canopen_crosscheck.py"
+    );
     let output = Command::new("python3")
         .args([script, &format!("socketcan:{interface}"), "5"])
         .output()?;
@@ -391,7 +446,9 @@ fn python_canopen_available() -> Result<(), String> {
         (true, _) => Ok(()),
         // CI installs it (.ci/run): missing there is a failure, not a skip.
         (false, true) => Ok(()),
-        (false, false) => Err("python3 with canopen and python-can not installed (pip install canopen)".into()),
+        (false, false) => {
+            Err("python3 with canopen and python-can not installed (pip install canopen)".into())
+        }
     }
 }
 
@@ -413,24 +470,53 @@ fn main() {
     let on = |interface: &Result<String, String>, f: fn(&str) -> Result<(), Failed>| {
         interface.clone().map(|i| Box::new(move || f(&i)) as Check)
     };
-    trials.push(("conformance_attached_over_vcan_fd", on(&fd, |i| {
-        conforms_on(&format!("socketcan:{i}"), "softdevice", "fc532x", &[])
-    })));
-    trials.push(("conformance_of_device_process_over_vcan", on(&fd, |i| {
-        conforms_on(&format!("socketcan:{i}"), &device_command(i, None), "fc532x", &[])
-    })));
+    trials.push((
+        "conformance_attached_over_vcan_fd",
+        on(&fd, |i| {
+            conforms_on(&format!("socketcan:{i}"), "softdevice", "fc532x", &[])
+        }),
+    ));
+    trials.push((
+        "conformance_of_device_process_over_vcan",
+        on(&fd, |i| {
+            conforms_on(
+                &format!("socketcan:{i}"),
+                &device_command(i, None),
+                "fc532x",
+                &[],
+            )
+        }),
+    ));
     trials.push(("fault_caught_over_vcan", on(&classic, fault_caught_over)));
     trials.push((
         "conformance_over_sja1000_controllers",
         controllers.clone().map(|(a, b)| {
             Box::new(move || {
-                conforms_on(&format!("socketcan:{a},{b}"), "softdevice", "fc510x", &["--scenario", "rx-"])?;
-                conforms_on(&format!("socketcan:{a},{b}"), &device_command(&a, None), "fc510x", &["--scenario", "tx-batches"])
+                // QEMU's SJA1000 garbles its receive FIFO after a remote frame with a length.
+                let flags = ["--no-remote-frames", "--scenario"];
+                conforms_on(
+                    &format!("socketcan:{a},{b}"),
+                    "softdevice",
+                    "fc510x",
+                    &[flags[0], flags[1], "rx-"],
+                )?;
+                conforms_on(
+                    &format!("socketcan:{a},{b}"),
+                    &device_command(&a, None),
+                    "fc510x",
+                    &[flags[0], flags[1], "tx-batches"],
+                )
             }) as Check
         }),
     ));
-    trials.push(("canopen_checks_over_vcan", on(&classic, canopen_checks_over)));
-    trials.push(("quick_start_through_every_profile_over_vcan", on(&classic, quick_start_over)));
+    trials.push((
+        "canopen_checks_over_vcan",
+        on(&classic, canopen_checks_over),
+    ));
+    trials.push((
+        "quick_start_through_every_profile_over_vcan",
+        on(&classic, quick_start_over),
+    ));
     trials.push((
         "python_canopen_over_vcan",
         classic.clone().and_then(|i| {
@@ -438,10 +524,13 @@ fn main() {
             Ok(Box::new(move || python_canopen_over(&i)) as Check)
         }),
     ));
-    trials.push(("interface_down_is_an_error", on(&classic, interface_down_is_an_error)));
     trials.push((
-        "no_acknowledge_is_an_error",
-        controllers.map(|(a, b)| Box::new(move || no_acknowledge_is_an_error(&a, &b)) as Check),
+        "interface_down_is_an_error",
+        on(&classic, interface_down_is_an_error),
+    ));
+    trials.push((
+        "send_buffer_full_is_an_error",
+        on(&classic, send_buffer_full_is_an_error),
     ));
     let trials = trials
         .into_iter()

@@ -468,16 +468,16 @@ pub fn quick_start(
             .ok_or_else(|| format!("no answer on 0x{:03X} (received {got:?})", id.raw()))
     };
     let mut guard = GuardChecker::default();
-    let mut guard_state = |exchange: &mut dyn FnMut(
-        Option<Frame>,
-        Option<CanId>,
-        u32,
-    )
-        -> Result<(Nanos, Vec<(Nanos, Frame)>), String>|
-     -> Result<NmtState, String> {
-        let (_, got) = exchange(Some(guarding::request(node)), Some(guard_id), 50)?;
-        guard.check(&answer_on(&got, guard_id)?)
-    };
+    let mut guard_state =
+        |exchange: &mut dyn FnMut(
+            Option<Frame>,
+            Option<CanId>,
+            u32,
+        ) -> Result<(Nanos, Vec<(Nanos, Frame)>), String>|
+         -> Result<NmtState, String> {
+            let (_, got) = exchange(Some(guarding::request(node)), Some(guard_id), 50)?;
+            guard.check(&answer_on(&got, guard_id)?)
+        };
     let mut record = |name, requirements, outcome| {
         results.push(CheckResult {
             name,
@@ -486,8 +486,12 @@ pub fn quick_start(
         })
     };
 
-    let started = exchange(Some(command_frame(NmtCommand::StartRemoteNode, None)), None, 3)
-        .and_then(|_| guard_state(&mut exchange));
+    let started = exchange(
+        Some(command_frame(NmtCommand::StartRemoteNode, None)),
+        None,
+        3,
+    )
+    .and_then(|_| guard_state(&mut exchange));
     record(
         "NMT start (0x000: 01 00), then guarding says operational",
         &["NMT-001", "NMT-003", "GRD-001", "GRD-003"][..],

@@ -586,7 +586,9 @@ impl Lockstep<'_> {
     }
 
     fn kernel(&mut self) -> &mut KernelBus {
-        self.kernel.as_mut().expect("only called on a SocketCAN bus")
+        self.kernel
+            .as_mut()
+            .expect("only called on a SocketCAN bus")
     }
 
     /// Runs the SocketCAN bus in real time up to scenario time `until`: writes
@@ -616,14 +618,11 @@ impl Lockstep<'_> {
                 self.now = self.now.max(until);
                 return Ok(());
             }
-            let wait = until
-                .saturating_sub(bus.now())
-                .clamp(50_000, 1_000_000);
+            let wait = until.saturating_sub(bus.now()).clamp(50_000, 1_000_000);
             let result = match &bus.side {
-                Side::Attached(iut) => KernelSocket::wait(
-                    &[iut, &bus.tester],
-                    std::time::Duration::from_nanos(wait),
-                ),
+                Side::Attached(iut) => {
+                    KernelSocket::wait(&[iut, &bus.tester], std::time::Duration::from_nanos(wait))
+                }
                 Side::Owned => {
                     KernelSocket::wait(&[&bus.tester], std::time::Duration::from_nanos(wait))
                 }
@@ -655,7 +654,9 @@ impl Lockstep<'_> {
                 Ok(()) => break,
                 Err(error) if error.raw_os_error() == Some(libc_enobufs()) => {
                     // The controller's queue is full: wait for it, within the timeout.
-                    let since = *bus.blocked_since.get_or_insert_with(std::time::Instant::now);
+                    let since = *bus
+                        .blocked_since
+                        .get_or_insert_with(std::time::Instant::now);
                     if since.elapsed() > bus.options.timeout {
                         let name = socket.interface.clone();
                         return Err(Outcome::Error(format!(
@@ -705,7 +706,8 @@ impl Lockstep<'_> {
                     });
                 }
                 Err(error) if error.raw_os_error() == Some(libc_enobufs()) => {
-                    bus.blocked_since.get_or_insert_with(std::time::Instant::now);
+                    bus.blocked_since
+                        .get_or_insert_with(std::time::Instant::now);
                     return Ok(()); // the queue drains; overdue() ends a stuck run
                 }
                 Err(error) => {
@@ -769,25 +771,31 @@ impl Lockstep<'_> {
             self.now = self.now.max(at);
             let bus = self.kernel();
             let mismatch = |bus: &KernelBus, expected: Option<&InFlight>, side: &str| {
-                Outcome::Error(format!(
-                    "the kernel delivered {frame} on {side}, but {}",
-                    expected.map_or("nothing was on its way".to_string(), |f| format!(
-                        "{} was on its way",
-                        f.frame
-                    ))
-                ) + &format!(
-                    " ({}{})",
-                    bus.options.spec.describe(),
-                    bus.last_error
-                        .as_ref()
-                        .map_or(String::new(), |e| format!("; {e}"))
-                ))
+                Outcome::Error(
+                    format!(
+                        "the kernel delivered {frame} on {side}, but {}",
+                        expected.map_or("nothing was on its way".to_string(), |f| format!(
+                            "{} was on its way",
+                            f.frame
+                        ))
+                    ) + &format!(
+                        " ({}{})",
+                        bus.options.spec.describe(),
+                        bus.last_error
+                            .as_ref()
+                            .map_or(String::new(), |e| format!("; {e}"))
+                    ),
+                )
             };
             match (owned, on_iut_socket, own) {
                 // Attached: the IUT's own frame is on the bus.
                 (false, true, true) => {
                     if bus.iut_in_flight.as_ref().map(|f| f.frame) != Some(frame) {
-                        return Err(mismatch(bus, bus.iut_in_flight.as_ref(), "the IUT's socket (echo)"));
+                        return Err(mismatch(
+                            bus,
+                            bus.iut_in_flight.as_ref(),
+                            "the IUT's socket (echo)",
+                        ));
                     }
                     bus.iut_in_flight = None;
                     self.complete(frame, true, at);
@@ -795,7 +803,11 @@ impl Lockstep<'_> {
                 // Attached: another node's frame reached the IUT.
                 (false, true, false) => {
                     if bus.tester_in_flight.front().map(|f| f.frame) != Some(frame) {
-                        return Err(mismatch(bus, bus.tester_in_flight.front(), "the IUT's socket"));
+                        return Err(mismatch(
+                            bus,
+                            bus.tester_in_flight.front(),
+                            "the IUT's socket",
+                        ));
                     }
                     bus.tester_in_flight.pop_front();
                     self.complete(frame, false, at);
@@ -810,7 +822,11 @@ impl Lockstep<'_> {
                 // Owned: the harness's own frame is on the bus; the IUT has it too.
                 (true, _, true) => {
                     if bus.tester_in_flight.front().map(|f| f.frame) != Some(frame) {
-                        return Err(mismatch(bus, bus.tester_in_flight.front(), "the tester's socket (echo)"));
+                        return Err(mismatch(
+                            bus,
+                            bus.tester_in_flight.front(),
+                            "the tester's socket (echo)",
+                        ));
                     }
                     bus.tester_in_flight.pop_front();
                     self.frames += 1;
@@ -1070,6 +1086,15 @@ pub fn run_scenario(
         }
         let t = if state.kernel.is_some() { state.now } else { t };
         state.cycle = k;
+        let mut step = step;
+        if let Some(kernel) = &scenario.kernel {
+            for message in &mut step.send {
+                message.frame = kernel.adapt(message.frame);
+            }
+            for (_, frame) in &mut step.bus {
+                *frame = kernel.adapt(*frame);
+            }
+        }
         for message in step.send {
             if plc.send(message).is_err() {
                 return run(

@@ -612,9 +612,11 @@ impl DeviceBus {
         let name = &self.socket.interface;
         while let Some(received) = self.socket.recv().map_err(|e| format!("{name}: {e}"))? {
             match received {
-                canif_kernel::Received::Frame { frame, at, own: false } => {
-                    iut.receive(&frame, at.saturating_sub(self.epoch))
-                }
+                canif_kernel::Received::Frame {
+                    frame,
+                    at,
+                    own: false,
+                } => iut.receive(&frame, at.saturating_sub(self.epoch)),
                 canif_kernel::Received::Frame { own: true, .. } => {
                     self.sending = None;
                     self.written = false;
@@ -630,7 +632,10 @@ impl DeviceBus {
                 (None, _) => match iut.poll_transmit(self.now()) {
                     None => return Ok(()),
                     Some(Err(invalid)) => {
-                        eprintln!("{name}: the device produced an invalid frame, not sent: {}", invalid.0);
+                        eprintln!(
+                            "{name}: the device produced an invalid frame, not sent: {}",
+                            invalid.0
+                        );
                         continue;
                     }
                     Some(Ok(frame)) => frame,

@@ -117,7 +117,10 @@ impl IutKind {
                 let mut iut =
                     ExecIut::spawn(command, std::time::Duration::from_millis(*timeout_ms))
                         .map_err(BuildError::Failed)?;
-                match iut.configure(caps, config, bus).map_err(BuildError::Failed)? {
+                match iut
+                    .configure(caps, config, bus)
+                    .map_err(BuildError::Failed)?
+                {
                     Ok(()) => Ok(Box::new(iut)),
                     Err(reason) => Err(BuildError::Refused(reason)),
                 }
@@ -144,7 +147,10 @@ impl IutKind {
                             Some(ExecIut::spawn(&command, timeout).map_err(BuildError::Failed)?);
                     }
                     let iut = process.as_mut().expect("just started");
-                    match iut.configure(caps, config, None).map_err(BuildError::Failed)? {
+                    match iut
+                        .configure(caps, config, None)
+                        .map_err(BuildError::Failed)?
+                    {
                         Ok(()) => Ok(()),
                         Err(reason) => Err(BuildError::Refused(reason)),
                     }

@@ -83,7 +83,10 @@ impl BusSpec {
         if self.iut == self.tester {
             format!("socketcan:{}", self.iut)
         } else {
-            format!("socketcan:{} (IUT) and {} (other nodes)", self.iut, self.tester)
+            format!(
+                "socketcan:{} (IUT) and {} (other nodes)",
+                self.iut, self.tester
+            )
         }
     }
 }
@@ -99,7 +102,11 @@ pub enum Received {
         own: bool,
     },
     /// The driver reported a bus problem (an error frame, CAN_ERR_FLAG).
-    Error { class: u32, data: [u8; 8], at: Nanos },
+    Error {
+        class: u32,
+        data: [u8; 8],
+        at: Nanos,
+    },
 }
 
 /// One CAN_RAW socket bound to an interface, non-blocking, with CAN FD frames
@@ -320,9 +327,8 @@ fn to_raw(frame: &Frame) -> (RawFrame, usize) {
             (raw, CAN_MTU)
         }
         FrameKind::Fd { brs, esi } => {
-            raw.flags = CANFD_FDF
-                | if brs { CANFD_BRS } else { 0 }
-                | if esi { CANFD_ESI } else { 0 };
+            raw.flags =
+                CANFD_FDF | if brs { CANFD_BRS } else { 0 } | if esi { CANFD_ESI } else { 0 };
             (raw, CANFD_MTU)
         }
     }
@@ -403,7 +409,8 @@ mod tests {
 /// `variable` (the kernel lane sets them), or why the test cannot run here:
 /// the kernel's errno when it has no CAN, or the missing interface.
 pub fn test_interface(variable: &str, default: &str) -> Result<String, String> {
-    probe().map_err(|e| format!("{e}; scripts/kernel-can-lane runs this under a kernel with CAN"))?;
+    probe()
+        .map_err(|e| format!("{e}; scripts/kernel-can-lane runs this under a kernel with CAN"))?;
     let name = std::env::var(variable).unwrap_or_else(|_| default.to_string());
     if std::path::Path::new(&format!("/sys/class/net/{name}")).exists() {
         Ok(name)
@@ -417,6 +424,10 @@ pub fn test_interface(variable: &str, default: &str) -> Result<String, String> {
 /// `ip link set INTERFACE up|down`, over netlink (needs CAP_NET_ADMIN).
 pub fn set_link(interface: &str, up: bool) -> Result<(), String> {
     let link = socketcan::CanInterface::open(interface).map_err(|e| format!("{interface}: {e}"))?;
-    if up { link.bring_up() } else { link.bring_down() }
-        .map_err(|e| format!("{interface}: set {}: {e}", if up { "up" } else { "down" }))
+    if up {
+        link.bring_up()
+    } else {
+        link.bring_down()
+    }
+    .map_err(|e| format!("{interface}: set {}: {e}", if up { "up" } else { "down" }))
 }
