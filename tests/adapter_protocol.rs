@@ -287,3 +287,46 @@ fn real_traffic_and_the_documented_session_fit_the_schema() {
         .is_valid(&serde_json::json!({"type": "configured", "protocol": 2, "accepted": true})));
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// On a SocketCAN bus `configure` names the interface and the epoch: the
+/// message the harness really sends fits the schema.
+#[test]
+fn the_configure_of_a_socketcan_bus_fits_the_schema() {
+    let dir = std::env::temp_dir().join(format!("canif-bus-configure-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let requests = dir.join("requests.log");
+    let command = format!(
+        "tee {} | {} device --stdio",
+        requests.display(),
+        env!("CARGO_BIN_EXE_canif")
+    );
+    let mut iut = canif_harness::exec::ExecIut::spawn(&command, Duration::from_secs(5)).unwrap();
+    let bus = canif_harness::iut::OwnedBus {
+        interface: "vcan0".into(),
+        epoch_ns: 1_700_000_000_000_000_000,
+    };
+    let answer = iut
+        .configure(
+            &Capabilities::everything(),
+            &InterfaceConfig::new(FrameFormat::Base11, 4),
+            Some(&bus),
+        )
+        .unwrap();
+    assert_eq!(answer, Ok(()));
+    drop(iut);
+    std::thread::sleep(Duration::from_millis(100));
+    let requests = std::fs::read_to_string(&requests).unwrap();
+    let line = requests.lines().next().expect("one configure");
+    assert!(
+        line.contains(r#""bus":{"epoch_ns":1700000000000000000,"socketcan":"vcan0"}"#),
+        "{line}"
+    );
+    check_lines(&schema(), "configure on a SocketCAN bus", &[line]);
+    let broken = line.replace(r#""socketcan":"vcan0""#, r#""socketcan":"""#);
+    let value: serde_json::Value = serde_json::from_str(&broken).unwrap();
+    assert!(
+        !schema().is_valid(&value),
+        "an empty interface name must not fit"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}

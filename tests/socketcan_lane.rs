@@ -535,7 +535,7 @@ fn main() {
     let trials = trials
         .into_iter()
         .map(|(name, check)| match check {
-            Ok(check) => Trial::test(name, move || check()),
+            Ok(check) => Trial::test(name, check),
             Err(why) => Trial::test(name, || Ok(()))
                 .with_kind(format!("skipped: {why}"))
                 .with_ignored_flag(true),

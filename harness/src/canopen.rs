@@ -416,6 +416,11 @@ pub fn check_node(target: &mut dyn CanNode, node: NodeId, tolerance: Nanos) -> V
     results
 }
 
+/// Sends a request (if any) and runs cycles until an answer on the given
+/// identifier arrives or the cycles are over: the last cycle's time and what came.
+type Exchange<'a> = dyn FnMut(Option<Frame>, Option<CanId>, u32) -> Result<(Nanos, Vec<(Nanos, Frame)>), String>
+    + 'a;
+
 /// The quick start (002) from start to stop, driven by a PLC that has only
 /// the CAN interface's process image: every telegram goes out as a Tx message
 /// and every answer comes back as an Rx message of `iut`. `cycle` runs one
@@ -468,16 +473,10 @@ pub fn quick_start(
             .ok_or_else(|| format!("no answer on 0x{:03X} (received {got:?})", id.raw()))
     };
     let mut guard = GuardChecker::default();
-    let mut guard_state =
-        |exchange: &mut dyn FnMut(
-            Option<Frame>,
-            Option<CanId>,
-            u32,
-        ) -> Result<(Nanos, Vec<(Nanos, Frame)>), String>|
-         -> Result<NmtState, String> {
-            let (_, got) = exchange(Some(guarding::request(node)), Some(guard_id), 50)?;
-            guard.check(&answer_on(&got, guard_id)?)
-        };
+    let mut guard_state = |exchange: &mut Exchange<'_>| -> Result<NmtState, String> {
+        let (_, got) = exchange(Some(guarding::request(node)), Some(guard_id), 50)?;
+        guard.check(&answer_on(&got, guard_id)?)
+    };
     let mut record = |name, requirements, outcome| {
         results.push(CheckResult {
             name,

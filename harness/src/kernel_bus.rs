@@ -184,3 +184,23 @@ impl KernelBus {
         None
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use canif_model::frame::CanId;
+
+    #[test]
+    fn without_remote_frames_a_remote_frame_goes_as_data_of_its_length() {
+        let mut options = KernelBusOptions::new(BusSpec::parse("socketcan:can0,can1").unwrap());
+        let remote = Frame::remote(CanId::Standard(0x285), 8).unwrap();
+        let data = Frame::classic(CanId::Standard(0x185), &[1, 2]).unwrap();
+        assert_eq!(options.adapt(remote), remote);
+        options.remote_frames = false;
+        assert_eq!(
+            options.adapt(remote),
+            Frame::classic(CanId::Standard(0x285), &[0; 8]).unwrap()
+        );
+        assert_eq!(options.adapt(data), data);
+    }
+}

@@ -74,7 +74,7 @@ impl BusSpec {
                 tester: tester.to_string(),
             }),
             _ => Err(format!(
-                "`{text}`: interface names are 1..15 characters, at most two, comma-separated"
+                "`{text}`: a bus is `socketcan:IFACE` or `socketcan:IFACE,IFACE` (names of 1..15 characters)"
             )),
         }
     }
@@ -365,6 +365,33 @@ pub fn mtu(interface: &str) -> Result<usize, String> {
         .map_err(|e| format!("{interface}: mtu: {e}"))
 }
 
+/// The interface a SocketCAN test uses, named by environment variable
+/// `variable` (the kernel lane sets them), or why the test cannot run here:
+/// the kernel's errno when it has no CAN, or the missing interface.
+pub fn test_interface(variable: &str, default: &str) -> Result<String, String> {
+    probe()
+        .map_err(|e| format!("{e}; scripts/kernel-can-lane runs this under a kernel with CAN"))?;
+    let name = std::env::var(variable).unwrap_or_else(|_| default.to_string());
+    if std::path::Path::new(&format!("/sys/class/net/{name}")).exists() {
+        Ok(name)
+    } else {
+        Err(format!(
+            "no interface {name} (set {variable}, or run scripts/kernel-can-lane, which creates it)"
+        ))
+    }
+}
+
+/// `ip link set INTERFACE up|down`, over netlink (needs CAP_NET_ADMIN).
+pub fn set_link(interface: &str, up: bool) -> Result<(), String> {
+    let link = socketcan::CanInterface::open(interface).map_err(|e| format!("{interface}: {e}"))?;
+    if up {
+        link.bring_up()
+    } else {
+        link.bring_down()
+    }
+    .map_err(|e| format!("{interface}: set {}: {e}", if up { "up" } else { "down" }))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -403,31 +430,4 @@ mod tests {
             (0x700 | CAN_RTR_FLAG, 1, CAN_MTU)
         );
     }
-}
-
-/// The interface a SocketCAN test uses, named by environment variable
-/// `variable` (the kernel lane sets them), or why the test cannot run here:
-/// the kernel's errno when it has no CAN, or the missing interface.
-pub fn test_interface(variable: &str, default: &str) -> Result<String, String> {
-    probe()
-        .map_err(|e| format!("{e}; scripts/kernel-can-lane runs this under a kernel with CAN"))?;
-    let name = std::env::var(variable).unwrap_or_else(|_| default.to_string());
-    if std::path::Path::new(&format!("/sys/class/net/{name}")).exists() {
-        Ok(name)
-    } else {
-        Err(format!(
-            "no interface {name} (set {variable}, or run scripts/kernel-can-lane, which creates it)"
-        ))
-    }
-}
-
-/// `ip link set INTERFACE up|down`, over netlink (needs CAP_NET_ADMIN).
-pub fn set_link(interface: &str, up: bool) -> Result<(), String> {
-    let link = socketcan::CanInterface::open(interface).map_err(|e| format!("{interface}: {e}"))?;
-    if up {
-        link.bring_up()
-    } else {
-        link.bring_down()
-    }
-    .map_err(|e| format!("{interface}: set {}: {e}", if up { "up" } else { "down" }))
 }
