@@ -509,6 +509,38 @@ fn main() {
             }) as Check
         }),
     ));
+    let vxcan = std::env::var("CANIF_LANE_VXCAN")
+        .map_err(|_| {
+            "no vxcan pair (CANIF_LANE_VXCAN=vxcan0,vxcan1; scripts/kernel-can-lane sets it)"
+                .to_string()
+        })
+        .and_then(|pair| {
+            let (a, b) = pair
+                .split_once(',')
+                .ok_or("CANIF_LANE_VXCAN is IFACE,IFACE")?;
+            canif_kernel::test_interface("CANIF_LANE_VXCAN_A", a)?;
+            canif_kernel::test_interface("CANIF_LANE_VXCAN_B", b)?;
+            Ok((a.to_string(), b.to_string()))
+        });
+    trials.push((
+        "conformance_over_a_vxcan_pair",
+        vxcan.map(|(a, b)| {
+            Box::new(move || {
+                conforms_on(
+                    &format!("socketcan:{a},{b}"),
+                    "softdevice",
+                    "fc510x",
+                    &["--scenario", "rx-handshake"],
+                )?;
+                conforms_on(
+                    &format!("socketcan:{a},{b}"),
+                    &device_command(&a, None),
+                    "fc510x",
+                    &["--scenario", "tx-batches"],
+                )
+            }) as Check
+        }),
+    ));
     trials.push((
         "canopen_checks_over_vcan",
         on(&classic, canopen_checks_over),
