@@ -83,6 +83,10 @@ enum Command {
         /// (for controllers that cannot carry them, such as QEMU's SJA1000).
         #[arg(long)]
         no_remote_frames: bool,
+        /// On a SocketCAN bus: the controllers send ESI from their own error
+        /// state (real CAN FD controllers), so the scenarios' ESI bits are left out.
+        #[arg(long)]
+        esi_from_controller: bool,
         /// Only scenarios whose name contains this text.
         #[arg(long, value_name = "TEXT")]
         scenario: Option<String>,
@@ -255,6 +259,7 @@ fn main() -> ExitCode {
             time_stamp_tolerance_us,
             frame_timeout_ms,
             no_remote_frames,
+            esi_from_controller,
             scenario,
             node,
             coupler_fault,
@@ -268,6 +273,7 @@ fn main() -> ExitCode {
                         time_stamp_tolerance: time_stamp_tolerance_us * 1_000,
                         timeout: std::time::Duration::from_millis(frame_timeout_ms),
                         remote_frames: !no_remote_frames,
+                        esi_settable: !esi_from_controller,
                     }),
                     Err(error) => {
                         eprintln!("--bus {error}");
@@ -791,10 +797,12 @@ fn run(
                 canif_kernel::kernel_release(),
                 k.cycle_time / 1_000,
                 k.time_stamp_tolerance / 1_000,
-                if k.remote_frames {
-                    ""
-                } else {
-                    ", remote frames sent as data frames"
+                match (k.remote_frames, k.esi_settable) {
+                    (true, true) => "",
+                    (false, true) => ", remote frames sent as data frames",
+                    (true, false) => ", ESI left to the controllers",
+                    (false, false) =>
+                        ", remote frames sent as data frames, ESI left to the controllers",
                 }
             ),
         },

@@ -452,20 +452,24 @@ fn python_canopen_available() -> Result<(), String> {
     }
 }
 
+/// A trial that cannot run here: skipped with the reason, or failed inside the
+/// kernel lane, which promised what it needs.
+fn unavailable(name: &str, why: String) -> Trial {
+    match canif_kernel::skip_is_failure(&why) {
+        Some(failure) => Trial::test(name, move || Err(failure.into())),
+        None => Trial::test(name, || Ok(()))
+            .with_kind(format!("skipped: {why}"))
+            .with_ignored_flag(true),
+    }
+}
+
 type Check = Box<dyn Fn() -> Result<(), Failed> + Send + Sync>;
 
 fn main() {
     let args = Arguments::from_args();
     let fd = canif_kernel::test_interface("CANIF_LANE_FD", "vcan0");
     let classic = canif_kernel::test_interface("CANIF_LANE_CLASSIC", "vcan1");
-    let controllers = std::env::var("CANIF_LANE_CONTROLLERS")
-        .map_err(|_| "no emulated controllers (CANIF_LANE_CONTROLLERS=can0,can1; scripts/kernel-can-lane sets it)".to_string())
-        .and_then(|pair| {
-            let (a, b) = pair.split_once(',').ok_or("CANIF_LANE_CONTROLLERS is IFACE,IFACE")?;
-            canif_kernel::test_interface("CANIF_LANE_CONTROLLER_A", a)?;
-            canif_kernel::test_interface("CANIF_LANE_CONTROLLER_B", b)?;
-            Ok((a.to_string(), b.to_string()))
-        });
+    let controllers = canif_kernel::test_interface_pair("CANIF_LANE_CONTROLLERS");
     let mut trials: Vec<(&str, Result<Check, String>)> = Vec::new();
     let on = |interface: &Result<String, String>, f: fn(&str) -> Result<(), Failed>| {
         interface.clone().map(|i| Box::new(move || f(&i)) as Check)
@@ -509,19 +513,7 @@ fn main() {
             }) as Check
         }),
     ));
-    let vxcan = std::env::var("CANIF_LANE_VXCAN")
-        .map_err(|_| {
-            "no vxcan pair (CANIF_LANE_VXCAN=vxcan0,vxcan1; scripts/kernel-can-lane sets it)"
-                .to_string()
-        })
-        .and_then(|pair| {
-            let (a, b) = pair
-                .split_once(',')
-                .ok_or("CANIF_LANE_VXCAN is IFACE,IFACE")?;
-            canif_kernel::test_interface("CANIF_LANE_VXCAN_A", a)?;
-            canif_kernel::test_interface("CANIF_LANE_VXCAN_B", b)?;
-            Ok((a.to_string(), b.to_string()))
-        });
+    let vxcan = canif_kernel::test_interface_pair("CANIF_LANE_VXCAN");
     trials.push((
         "conformance_over_a_vxcan_pair",
         vxcan.map(|(a, b)| {
@@ -537,6 +529,27 @@ fn main() {
                     &device_command(&a, None),
                     "fc510x",
                     &["--scenario", "tx-batches"],
+                )
+            }) as Check
+        }),
+    ));
+    let fd_controllers = canif_kernel::test_interface_pair("CANIF_LANE_FD_CONTROLLERS");
+    trials.push((
+        "conformance_over_ctu_can_fd_controllers",
+        fd_controllers.map(|(a, b)| {
+            Box::new(move || {
+                conforms_on(
+                    &format!("socketcan:{a},{b}"),
+                    "softdevice",
+                    "fc532x",
+                    // ESI on the wire is the sending controller's error state.
+                    &["--esi-from-controller", "--scenario", "[FD"],
+                )?;
+                conforms_on(
+                    &format!("socketcan:{a},{b}"),
+                    &device_command(&a, None),
+                    "fc532x",
+                    &["--esi-from-controller", "--scenario", "tx-batches [FD"],
                 )
             }) as Check
         }),
@@ -568,9 +581,7 @@ fn main() {
         .into_iter()
         .map(|(name, check)| match check {
             Ok(check) => Trial::test(name, check),
-            Err(why) => Trial::test(name, || Ok(()))
-                .with_kind(format!("skipped: {why}"))
-                .with_ignored_flag(true),
+            Err(why) => unavailable(name, why),
         })
         .collect();
     libtest_mimic::run(&args, trials).exit();

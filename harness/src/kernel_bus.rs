@@ -15,7 +15,7 @@ use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use canif_kernel::{BusSpec, KernelSocket};
-use canif_model::frame::Frame;
+use canif_model::frame::{Frame, FrameKind};
 use canif_model::Nanos;
 
 /// How scenarios run on a SocketCAN bus.
@@ -32,16 +32,26 @@ pub struct KernelBusOptions {
     /// every frame after a remote frame with a length, so the kernel lane runs
     /// the controller pair with the scenarios' remote frames sent as data frames.
     pub remote_frames: bool,
+    /// Whether a sender sets the ESI bit of an FD frame. A real CAN FD
+    /// controller sends its own error state there (the CTU CAN FD driver
+    /// ignores CANFD_ESI on transmit), so on one the scenarios' ESI is left out.
+    pub esi_settable: bool,
 }
 
 impl KernelBusOptions {
     /// `frame` as this bus can carry it: a remote frame becomes a data frame
-    /// of its length (zeros) where remote frames are off.
+    /// of its length (zeros) where remote frames are off; an FD frame loses its
+    /// ESI where the controller sets it.
     pub fn adapt(&self, frame: Frame) -> Frame {
-        if self.remote_frames || !frame.is_remote() {
-            return frame;
+        match frame.kind {
+            FrameKind::Classic { rtr: true } if !self.remote_frames => {
+                Frame::classic(frame.id, &vec![0; usize::from(frame.len().min(8))]).unwrap_or(frame)
+            }
+            FrameKind::Fd { brs, esi: true } if !self.esi_settable => {
+                Frame::fd(frame.id, brs, false, frame.data()).unwrap_or(frame)
+            }
+            _ => frame,
         }
-        Frame::classic(frame.id, &vec![0; usize::from(frame.len().min(8))]).unwrap_or(frame)
     }
 
     pub fn new(spec: BusSpec) -> Self {
@@ -51,6 +61,7 @@ impl KernelBusOptions {
             time_stamp_tolerance: 1_000_000,
             timeout: Duration::from_secs(2),
             remote_frames: true,
+            esi_settable: true,
         }
     }
 }
@@ -202,5 +213,12 @@ mod tests {
             Frame::classic(CanId::Standard(0x285), &[0; 8]).unwrap()
         );
         assert_eq!(options.adapt(data), data);
+        let esi = Frame::fd(CanId::Extended(0x1234), true, true, &[7; 12]).unwrap();
+        assert_eq!(options.adapt(esi), esi);
+        options.esi_settable = false;
+        assert_eq!(
+            options.adapt(esi),
+            Frame::fd(CanId::Extended(0x1234), true, false, &[7; 12]).unwrap()
+        );
     }
 }

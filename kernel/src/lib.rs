@@ -369,16 +369,47 @@ pub fn mtu(interface: &str) -> Result<usize, String> {
 /// `variable` (the kernel lane sets them), or why the test cannot run here:
 /// the kernel's errno when it has no CAN, or the missing interface.
 pub fn test_interface(variable: &str, default: &str) -> Result<String, String> {
+    let name = std::env::var(variable).unwrap_or_else(|_| default.to_string());
+    interface_available(&name).map(|()| name)
+}
+
+/// A pair of interfaces named `A,B` by environment variable `variable`.
+pub fn test_interface_pair(variable: &str) -> Result<(String, String), String> {
+    let pair = std::env::var(variable).map_err(|_| {
+        format!("no interface pair ({variable}=IFACE,IFACE; scripts/kernel-can-lane sets it)")
+    })?;
+    let (a, b) = pair
+        .split_once(',')
+        .ok_or_else(|| format!("{variable}={pair:?} is not IFACE,IFACE"))?;
+    interface_available(a)?;
+    interface_available(b)?;
+    Ok((a.to_string(), b.to_string()))
+}
+
+/// Whether a SocketCAN test can use interface `name` here, or why not.
+pub fn interface_available(name: &str) -> Result<(), String> {
     probe()
         .map_err(|e| format!("{e}; scripts/kernel-can-lane runs this under a kernel with CAN"))?;
-    let name = std::env::var(variable).unwrap_or_else(|_| default.to_string());
     if std::path::Path::new(&format!("/sys/class/net/{name}")).exists() {
-        Ok(name)
+        Ok(())
     } else {
         Err(format!(
-            "no interface {name} (set {variable}, or run scripts/kernel-can-lane, which creates it)"
+            "no interface {name} (scripts/kernel-can-lane creates it)"
         ))
     }
+}
+
+/// Inside the kernel lane (CANIF_LANE set) a test that cannot run is a
+/// failure — the lane promised its interfaces — unless the lane said why it
+/// could not provide them (`CANIF_LANE_MISSING`, e.g. a driver that did not build).
+/// Outside the lane it is a skip with `why`.
+pub fn skip_is_failure(why: &str) -> Option<String> {
+    std::env::var("CANIF_LANE").ok()?;
+    let excused = std::env::var("CANIF_LANE_MISSING").unwrap_or_default();
+    if !excused.is_empty() && why.contains(excused.split(':').next().unwrap_or("-")) {
+        return None;
+    }
+    Some(format!("the kernel lane should provide this but: {why}"))
 }
 
 /// `ip link set INTERFACE up|down`, over netlink (needs CAP_NET_ADMIN).
