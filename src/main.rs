@@ -30,7 +30,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Certify an implementation on the simulated bus against the model, per profile.
+    /// Certify an implementation against the model, per profile, on the
+    /// simulated bus or a SocketCAN interface.
     Run {
         /// softdevice (the built-in soft EL6751), model (the reference itself), or
         /// exec:'COMMAND' (a process speaking the adapter protocol).

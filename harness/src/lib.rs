@@ -3,7 +3,8 @@
 //! The harness owns the PLC side (the reference client of 001 §6 writes the
 //! output image and reads the input image, once per task cycle, with the LRW or
 //! separate-input-update timing) and the bus side (a simulated CAN bus in
-//! virtual time plays the other nodes). It runs the reference model beside the
+//! virtual time, or a Linux SocketCAN interface in real time, plays the other
+//! nodes). It runs the reference model beside the
 //! implementation under test on the same stimulus and reports the first
 //! difference of each scenario against the requirement ids it breaks.
 
