@@ -88,9 +88,9 @@ enum Command {
         /// state (real CAN FD controllers), so the scenarios' ESI bits are left out.
         #[arg(long)]
         esi_from_controller: bool,
-        /// Only scenarios whose name contains this text.
+        /// Only scenarios whose name contains this text (repeatable: any of them).
         #[arg(long, value_name = "TEXT")]
-        scenario: Option<String>,
+        scenario: Vec<String>,
         /// With --suite canopen: the node id to check.
         #[arg(long, default_value_t = 5)]
         node: u8,
@@ -759,7 +759,7 @@ fn run(
         );
         results.push(result);
     }
-    let scenarios = if options.kernel.is_some() || options.only.is_some() {
+    let scenarios = if options.kernel.is_some() || !options.only.is_empty() {
         // The Gherkin scenarios run on the simulated bus; a SocketCAN or filtered run leaves them out.
         eprintln!(
             "Gherkin scenarios: not run (they use the simulated bus; run without --bus/--scenario)"
@@ -840,7 +840,7 @@ fn self_check(catalogue: &Catalogue, seed: u64) -> ExitCode {
         counter_wrap: false,
         trace_dir: None,
         kernel: None,
-        only: None,
+        only: Vec::new(),
     };
     let rows = canif_harness::suite::kill_matrix(catalogue, &options, |fault| {
         eprintln!("running {fault} on every profile")

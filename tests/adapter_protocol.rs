@@ -21,7 +21,7 @@ fn quick() -> Options {
         counter_wrap: false,
         trace_dir: None,
         kernel: None,
-        only: None,
+        only: Vec::new(),
     }
 }
 

@@ -768,6 +768,9 @@ impl Lockstep<'_> {
                     continue; // other error frames: the driver's retries go on
                 }
             };
+            if frame == crate::kernel_bus::marker() && !own {
+                continue; // a synchronization marker a driver delivered late
+            }
             self.now = self.now.max(at);
             let bus = self.kernel();
             let mismatch = |bus: &KernelBus, expected: Option<&InFlight>, side: &str| {

@@ -66,6 +66,56 @@ impl KernelBusOptions {
     }
 }
 
+/// Before a scenario on an attached bus: the other nodes send a marker frame
+/// until the IUT's socket has it, and everything before it is dropped. What a
+/// previous scenario left on the bus (or a frame a driver held back) must not
+/// reach this one's IUT. The IUT never sees the markers.
+fn synchronize(iut: &KernelSocket, tester: &KernelSocket, timeout: Duration) -> Result<(), String> {
+    let marker =
+        Frame::classic(canif_model::frame::CanId::Standard(0x7FF), b"canif-sy").expect("8 bytes");
+    let started = Instant::now();
+    let drain = |socket: &KernelSocket| -> Result<Vec<Frame>, String> {
+        let mut frames = Vec::new();
+        while let Some(received) = socket
+            .recv()
+            .map_err(|e| format!("{}: {e}", socket.interface))?
+        {
+            if let canif_kernel::Received::Frame { frame, .. } = received {
+                frames.push(frame);
+            }
+        }
+        Ok(frames)
+    };
+    while started.elapsed() < timeout {
+        match tester.send(&marker) {
+            Ok(()) => {}
+            Err(e) if e.raw_os_error() == Some(canif_kernel::ENOBUFS) => {}
+            Err(e) => return Err(format!("{}: {e}", tester.interface)),
+        }
+        let sent = Instant::now();
+        while sent.elapsed() < Duration::from_millis(50) {
+            let _ = KernelSocket::wait(&[iut], Duration::from_millis(5));
+            if drain(iut)?.contains(&marker) {
+                // Markers still on their way arrive within a moment; drop them too.
+                std::thread::sleep(Duration::from_millis(20));
+                drain(iut)?;
+                drain(tester)?;
+                return Ok(());
+            }
+        }
+    }
+    Err(format!(
+        "no frame from {} reached {} within {timeout:?} (bus down, or nothing acknowledges)",
+        tester.interface, iut.interface
+    ))
+}
+
+/// The frame [`synchronize`] sends; one that a driver held back and delivers
+/// late is dropped by the harness too.
+pub fn marker() -> Frame {
+    Frame::classic(canif_model::frame::CanId::Standard(0x7FF), b"canif-sy").expect("8 bytes")
+}
+
 /// Where the IUT sits on the kernel bus.
 pub(crate) enum Side {
     Attached(KernelSocket),
@@ -111,6 +161,15 @@ impl KernelBus {
             Side::Attached(KernelSocket::open(&options.spec.iut, true)?)
         };
         let tester = KernelSocket::open(&options.spec.tester, owned)?;
+        match &side {
+            Side::Attached(iut) => synchronize(iut, &tester, options.timeout)?,
+            // Before the IUT opens its socket: a socket of the harness's own stands in.
+            Side::Owned => synchronize(
+                &KernelSocket::open(&options.spec.iut, false)?,
+                &tester,
+                options.timeout,
+            )?,
+        }
         Ok(KernelBus {
             options: options.clone(),
             side,

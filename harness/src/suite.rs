@@ -27,8 +27,8 @@ pub struct Options {
     pub trace_dir: Option<std::path::PathBuf>,
     /// Run on a SocketCAN interface in real time instead of the simulated bus.
     pub kernel: Option<crate::kernel_bus::KernelBusOptions>,
-    /// Only scenarios whose name contains this.
-    pub only: Option<String>,
+    /// Only scenarios whose name contains one of these (all when empty).
+    pub only: Vec<String>,
 }
 
 impl Options {
@@ -41,7 +41,7 @@ impl Options {
             counter_wrap: false,
             trace_dir: None,
             kernel: None,
-            only: None,
+            only: Vec::new(),
         }
     }
 }
@@ -55,7 +55,7 @@ impl Default for Options {
             counter_wrap: true,
             trace_dir: None,
             kernel: None,
-            only: None,
+            only: Vec::new(),
         }
     }
 }
@@ -417,8 +417,9 @@ pub fn run_profile(
     for mut scenario in scenarios(&caps, options) {
         if options
             .only
-            .as_ref()
-            .is_some_and(|only| !scenario.name.contains(only.as_str()))
+            .iter()
+            .all(|only| !scenario.name.contains(only.as_str()))
+            && !options.only.is_empty()
         {
             continue;
         }

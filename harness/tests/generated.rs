@@ -147,7 +147,7 @@ fn report(seed: u64) -> serde_json::Value {
         counter_wrap: false,
         trace_dir: None,
         kernel: None,
-        only: None,
+        only: Vec::new(),
     };
     let run = run_profile(
         &catalogue,

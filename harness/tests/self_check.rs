@@ -15,7 +15,7 @@ fn quick() -> Options {
         counter_wrap: false,
         trace_dir: None,
         kernel: None,
-        only: None,
+        only: Vec::new(),
     }
 }
 
