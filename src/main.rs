@@ -1170,9 +1170,9 @@ fn serve_coupler(
     use canif_model::canopen::coupler::Coupler;
     use canif_model::frame::{CanId, Frame};
     use std::io::{BufRead, BufReader, Write};
-    let Some(node) = canif_model::canopen::NodeId::new(node) else {
-        eprintln!("node ids are 1..63");
-        return ExitCode::from(2);
+    let node = match node_id(node) {
+        Ok(node) => node,
+        Err(code) => return code,
     };
     let listener = match std::net::TcpListener::bind(("127.0.0.1", port)) {
         Ok(listener) => listener,
@@ -1281,9 +1281,9 @@ fn coupler_on_bus(
     fault: Option<canif_model::canopen::coupler::CouplerFault>,
 ) -> ExitCode {
     use canif_model::canopen::coupler::Coupler;
-    let Some(node) = canif_model::canopen::NodeId::new(node) else {
-        eprintln!("node ids are 1..63");
-        return ExitCode::from(2);
+    let node = match node_id(node) {
+        Ok(node) => node,
+        Err(code) => return code,
     };
     let opened = canif_kernel::BusSpec::parse(bus)
         .and_then(|spec| canif_kernel::probe().map(|()| spec))
@@ -1335,9 +1335,9 @@ fn canopen_suite(
     fault: Option<&str>,
 ) -> ExitCode {
     use canif_model::canopen::coupler::Coupler;
-    let Some(node) = canif_model::canopen::NodeId::new(node) else {
-        eprintln!("node ids are 1..63");
-        return ExitCode::from(2);
+    let node = match node_id(node) {
+        Ok(node) => node,
+        Err(code) => return code,
     };
     let (results, target) = match kernel {
         None => {
@@ -1396,6 +1396,14 @@ fn canopen_suite(
     }
     println!("{target}: {} checks, {failed} failed", results.len());
     ExitCode::from(u8::from(failed > 0))
+}
+
+/// A CANopen node id from the command line, or the exit code of a usage error.
+fn node_id(node: u8) -> Result<canif_model::canopen::NodeId, ExitCode> {
+    canif_model::canopen::NodeId::new(node).ok_or_else(|| {
+        eprintln!("node ids are 1..63, not {node}");
+        ExitCode::from(2)
+    })
 }
 
 /// The soft-device faults named on the command line, or the exit code of a usage error.

@@ -19,7 +19,7 @@ use canif_harness::canopen::quick_start;
 use canif_harness::exec::ExecIut;
 use canif_harness::iut::OwnedBus;
 use canif_model::canopen::NodeId;
-use canif_model::config::{FrameFormat, InterfaceConfig};
+use canif_model::config::InterfaceConfig;
 use canif_model::image::ImageLayout;
 use libtest_mimic::{Arguments, Failed, Trial};
 
@@ -361,14 +361,7 @@ fn quick_start_over(interface: &str) -> Result<(), Failed> {
     let mut failures = Vec::new();
     for profile in &catalogue.profiles {
         let caps = profile.model_capabilities();
-        let format = if caps.base11 {
-            FrameFormat::Base11
-        } else if caps.ext29 {
-            FrameFormat::Extended29
-        } else {
-            FrameFormat::Fd
-        };
-        let config = InterfaceConfig::new(format, 8);
+        let config = InterfaceConfig::new(caps.first_format(), 8);
         // A coupler from boot for each profile (its guarding toggle starts at 0).
         let _coupler = CouplerProcess::start(interface, None)?;
         let layout = ImageLayout::new(&config, caps.info_data);

@@ -1073,14 +1073,7 @@ fn sdo_upload_request(
 #[given(regex = r"^the profile's CAN interface with (\d+) slots$")]
 fn profile_interface(world: &mut CanWorld, slots: u8) {
     let caps = &world.target.caps;
-    let format = if caps.base11 {
-        FrameFormat::Base11
-    } else if caps.ext29 {
-        FrameFormat::Extended29
-    } else {
-        FrameFormat::Fd
-    };
-    world.config = canif_model::config::InterfaceConfig::new(format, slots);
+    world.config = canif_model::config::InterfaceConfig::new(caps.first_format(), slots);
 }
 
 #[given(regex = r"^a Beckhoff bus coupler with node id (\d+) on the bus$")]

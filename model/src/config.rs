@@ -116,6 +116,18 @@ pub struct Capabilities {
 }
 
 impl Capabilities {
+    /// The frame format of the profile's first interface: 11-bit where it has
+    /// it, else 29-bit, else CAN FD.
+    pub fn first_format(&self) -> FrameFormat {
+        if self.base11 {
+            FrameFormat::Base11
+        } else if self.ext29 {
+            FrameFormat::Extended29
+        } else {
+            FrameFormat::Fd
+        }
+    }
+
     /// Everything on, 32 slots, EL6751 queue depths: for tests of single features.
     pub fn everything() -> Self {
         Capabilities {
