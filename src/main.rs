@@ -834,13 +834,9 @@ fn run(
 
 fn self_check(catalogue: &Catalogue, seed: u64) -> ExitCode {
     let options = Options {
-        seed,
         cases: 2,
         generated_cycles: 150,
-        counter_wrap: false,
-        trace_dir: None,
-        kernel: None,
-        only: Vec::new(),
+        ..Options::quick(seed)
     };
     let rows = canif_harness::suite::kill_matrix(catalogue, &options, |fault| {
         eprintln!("running {fault} on every profile")
@@ -1167,7 +1163,6 @@ fn serve_coupler(
     node: u8,
     fault: Option<canif_model::canopen::coupler::CouplerFault>,
 ) -> ExitCode {
-    use canif_model::canopen::coupler::Coupler;
     use canif_model::frame::{CanId, Frame};
     use std::io::{BufRead, BufReader, Write};
     let node = match node_id(node) {
@@ -1209,10 +1204,7 @@ fn serve_coupler(
             (at % 1_000_000_000) / 1_000
         )
     };
-    let mut coupler = Coupler::new(node, 2, 4);
-    if let Some(fault) = fault {
-        coupler.inject(fault);
-    }
+    let mut coupler = simulated_coupler(node, fault);
     let mut reader = BufReader::new(stream);
     let mut pending = String::new();
     if writer.write_all(b"< hi >").is_err() {
@@ -1280,7 +1272,6 @@ fn coupler_on_bus(
     node: u8,
     fault: Option<canif_model::canopen::coupler::CouplerFault>,
 ) -> ExitCode {
-    use canif_model::canopen::coupler::Coupler;
     let node = match node_id(node) {
         Ok(node) => node,
         Err(code) => return code,
@@ -1295,10 +1286,7 @@ fn coupler_on_bus(
             return ExitCode::from(2);
         }
     };
-    let mut coupler = Coupler::new(node, 2, 4);
-    if let Some(fault) = fault {
-        coupler.inject(fault);
-    }
+    let mut coupler = simulated_coupler(node, fault);
     let epoch = canif_kernel::realtime_ns();
     println!("ready: node {} on {}", node.get(), socket.interface);
     let _ = std::io::stdout().flush();
@@ -1334,19 +1322,16 @@ fn canopen_suite(
     node: u8,
     fault: Option<&str>,
 ) -> ExitCode {
-    use canif_model::canopen::coupler::Coupler;
     let node = match node_id(node) {
         Ok(node) => node,
         Err(code) => return code,
     };
     let (results, target) = match kernel {
         None => {
-            let mut coupler = Coupler::new(node, 2, 4);
-            match coupler_fault(fault) {
-                Ok(Some(fault)) => coupler.inject(fault),
-                Ok(None) => {}
+            let mut coupler = match coupler_fault(fault) {
+                Ok(chosen) => simulated_coupler(node, chosen),
                 Err(code) => return code,
-            }
+            };
             let results = canif_harness::canopen::check_node(&mut coupler, node, 0);
             let target = format!(
                 "simulated coupler, node {}{}",
@@ -1396,6 +1381,18 @@ fn canopen_suite(
     }
     println!("{target}: {} checks, {failed} failed", results.len());
     ExitCode::from(u8::from(failed > 0))
+}
+
+/// The quick start's coupler (2 digital, 4 analog channels), with a fault if asked.
+fn simulated_coupler(
+    node: canif_model::canopen::NodeId,
+    fault: Option<canif_model::canopen::coupler::CouplerFault>,
+) -> canif_model::canopen::coupler::Coupler {
+    let mut coupler = canif_model::canopen::coupler::Coupler::new(node, 2, 4);
+    if let Some(fault) = fault {
+        coupler.inject(fault);
+    }
+    coupler
 }
 
 /// A CANopen node id from the command line, or the exit code of a usage error.

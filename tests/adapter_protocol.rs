@@ -14,15 +14,7 @@ use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig};
 use canif_spec::Catalogue;
 
 fn quick() -> Options {
-    Options {
-        seed: 3,
-        cases: 1,
-        generated_cycles: 100,
-        counter_wrap: false,
-        trace_dir: None,
-        kernel: None,
-        only: Vec::new(),
-    }
+    Options::quick(3)
 }
 
 fn exec(command: &str, timeout_ms: u64) -> IutKind {

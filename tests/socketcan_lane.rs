@@ -521,6 +521,36 @@ fn unavailable(name: &str, why: String) -> Trial {
 
 type Check = Box<dyn Fn() -> Result<(), Failed> + Send + Sync>;
 
+/// How a run over a bus is judged: `(bus, iut, profile, flags)`.
+type Judge = fn(&str, &str, &str, &[&str]) -> Result<(), Failed>;
+
+/// On a pair of interfaces (IUT side, other nodes): the attached soft device
+/// with the `attached` scenarios, then `canif device` on its own socket with the
+/// `device` scenarios, both with `flags`.
+fn on_pair(
+    pair: &Result<(String, String), String>,
+    profile: &'static str,
+    flags: &[&'static str],
+    attached: &[&'static str],
+    device: &[&'static str],
+    judge: Judge,
+) -> Result<Check, String> {
+    let (a, b) = pair.clone()?;
+    let with = |scenarios: &[&'static str]| -> Vec<&'static str> {
+        let mut args = flags.to_vec();
+        for scenario in scenarios {
+            args.extend(["--scenario", scenario]);
+        }
+        args
+    };
+    let (attached, device) = (with(attached), with(device));
+    Ok(Box::new(move || {
+        let bus = format!("socketcan:{a},{b}");
+        judge(&bus, "softdevice", profile, &attached)?;
+        judge(&bus, &device_command(&a, None), profile, &device)
+    }))
+}
+
 fn main() {
     let args = Arguments::from_args();
     let fd = canif_kernel::test_interface("CANIF_LANE_FD", "vcan0");
@@ -548,73 +578,44 @@ fn main() {
         }),
     ));
     trials.push(("fault_caught_over_vcan", on(&classic, fault_caught_over)));
+    // QEMU's SJA1000 garbles its receive FIFO after a remote frame with a length.
+    let sja1000 = ["--no-remote-frames"];
+    // ESI on the wire is the sending controller's error state.
+    let ctu = ["--esi-from-controller"];
     trials.push((
         "conformance_over_sja1000_controllers",
-        controllers.clone().map(|(a, b)| {
-            Box::new(move || {
-                // QEMU's SJA1000 garbles its receive FIFO after a remote frame with a length.
-                let flags = ["--no-remote-frames", "--scenario"];
-                conforms_on(
-                    &format!("socketcan:{a},{b}"),
-                    "softdevice",
-                    "fc510x",
-                    &[flags[0], flags[1], "rx-"],
-                )?;
-                conforms_on(
-                    &format!("socketcan:{a},{b}"),
-                    &device_command(&a, None),
-                    "fc510x",
-                    &[flags[0], flags[1], "tx-batches"],
-                )
-            }) as Check
-        }),
+        on_pair(
+            &controllers,
+            "fc510x",
+            &sja1000,
+            &["rx-"],
+            &["tx-batches"],
+            conforms_on,
+        ),
     ));
-    let vxcan = canif_kernel::test_interface_pair("CANIF_LANE_VXCAN");
     trials.push((
         "conformance_over_a_vxcan_pair",
-        vxcan.map(|(a, b)| {
-            Box::new(move || {
-                conforms_on(
-                    &format!("socketcan:{a},{b}"),
-                    "softdevice",
-                    "fc510x",
-                    &["--scenario", "rx-handshake"],
-                )?;
-                conforms_on(
-                    &format!("socketcan:{a},{b}"),
-                    &device_command(&a, None),
-                    "fc510x",
-                    &["--scenario", "tx-batches"],
-                )
-            }) as Check
-        }),
+        on_pair(
+            &canif_kernel::test_interface_pair("CANIF_LANE_VXCAN"),
+            "fc510x",
+            &[],
+            &["rx-handshake"],
+            &["tx-batches"],
+            conforms_on,
+        ),
     ));
-    let fd_controllers = canif_kernel::test_interface_pair("CANIF_LANE_FD_CONTROLLERS");
     trials.push((
         "conformance_over_ctu_can_fd_controllers",
-        fd_controllers.map(|(a, b)| {
-            Box::new(move || {
-                let bus = format!("socketcan:{a},{b}");
-                // ESI on the wire is the sending controller's error state.
-                let scripted = [
-                    "--esi-from-controller",
-                    "--scenario",
-                    "rx-handshake [FD",
-                    "--scenario",
-                    "fd-lengths [FD",
-                    "--scenario",
-                    "info-data [FD",
-                ];
-                conforms_despite_transport_delays(&bus, "softdevice", "fc532x", &scripted, 1)?;
-                conforms_despite_transport_delays(
-                    &bus,
-                    &device_command(&a, None),
-                    "fc532x",
-                    &["--esi-from-controller", "--scenario", "tx-batches [FD"],
-                    1,
-                )
-            }) as Check
-        }),
+        on_pair(
+            &canif_kernel::test_interface_pair("CANIF_LANE_FD_CONTROLLERS"),
+            "fc532x",
+            &ctu,
+            &["rx-handshake [FD", "fd-lengths [FD", "info-data [FD"],
+            &["tx-batches [FD"],
+            |bus, iut, profile, flags| {
+                conforms_despite_transport_delays(bus, iut, profile, flags, 1)
+            },
+        ),
     ));
     trials.push((
         "canopen_checks_over_vcan",

@@ -14,12 +14,8 @@ use canif_model::Nanos;
 use crate::bus::{arbitration_key, duration, Nodes};
 use crate::iut::{InvalidFrame, Iut, IutKind};
 use crate::kernel_bus::{InFlight, KernelBus, Side};
-use canif_kernel::KernelSocket;
-
-fn libc_enobufs() -> i32 {
-    canif_kernel::ENOBUFS
-}
 use crate::scenario::{Scenario, Step};
+use canif_kernel::KernelSocket;
 
 /// How many cycles of history a failure shows.
 pub const CONTEXT_CYCLES: usize = 6;
@@ -418,6 +414,16 @@ fn compare_frames(expected: &Frame, actual: &Frame) -> &'static [&'static str] {
     blame::TX_DATA
 }
 
+/// `frame` came as the next of `queue` (frames on their way, in order): it
+/// leaves the queue. `false` when something else was expected.
+fn arrived(queue: &mut VecDeque<InFlight>, frame: Frame) -> bool {
+    let next = queue.front().is_some_and(|f| f.frame == frame);
+    if next {
+        queue.pop_front();
+    }
+    next
+}
+
 /// Everything that runs in lockstep for one scenario.
 struct Lockstep<'a> {
     scenario: &'a Scenario,
@@ -644,44 +650,31 @@ impl Lockstep<'_> {
         ))
     }
 
+    /// Writes the IUT's frame on its socket; a full queue (ENOBUFS) keeps it
+    /// pending for the next turn, as for the other nodes.
     fn kernel_send_iut(&mut self, frame: Frame) -> Result<(), Outcome> {
         let bus = self.kernel();
         let Side::Attached(socket) = &bus.side else {
             return Ok(());
         };
-        loop {
-            match socket.send(&frame) {
-                Ok(()) => break,
-                Err(error) if error.raw_os_error() == Some(libc_enobufs()) => {
-                    // The controller's queue is full: wait for it, within the timeout.
-                    let since = *bus
-                        .blocked_since
-                        .get_or_insert_with(std::time::Instant::now);
-                    if since.elapsed() > bus.options.timeout {
-                        let name = socket.interface.clone();
-                        return Err(Outcome::Error(format!(
-                            "{name}: the send buffer stayed full (ENOBUFS) for {:?}",
-                            since.elapsed()
-                        )));
-                    }
-                    std::thread::sleep(std::time::Duration::from_micros(200));
-                }
-                Err(error) => {
-                    let name = socket.interface.clone();
-                    return Err(self.kernel_error(&name, error));
-                }
+        match socket.send(&frame) {
+            Ok(()) => {}
+            Err(error) if error.raw_os_error() == Some(canif_kernel::ENOBUFS) => {
+                let name = socket.interface.clone();
+                bus.blocked(name);
+                self.iut_pending = Some(frame);
+                return Ok(());
+            }
+            Err(error) => {
+                let name = socket.interface.clone();
+                return Err(self.kernel_error(&name, error));
             }
         }
         bus.blocked_since = None;
-        bus.iut_in_flight = Some(InFlight {
-            frame,
-            since: std::time::Instant::now(),
-        });
+        let since = std::time::Instant::now();
+        bus.iut_in_flight = Some(InFlight { frame, since });
         // On one interface the other nodes may see it before the IUT's echo.
-        bus.crossing.push_back(InFlight {
-            frame,
-            since: std::time::Instant::now(),
-        });
+        bus.crossing.push_back(InFlight { frame, since });
         Ok(())
     }
 
@@ -705,9 +698,9 @@ impl Lockstep<'_> {
                         since: std::time::Instant::now(),
                     });
                 }
-                Err(error) if error.raw_os_error() == Some(libc_enobufs()) => {
-                    bus.blocked_since
-                        .get_or_insert_with(std::time::Instant::now);
+                Err(error) if error.raw_os_error() == Some(canif_kernel::ENOBUFS) => {
+                    let name = bus.tester.interface.clone();
+                    bus.blocked(name);
                     return Ok(()); // the queue drains; overdue() ends a stuck run
                 }
                 Err(error) => {
@@ -805,41 +798,31 @@ impl Lockstep<'_> {
                 }
                 // Attached: another node's frame reached the IUT.
                 (false, true, false) => {
-                    if bus.tester_in_flight.front().map(|f| f.frame) != Some(frame) {
+                    if !arrived(&mut bus.tester_in_flight, frame) {
                         return Err(mismatch(
                             bus,
                             bus.tester_in_flight.front(),
                             "the IUT's socket",
                         ));
                     }
-                    bus.tester_in_flight.pop_front();
                     self.complete(frame, false, at);
                 }
                 // Attached: the IUT's frame reached the other nodes.
                 (false, false, _) => {
-                    if bus.crossing.front().map(|f| f.frame) != Some(frame) {
+                    if !arrived(&mut bus.crossing, frame) {
                         return Err(mismatch(bus, bus.crossing.front(), "the tester's socket"));
                     }
-                    bus.crossing.pop_front();
                 }
                 // Owned: the harness's own frame is on the bus; the IUT has it too.
                 (true, _, true) => {
-                    if bus.tester_in_flight.front().map(|f| f.frame) != Some(frame) {
+                    if !arrived(&mut bus.tester_in_flight, frame) {
                         return Err(mismatch(
                             bus,
                             bus.tester_in_flight.front(),
                             "the tester's socket (echo)",
                         ));
                     }
-                    bus.tester_in_flight.pop_front();
-                    self.frames += 1;
-                    self.model.handle_received(frame, at);
-                    self.recent_rx.push_back(frame);
-                    if self.recent_rx.len() > RECENT_RX {
-                        self.recent_rx.pop_front();
-                    }
-                    self.log(false, frame, at);
-                    self.write_trace(at, &frame);
+                    self.observe(frame, false, at);
                 }
                 // Owned: a frame the IUT sent.
                 (true, _, false) => {
@@ -848,12 +831,7 @@ impl Lockstep<'_> {
                         None => self.model.poll_transmit(at),
                     };
                     match self.transmit_difference(expected, Some(Ok(frame))) {
-                        Ok(_) => {
-                            self.frames += 1;
-                            self.model.handle_transmit_complete();
-                            self.log(true, frame, at);
-                            self.write_trace(at, &frame);
-                        }
+                        Ok(_) => self.observe(frame, true, at),
                         Err(difference) => return Err(self.fail(difference)),
                     }
                 }
@@ -897,21 +875,28 @@ impl Lockstep<'_> {
     }
 
     fn complete(&mut self, frame: Frame, from_iut: bool, end: Nanos) {
+        if from_iut {
+            self.iut.transmit_complete();
+        } else {
+            self.iut.receive(&frame, end);
+        }
+        self.observe(frame, from_iut, end);
+    }
+
+    /// A frame ended on the bus: the model, the trace and the history learn of it.
+    fn observe(&mut self, frame: Frame, from_iut: bool, end: Nanos) {
         self.frames += 1;
         self.write_trace(end, &frame); // a full disk ends the trace, not the run
         if from_iut {
-            self.iut.transmit_complete();
             self.model.handle_transmit_complete();
-            self.log(true, frame, end);
         } else {
-            self.iut.receive(&frame, end);
             self.model.handle_received(frame, end);
             self.recent_rx.push_back(frame);
             if self.recent_rx.len() > RECENT_RX {
                 self.recent_rx.pop_front();
             }
-            self.log(false, frame, end);
         }
+        self.log(from_iut, frame, end);
     }
 
     fn log(&mut self, from_iut: bool, frame: Frame, end: Nanos) {

@@ -501,8 +501,12 @@ pub fn serve(
         if line.trim().is_empty() {
             continue;
         }
-        let Some(answer) = answer(kind, &mut iut, &line, true) else {
-            return Ok(());
+        let answer = match serde_json::from_str(&line) {
+            Ok(request) => match answer(kind, &mut iut, &request, true) {
+                Some(answer) => answer,
+                None => return Ok(()),
+            },
+            Err(error) => not_json(error),
         };
         writeln!(output, "{answer}")?;
         output.flush()?;
@@ -510,27 +514,25 @@ pub fn serve(
     Ok(())
 }
 
-/// The answer to one request line; `None` for `bye`. `drives_bus`: the
-/// harness drives the CAN side through the protocol (no SocketCAN bus).
+fn not_json(error: serde_json::Error) -> Value {
+    json!({"type": "error", "message": format!("not JSON: {error}")})
+}
+
+/// The answer to one request; `None` for `bye`. `drives_bus`: the harness
+/// drives the CAN side through the protocol (no SocketCAN bus).
 fn answer(
     kind: &crate::iut::IutKind,
     iut: &mut Option<Box<dyn Iut>>,
-    line: &str,
+    request: &Value,
     drives_bus: bool,
 ) -> Option<Value> {
-    let request: Value = match serde_json::from_str(line) {
-        Ok(value) => value,
-        Err(error) => {
-            return Some(json!({"type": "error", "message": format!("not JSON: {error}")}))
-        }
-    };
     let bus_request = matches!(
         request["type"].as_str(),
         Some("receive" | "poll_transmit" | "transmit_complete")
     );
     Some(match (request["type"].as_str(), iut.as_mut()) {
         (Some("bye"), _) => return None,
-        (Some("configure"), _) => match config_from_json(&request) {
+        (Some("configure"), _) => match config_from_json(request) {
             Ok((caps, config)) => match kind.build(&caps, &config) {
                 Ok(built) => {
                     *iut = Some(built);
@@ -683,8 +685,15 @@ pub fn serve_on_bus(kind: &crate::iut::IutKind, interface: Option<&str>) -> Resu
         let Some(line) = line.filter(|l| !l.trim().is_empty()) else {
             continue;
         };
-        let request: Value = serde_json::from_str(&line).unwrap_or(Value::Null);
-        let Some(mut reply) = answer(kind, &mut iut, &line, false) else {
+        let request: Value = match serde_json::from_str(&line) {
+            Ok(request) => request,
+            Err(error) => {
+                writeln!(output, "{}", not_json(error)).map_err(|e| e.to_string())?;
+                output.flush().map_err(|e| e.to_string())?;
+                continue;
+            }
+        };
+        let Some(mut reply) = answer(kind, &mut iut, &request, false) else {
             return Ok(());
         };
         if request["type"] == "configure" && iut.is_some() {

@@ -136,8 +136,8 @@ pub(crate) struct KernelBus {
     pub epoch: Nanos,
     /// Other nodes' frames not yet written, by the time they are due.
     pub waiting: VecDeque<(Nanos, Frame)>,
-    /// Since when the tester socket has answered ENOBUFS.
-    pub blocked_since: Option<Instant>,
+    /// Since when, and on which interface, a write has answered ENOBUFS.
+    pub blocked_since: Option<(Instant, String)>,
     /// Written by the tester, not yet seen by the IUT's socket (attached) or
     /// echoed (owned).
     pub tester_in_flight: VecDeque<InFlight>,
@@ -199,6 +199,12 @@ impl KernelBus {
         self.waiting.insert(index, (at, frame));
     }
 
+    /// A write on `interface` answered ENOBUFS (the first time counts).
+    pub fn blocked(&mut self, interface: String) {
+        self.blocked_since
+            .get_or_insert_with(|| (Instant::now(), interface));
+    }
+
     /// Nothing written is still on its way, and (owned) the IUT has sent what
     /// the model says is due: the IUT acts on a cycle before the next one.
     pub fn settled(&self) -> bool {
@@ -242,12 +248,13 @@ impl KernelBus {
                 f.frame, self.options.timeout
             ));
         }
-        if let Some(since) = self
+        if let Some((since, interface)) = self
             .blocked_since
-            .filter(|s| s.elapsed() > self.options.timeout)
+            .as_ref()
+            .filter(|(since, _)| since.elapsed() > self.options.timeout)
         {
             return Some(format!(
-                "{tester}: the send buffer stayed full (ENOBUFS) for {:?}",
+                "{interface}: the send buffer stayed full (ENOBUFS) for {:?}",
                 since.elapsed()
             ));
         }

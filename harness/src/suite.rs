@@ -49,13 +49,10 @@ impl Options {
 impl Default for Options {
     fn default() -> Self {
         Options {
-            seed: 1,
             cases: 4,
             generated_cycles: 200,
             counter_wrap: true,
-            trace_dir: None,
-            kernel: None,
-            only: Vec::new(),
+            ..Options::quick(1)
         }
     }
 }

@@ -141,13 +141,9 @@ fn report(seed: u64) -> serde_json::Value {
     let catalogue = Catalogue::embedded().unwrap();
     let profile = catalogue.profile("el6751-mdp").unwrap();
     let options = Options {
-        seed,
         cases: 2,
         generated_cycles: 150,
-        counter_wrap: false,
-        trace_dir: None,
-        kernel: None,
-        only: Vec::new(),
+        ..Options::quick(seed)
     };
     let run = run_profile(
         &catalogue,

@@ -9,13 +9,9 @@ use canif_spec::Catalogue;
 
 fn quick() -> Options {
     Options {
-        seed: 1,
         cases: 2,
         generated_cycles: 120,
-        counter_wrap: false,
-        trace_dir: None,
-        kernel: None,
-        only: Vec::new(),
+        ..Options::quick(1)
     }
 }
 

@@ -178,15 +178,11 @@ impl KernelSocket {
     /// interface's queue is full (try again), `ENETDOWN` that it is down.
     pub fn send(&self, frame: &Frame) -> io::Result<()> {
         let (raw, size) = to_raw(frame);
-        self.send_raw(&raw, size)
-    }
-
-    fn send_raw(&self, raw: &RawFrame, size: usize) -> io::Result<()> {
         // SAFETY: `raw` is a plain-old-data struct of at least `size` bytes.
         let written = unsafe {
             libc::write(
                 self.socket.as_raw_fd(),
-                (raw as *const RawFrame).cast(),
+                (&raw as *const RawFrame).cast(),
                 size,
             )
         };
@@ -195,22 +191,6 @@ impl KernelSocket {
             n if n >= 0 => Err(io::Error::other(format!("short write: {n} of {size}"))),
             _ => Err(io::Error::last_os_error()),
         }
-    }
-
-    /// Writes an FD frame of `len` data bytes as it is, whatever the length:
-    /// for the kernel's own length handling (oracle tests).
-    pub fn send_fd_raw(&self, id: CanId, len: u8, fill: u8) -> io::Result<()> {
-        let mut raw = RawFrame {
-            can_id: can_id_bits(id),
-            len,
-            flags: CANFD_FDF,
-            reserved: [0; 2],
-            data: [0; 64],
-        };
-        for byte in raw.data.iter_mut().take(usize::from(len.min(64))) {
-            *byte = fill;
-        }
-        self.send_raw(&raw, CANFD_MTU)
     }
 
     /// The next frame, if one is waiting.
@@ -297,10 +277,6 @@ impl KernelSocket {
         }
         Ok(())
     }
-
-    pub fn raw_fd(&self) -> i32 {
-        self.socket.as_raw_fd()
-    }
 }
 
 fn can_id_bits(id: CanId) -> u32 {
@@ -354,15 +330,6 @@ fn from_raw(raw: &RawFrame, size: usize) -> Result<Frame, String> {
         other => return Err(format!("a read of {other} bytes is no CAN frame")),
     }
     .map_err(|e| format!("the kernel delivered a frame the model cannot hold: {e:?}"))
-}
-
-/// The interface's MTU: 16 (classic CAN) or 72 (CAN FD).
-pub fn mtu(interface: &str) -> Result<usize, String> {
-    std::fs::read_to_string(format!("/sys/class/net/{interface}/mtu"))
-        .map_err(|e| format!("{interface}: {e}"))?
-        .trim()
-        .parse()
-        .map_err(|e| format!("{interface}: mtu: {e}"))
 }
 
 /// The interface a SocketCAN test uses, named by environment variable
