@@ -5,8 +5,8 @@
 
 use std::time::{Duration, Instant};
 
-use canif_harness::check::run_scenario;
 use canif_harness::report::RunReport;
+use canif_harness::run_scenario;
 use canif_harness::scenario;
 use canif_harness::suite::{run_profile, Options};
 use canif_harness::{IutKind, Outcome, Verdict};
@@ -96,9 +96,14 @@ fn broken(command: &str, expected: &[&str]) {
         "the harness waited {:?}",
         started.elapsed()
     );
-    let Outcome::Error(message) = run.outcome else {
+    let Outcome::Error(error) = run.outcome else {
         panic!("`{command}` gave {:?}, not an error", run.outcome)
     };
+    assert!(
+        matches!(error, canif_harness::RunError::Iut(_)),
+        "`{command}`: a broken IUT is the IUT's error, not {error:?}"
+    );
+    let message = error.to_string();
     for words in expected {
         assert!(
             message.contains(words),
@@ -292,8 +297,9 @@ fn the_configure_of_a_socketcan_bus_fits_the_schema() {
         requests.display(),
         env!("CARGO_BIN_EXE_canif")
     );
-    let mut iut = canif_harness::exec::ExecIut::spawn(&command, Duration::from_secs(5)).unwrap();
-    let bus = canif_harness::iut::OwnedBus {
+    let mut iut =
+        canif_harness::adapter::client::ExecIut::spawn(&command, Duration::from_secs(5)).unwrap();
+    let bus = canif_harness::adapter::protocol::OwnedBus {
         interface: "vcan0".into(),
         epoch_ns: 1_700_000_000_000_000_000,
     };

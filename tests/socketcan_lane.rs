@@ -15,9 +15,9 @@ use std::path::PathBuf;
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
+use canif_harness::adapter::client::ExecIut;
+use canif_harness::adapter::protocol::OwnedBus;
 use canif_harness::canopen::quick_start;
-use canif_harness::exec::ExecIut;
-use canif_harness::iut::OwnedBus;
 use canif_model::canopen::NodeId;
 use canif_model::config::InterfaceConfig;
 use canif_model::image::ImageLayout;

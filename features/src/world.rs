@@ -1,13 +1,12 @@
 //! The world a scenario runs in: a PLC (the reference client of 001 §6), an
 //! implementation under test built through the harness, and the bus around it.
 
-use canif_harness::check::declare_lengths;
+use canif_harness::plc::{PlcSide, TaskStimulus};
 use canif_harness::{Iut, IutKind};
-use canif_model::client::PlcClient;
 use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig};
-use canif_model::exchange::{ExchangeMode, ProcessDataExchange};
+use canif_model::exchange::ExchangeMode;
 use canif_model::frame::Frame;
-use canif_model::image::{ImageLayout, InputImage, MessageRepr};
+use canif_model::image::{ImageLayout, InputImage, MessageRepr, OutputImage};
 use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 use std::cell::RefCell;
@@ -62,8 +61,7 @@ pub struct CanWorld {
     pub exchange_mode: ExchangeMode,
     pub iut: Option<Box<dyn Iut>>,
     pub refused: Option<String>,
-    pub plc: Option<PlcClient>,
-    pub exchange: Option<ProcessDataExchange>,
+    pub plc: Option<PlcSide>,
     pub layout: Option<ImageLayout>,
     /// The input image the IUT returned last.
     pub inputs: Vec<u8>,
@@ -85,7 +83,6 @@ pub struct CanWorld {
     pub status: Option<ControllerStatus>,
     /// Cycles from the PLC's TxCounter increment to its confirmation, as the PLC saw it.
     pub confirmation_delay: Option<u64>,
-    pending_increment: Option<(u64, u16)>,
     /// The last cycles, shown when a step fails (bounded).
     pub trace: std::collections::VecDeque<String>,
     /// A CANopen bus coupler on the bus (the quick start), and whether it still runs.
@@ -126,7 +123,6 @@ impl CanWorld {
             iut: None,
             refused: None,
             plc: None,
-            exchange: None,
             layout: None,
             inputs: Vec::new(),
             now: 0,
@@ -142,7 +138,6 @@ impl CanWorld {
             next_tn: 1,
             status: None,
             confirmation_delay: None,
-            pending_increment: None,
             trace: std::collections::VecDeque::new(),
             coupler: None,
             coupler_alive: true,
@@ -163,8 +158,7 @@ impl CanWorld {
             Ok(iut) => {
                 let layout = ImageLayout::new(&self.config, self.target.caps.info_data);
                 self.inputs = vec![0; layout.input_size()];
-                self.plc = Some(PlcClient::new(layout));
-                self.exchange = Some(ProcessDataExchange::new(self.exchange_mode, &self.inputs));
+                self.plc = Some(PlcSide::new(layout, self.exchange_mode));
                 self.layout = Some(layout);
                 self.iut = Some(iut);
                 Ok(())
@@ -194,28 +188,14 @@ impl CanWorld {
         self.start()?;
         let layout = self.layout();
         let plc = self.plc.as_mut().expect("started");
-        let exchange = self.exchange.as_mut().expect("started");
         if !plc_busy {
-            let seen = InputImage::new_checked(exchange.plc_inputs(), layout)
-                .map_err(|e| e.to_string())?
-                .tx_counter();
-            if let Some((since, counter)) = self.pending_increment {
-                if seen == counter {
-                    self.confirmation_delay = Some(self.cycle - since);
-                    self.pending_increment = None;
-                }
-            }
-            let before = u16::from_le_bytes([plc.outputs()[0], plc.outputs()[1]]);
-            plc.task(exchange.plc_inputs()).map_err(|e| e.to_string())?;
-            if !self.declared_lengths.is_empty() {
-                declare_lengths(&layout, &self.declared_lengths, plc.outputs_mut());
-            }
-            if let Some(counter) = self.tx_counter_override.take() {
-                plc.outputs_mut()[..2].copy_from_slice(&counter.to_le_bytes());
-            }
-            let after = u16::from_le_bytes([plc.outputs()[0], plc.outputs()[1]]);
-            if after != before && self.pending_increment.is_none() {
-                self.pending_increment = Some((self.cycle, after));
+            let stimulus = TaskStimulus {
+                declared_lengths: &self.declared_lengths,
+                set_tx_counter: self.tx_counter_override.take(),
+            };
+            let report = plc.task(self.cycle, stimulus).map_err(|e| e.to_string())?;
+            if let Some(delay) = report.confirmed_after {
+                self.confirmation_delay = Some(delay);
             }
             let read = plc.take_received();
             self.received_at
@@ -231,25 +211,29 @@ impl CanWorld {
             record_iut_error(&e.0);
             e.0
         })?;
-        exchange.device_cycle_done(&self.inputs);
+        plc.device_cycle_done(&self.inputs);
         let sent_before = self.on_bus.len();
         let result = self.run_bus();
-        let header = |b: &[u8]| {
-            [0, 2, 4].map(|at| {
-                b.get(at..at + 2)
-                    .map_or(0, |w| u16::from_le_bytes([w[0], w[1]]))
-            })
-        };
-        let [otx, orx, on] = header(&outputs);
-        let [itx, irx, inn] = header(&self.inputs);
+        let out = OutputImage::new_checked(&outputs[..], layout)
+            .map(|o| o.header())
+            .unwrap_or_default();
+        let inp = InputImage::new_checked(&self.inputs[..], layout)
+            .map(|i| i.header())
+            .unwrap_or_default();
         let sent: Vec<String> = self.on_bus[sent_before..]
             .iter()
             .map(ToString::to_string)
             .collect();
         self.trace.push_back(format!(
-            "cycle {:>3}{}: out[tx={otx} rx={orx} n={on}] in[tx={itx} rx={irx} n={inn}] bus: {}",
+            "cycle {:>3}{}: out[tx={} rx={} n={}] in[tx={} rx={} n={}] bus: {}",
             self.cycle,
             if plc_busy { " (PLC busy)" } else { "" },
+            out.tx_counter,
+            out.rx_counter,
+            out.no_of_tx_messages,
+            inp.tx_counter,
+            inp.rx_counter,
+            inp.no_of_rx_messages,
             if sent.is_empty() {
                 "-".to_string()
             } else {

@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use canif_harness::check::run_scenario;
+use canif_harness::run_scenario;
 use canif_harness::scenario;
 use canif_harness::suite::{run_profile, Options};
 use canif_harness::IutKind;

@@ -1,6 +1,7 @@
 //! The implementation under test, as the harness sees it: a process-image side
 //! (one exchange per cycle) and a CAN-controller side (received frames in,
-//! transmissions out, one at a time, completions back).
+//! transmissions out, one at a time, completions back), and the two IUTs the
+//! harness has in process: the reference model and the soft device.
 
 use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig, QueueMode, Synchronization};
 use canif_model::device::Device;
@@ -8,17 +9,13 @@ use canif_model::filter::{FilterAction, FilterMatch};
 use canif_model::frame::{CanId, Frame};
 use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
-use canif_softdevice::{CanFrame, Fault, FilterRule, Format, Offer, Queue, Settings, SoftDevice};
+use canif_softdevice::{CanFrame, FilterRule, Format, Offer, Queue, Settings, SoftDevice};
 
-use crate::exec::ExecIut;
+pub use crate::error::IutError;
 
 /// A frame an IUT put on the bus that is no valid CAN frame (e.g. 36 FD bytes).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct InvalidFrame(pub String);
-
-/// Something went wrong with the IUT itself (not a non-conformance).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct IutError(pub String);
 
 /// What the harness needs from an implementation under test.
 pub trait Iut {
@@ -36,20 +33,6 @@ pub trait Iut {
     fn controller_status(&mut self, status: &ControllerStatus);
 }
 
-/// Which implementation to run.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum IutKind {
-    SoftDevice {
-        faults: Vec<Fault>,
-    },
-    Model,
-    /// Another process speaking the adapter protocol (docs/adapter-protocol.md).
-    Exec {
-        command: String,
-        timeout_ms: u64,
-    },
-}
-
 /// Why no IUT could be built for a configuration.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum BuildError {
@@ -64,120 +47,6 @@ impl std::fmt::Display for BuildError {
         match self {
             BuildError::Refused(reason) => write!(f, "refused: {reason}"),
             BuildError::Failed(reason) => f.write_str(reason),
-        }
-    }
-}
-
-/// Asks an IUT, configuration after configuration, whether it accepts.
-pub type Configurer = Box<dyn FnMut(&Capabilities, &InterfaceConfig) -> Result<(), BuildError>>;
-
-/// A SocketCAN interface an external IUT opens itself (adapter protocol,
-/// `configure.bus`): its time stamps count from `epoch_ns` of CLOCK_REALTIME.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct OwnedBus {
-    pub interface: String,
-    pub epoch_ns: u64,
-}
-
-impl IutKind {
-    /// Builds the IUT for a configuration.
-    pub fn build(
-        &self,
-        caps: &Capabilities,
-        config: &InterfaceConfig,
-    ) -> Result<Box<dyn Iut>, BuildError> {
-        self.build_on(caps, config, None)
-    }
-
-    /// Builds the IUT; with `bus`, an external IUT is told to open that
-    /// interface itself (in-process IUTs are attached by the harness instead).
-    pub fn build_on(
-        &self,
-        caps: &Capabilities,
-        config: &InterfaceConfig,
-        bus: Option<&OwnedBus>,
-    ) -> Result<Box<dyn Iut>, BuildError> {
-        let refused = |e: &dyn std::fmt::Display| BuildError::Refused(e.to_string());
-        match self {
-            IutKind::Model => Ok(Box::new(ModelIut(
-                Device::new(caps, config.clone()).map_err(|e| refused(&e))?,
-            ))),
-            IutKind::SoftDevice { faults } => {
-                let mut device =
-                    SoftDevice::new(soft_settings(caps, config)).map_err(|e| refused(&e))?;
-                for fault in faults {
-                    device.inject(*fault);
-                }
-                Ok(Box::new(SoftDeviceIut(device)))
-            }
-            IutKind::Exec {
-                command,
-                timeout_ms,
-            } => {
-                let mut iut =
-                    ExecIut::spawn(command, std::time::Duration::from_millis(*timeout_ms))
-                        .map_err(BuildError::Failed)?;
-                match iut
-                    .configure(caps, config, bus)
-                    .map_err(BuildError::Failed)?
-                {
-                    Ok(()) => Ok(Box::new(iut)),
-                    Err(reason) => Err(BuildError::Refused(reason)),
-                }
-            }
-        }
-    }
-
-    /// Something that answers configuration after configuration; for an
-    /// external process, one process answers them all.
-    pub fn configurer(&self) -> Configurer {
-        match self {
-            IutKind::Exec {
-                command,
-                timeout_ms,
-            } => {
-                let (command, timeout) = (
-                    command.clone(),
-                    std::time::Duration::from_millis(*timeout_ms),
-                );
-                let mut process: Option<ExecIut> = None;
-                Box::new(move |caps, config| {
-                    if process.is_none() {
-                        process =
-                            Some(ExecIut::spawn(&command, timeout).map_err(BuildError::Failed)?);
-                    }
-                    let iut = process.as_mut().expect("just started");
-                    match iut
-                        .configure(caps, config, None)
-                        .map_err(BuildError::Failed)?
-                    {
-                        Ok(()) => Ok(()),
-                        Err(reason) => Err(BuildError::Refused(reason)),
-                    }
-                })
-            }
-            other => {
-                let kind = other.clone();
-                Box::new(move |caps, config| kind.build(caps, config).map(|_| ()))
-            }
-        }
-    }
-
-    pub fn name(&self) -> String {
-        match self {
-            IutKind::Model => "model".into(),
-            IutKind::SoftDevice { faults } if faults.is_empty() => "softdevice".into(),
-            IutKind::SoftDevice { faults } => {
-                format!(
-                    "softdevice+{}",
-                    faults
-                        .iter()
-                        .map(|f| f.name())
-                        .collect::<Vec<_>>()
-                        .join("+")
-                )
-            }
-            IutKind::Exec { command, .. } => format!("exec:{command}"),
         }
     }
 }

@@ -6,7 +6,7 @@ use std::path::Path;
 use canif_spec::Catalogue;
 use serde_json::{json, Value};
 
-use crate::check::{Failure, Outcome};
+use crate::outcome::{Failure, Outcome};
 use crate::suite::{ProfileRun, Verdict};
 
 /// One Gherkin scenario (or Examples row) run against one profile.
@@ -305,7 +305,7 @@ impl RunReport {
             for failure in &p.failures {
                 let _ = write!(md, "\n## {} — {}\n\n", p.profile, headline(failure));
                 for id in &failure.requirements {
-                    if let Some(r) = catalogue.requirement(id) {
+                    if let Some(r) = catalogue.requirement(id.as_str()) {
                         let _ = writeln!(md, "- **{id}**: {}", r.statement);
                     }
                 }
@@ -338,7 +338,7 @@ fn verdict_json(verdict: &Verdict) -> Value {
 
 fn failure_json(failure: &Failure) -> Value {
     json!({
-        "requirements": failure.requirements,
+        "requirements": failure.requirements.iter().map(|id| id.as_str()).collect::<Vec<_>>(),
         "scenario": failure.scenario,
         "cycle": failure.cycle,
         "time_ns": failure.time,
@@ -356,7 +356,7 @@ pub fn headline(failure: &Failure) -> String {
         failure.scenario,
         failure.cycle,
         failure.what,
-        failure.requirements.join(", ")
+        canif_spec::ReqId::join(&failure.requirements, ", ")
     )
 }
 
@@ -442,15 +442,27 @@ pub fn timing_diagram(failure: &Failure) -> String {
                 height - 4.0
             ));
         }
-        let [otx, orx, on] = view.outputs;
+        let o = view.outputs;
         svg.push_str(&format!(
-            "<text x=\"{}\" y=\"{}\">{otx} / {orx} / {on}</text>\n",
+            "<text x=\"{}\" y=\"{}\">{} / {} / {}</text>\n",
             x + 4.0,
-            row * 1.5 + 16.0
+            row * 1.5 + 16.0,
+            o.tx_counter,
+            o.rx_counter,
+            o.no_of_tx_messages
         ));
+        let fields = |h: &canif_model::image::InputHeader| {
+            [
+                h.tx_counter,
+                h.rx_counter,
+                h.no_of_rx_messages,
+                h.transaction_number.unwrap_or(0),
+            ]
+        };
+        let (expected, actual) = (fields(&view.expected), fields(&view.actual));
         for field in 0..4 {
             let y = row * (field as f64 + 2.5);
-            let (e, a) = (view.expected[field], view.actual[field]);
+            let (e, a) = (expected[field], actual[field]);
             if e != a {
                 svg.push_str(&format!("<rect class=\"mismatch\" x=\"{x}\" y=\"{y}\" width=\"{cell}\" height=\"{row}\" fill=\"#fcc\"/>\n"));
             }
@@ -467,7 +479,8 @@ pub fn timing_diagram(failure: &Failure) -> String {
         };
         let span = view.time.saturating_sub(previous).max(1) as f64;
         let y = row * 6.5;
-        for (end, from_iut, text) in &view.frames {
+        for frame in &view.frames {
+            let (end, from_iut, text) = (&frame.end, &frame.from_iut, &frame.text);
             let fx = x + cell * (end.saturating_sub(previous) as f64 / span).min(1.0) - cell + 2.0;
             let fx = fx.max(x - cell + 2.0);
             let colour = if *from_iut { "#36c" } else { "#999" };

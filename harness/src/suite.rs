@@ -7,10 +7,13 @@ use canif_model::config::{
     Capabilities, ConfigError, FrameFormat, InterfaceConfig, QueueMode, Synchronization,
 };
 use canif_model::filter::FilterRow;
-use canif_spec::{Catalogue, Profile, Verification};
+use canif_spec::{req_ids, Catalogue, Profile, ReqId, Verification};
 
-use crate::check::{run_scenario, Failure, Outcome, ScenarioRun};
-use crate::iut::IutKind;
+use crate::bus::BusChoice;
+use crate::iut::BuildError;
+use crate::iut_kind::IutKind;
+use crate::lockstep::run_scenario;
+use crate::outcome::{Failure, Outcome, ScenarioRun};
 use crate::scenario::{self, Scenario};
 
 /// What to run.
@@ -25,8 +28,8 @@ pub struct Options {
     pub counter_wrap: bool,
     /// Write each scenario's bus trace under this folder (`PROFILE/SCENARIO.{log,pcapng}`).
     pub trace_dir: Option<std::path::PathBuf>,
-    /// Run on a SocketCAN interface in real time instead of the simulated bus.
-    pub kernel: Option<crate::kernel_bus::KernelBusOptions>,
+    /// The bus the scenarios run on.
+    pub bus: BusChoice,
     /// Only scenarios whose name contains one of these (all when empty).
     pub only: Vec<String>,
 }
@@ -40,7 +43,7 @@ impl Options {
             generated_cycles: 100,
             counter_wrap: false,
             trace_dir: None,
-            kernel: None,
+            bus: BusChoice::Sim,
             only: Vec::new(),
         }
     }
@@ -259,28 +262,28 @@ pub fn describe(config: &InterfaceConfig) -> String {
     parts.join(", ")
 }
 
-fn refusal_ids(error: &ConfigError) -> &'static [&'static str] {
+fn refusal_ids(error: &ConfigError) -> &'static [ReqId] {
     use ConfigError::*;
     match error {
-        FormatNotOffered(_) => &["PROF-002", "PROF-006", "PROF-007", "PROF-009"],
-        QueueModeNotOffered(_) => &["PROF-002"],
-        QueueModeNeedsBase11(_) => &["BQ-003", "PROF-003"],
-        QueueModeWithoutTransactionNumber(_) => &["BQ-005", "PROF-003"],
-        FiltersNotAllowed(_) => &["BQ-004"],
-        FiltersNotOffered => &["PROF-002"],
-        InvalidFilter { .. } => &["FLT-010"],
-        TransactionNumberNotOffered => &["PROF-002", "PROF-008"],
-        TransactionNumberOnlyExt29 => &["PROF-005", "TN-004"],
-        TimeStampNotOffered => &["PROF-004", "PROF-008"],
-        TimeStampNeedsExt29WithTransactionNumber => &["PROF-004", "TS-002"],
-        FdStructuresCarryTransactionNumberAndTimeStamp => &["LAY-FD-001"],
-        SlotCount { .. } => &["PROF-011", "LAY-GEN-007"],
-        DistributedClocksNotOffered | DistributedClocksNeedsFastQueue => &["PDX-005"],
+        FormatNotOffered(_) => req_ids!["PROF-002", "PROF-006", "PROF-007", "PROF-009"],
+        QueueModeNotOffered(_) => req_ids!["PROF-002"],
+        QueueModeNeedsBase11(_) => req_ids!["BQ-003", "PROF-003"],
+        QueueModeWithoutTransactionNumber(_) => req_ids!["BQ-005", "PROF-003"],
+        FiltersNotAllowed(_) => req_ids!["BQ-004"],
+        FiltersNotOffered => req_ids!["PROF-002"],
+        InvalidFilter { .. } => req_ids!["FLT-010"],
+        TransactionNumberNotOffered => req_ids!["PROF-002", "PROF-008"],
+        TransactionNumberOnlyExt29 => req_ids!["PROF-005", "TN-004"],
+        TimeStampNotOffered => req_ids!["PROF-004", "PROF-008"],
+        TimeStampNeedsExt29WithTransactionNumber => req_ids!["PROF-004", "TS-002"],
+        FdStructuresCarryTransactionNumberAndTimeStamp => req_ids!["LAY-FD-001"],
+        SlotCount { .. } => req_ids!["PROF-011", "LAY-GEN-007"],
+        DistributedClocksNotOffered | DistributedClocksNeedsFastQueue => req_ids!["PDX-005"],
     }
 }
 
 /// Requirements the refusal check exercises.
-pub const REFUSAL_IDS: &[&str] = &[
+pub const REFUSAL_IDS: &[ReqId] = req_ids![
     "PROF-001",
     "PROF-002",
     "PROF-003",
@@ -335,12 +338,14 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
                             let expected = config.validate(caps);
                             let actual = match configure(caps, &config) {
                                 Ok(()) => Ok(()),
-                                Err(crate::iut::BuildError::Refused(reason)) => Err(reason),
-                                Err(crate::iut::BuildError::Failed(reason)) => {
+                                Err(BuildError::Refused(reason)) => Err(reason),
+                                Err(BuildError::Failed(reason)) => {
                                     return ScenarioRun {
                                         scenario: "configuration refusals".into(),
-                                        covers: ids(REFUSAL_IDS),
-                                        outcome: Outcome::Error(reason),
+                                        covers: REFUSAL_IDS.to_vec(),
+                                        outcome: Outcome::Error(
+                                            crate::error::IutError(reason).into(),
+                                        ),
                                         cycles: checked,
                                         frames_checked: 0,
                                     };
@@ -348,10 +353,8 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
                             };
                             if expected.is_ok() != actual.is_ok() {
                                 let requirements = match &expected {
-                                    Err(e) => {
-                                        refusal_ids(e).iter().map(|s| s.to_string()).collect()
-                                    }
-                                    Ok(()) => vec!["PROF-001".to_string(), "PROF-002".to_string()],
+                                    Err(e) => refusal_ids(e).to_vec(),
+                                    Ok(()) => req_ids!["PROF-001", "PROF-002"].to_vec(),
                                 };
                                 let failure = Failure {
                                     requirements,
@@ -375,7 +378,7 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
                                 };
                                 return ScenarioRun {
                                     scenario: "configuration refusals".into(),
-                                    covers: ids(REFUSAL_IDS),
+                                    covers: REFUSAL_IDS.to_vec(),
                                     outcome: Outcome::Fail(Box::new(failure)),
                                     cycles: checked,
                                     frames_checked: 0,
@@ -389,15 +392,11 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
     }
     ScenarioRun {
         scenario: "configuration refusals".into(),
-        covers: ids(REFUSAL_IDS),
+        covers: REFUSAL_IDS.to_vec(),
         outcome: Outcome::Pass,
         cycles: checked,
         frames_checked: 0,
     }
-}
-
-fn ids(list: &[&str]) -> Vec<String> {
-    list.iter().map(|s| s.to_string()).collect()
 }
 
 /// Runs every scenario of a profile against an IUT and judges each requirement.
@@ -421,7 +420,7 @@ pub fn run_profile(
             continue;
         }
         scenario.time_stamp_tolerance = profile.timestamp_tolerance_ns;
-        scenario.kernel = options.kernel.clone();
+        scenario.bus = options.bus.clone();
         if let Some(dir) = &options.trace_dir {
             let name: String = scenario
                 .name
@@ -452,14 +451,17 @@ pub fn judge(catalogue: &Catalogue, profile: &Profile, runs: Vec<ScenarioRun>) -
         match &run.outcome {
             Outcome::Fail(failure) => {
                 for id in &failure.requirements {
-                    failed.entry(id.clone()).or_default().push(failures.len());
+                    failed
+                        .entry(id.to_string())
+                        .or_default()
+                        .push(failures.len());
                 }
                 failures.push(failure.as_ref().clone());
             }
             Outcome::Error(message) => {
                 for id in &run.covers {
                     errors
-                        .entry(id.clone())
+                        .entry(id.to_string())
                         .or_insert_with(|| format!("{}: {message}", run.scenario));
                 }
             }
@@ -469,7 +471,9 @@ pub fn judge(catalogue: &Catalogue, profile: &Profile, runs: Vec<ScenarioRun>) -
     let mut verdicts = BTreeMap::new();
     for requirement in catalogue.requirements() {
         let missing = profile.lacks(&requirement.capabilities);
-        let checked = runs.iter().any(|r| r.covers.contains(&requirement.id));
+        let checked = runs
+            .iter()
+            .any(|r| r.covers.iter().any(|c| *c == requirement.id));
         let verdict = if !missing.is_empty() {
             Verdict::NotApplicable(format!("{} lacks {}", profile.name, missing.join(", ")))
         } else if let Some(indexes) = failed.get(&requirement.id) {
@@ -501,8 +505,9 @@ pub fn checked_ids(caps: &Capabilities, options: &Options) -> Vec<String> {
     let mut ids: Vec<String> = scenarios(caps, options)
         .into_iter()
         .flat_map(|s| s.covers)
+        .map(|id| id.to_string())
         .collect();
-    ids.extend(REFUSAL_IDS.iter().map(|s| s.to_string()));
+    ids.extend(REFUSAL_IDS.iter().map(|id| id.to_string()));
     ids.sort();
     ids.dedup();
     ids

@@ -1,7 +1,7 @@
 //! Generated stimulus with shrinking, and determinism.
 
-use canif_harness::check::run_scenario;
 use canif_harness::report::RunReport;
+use canif_harness::run_scenario;
 use canif_harness::scenario::{Scenario, Step, Steps};
 use canif_harness::suite::{run_profile, Options};
 use canif_harness::{IutKind, Outcome};
@@ -62,10 +62,10 @@ fn scenario_of(cycles: &[Cycle]) -> Scenario {
     Scenario {
         name: "proptest".into(),
         covers: vec![
-            "HS-TX-004".into(),
-            "HS-TX-006".into(),
-            "HS-RX-007".into(),
-            "RXQ-004".into(),
+            canif_spec::ReqId::new("HS-TX-004"),
+            canif_spec::ReqId::new("HS-TX-006"),
+            canif_spec::ReqId::new("HS-RX-007"),
+            canif_spec::ReqId::new("RXQ-004"),
         ],
         interface: InterfaceConfig::new(FrameFormat::Base11, 4),
         exchange: ExchangeMode::SeparateInputUpdate,
@@ -75,7 +75,7 @@ fn scenario_of(cycles: &[Cycle]) -> Scenario {
         declared_lengths: Vec::new(),
         time_stamp_tolerance: 0,
         trace: None,
-        kernel: None,
+        bus: canif_harness::bus::BusChoice::Sim,
         steps: Steps::Scripted(steps),
     }
 }
@@ -132,7 +132,9 @@ fn a_failure_shrinks_to_a_minimal_run() {
         panic!()
     };
     assert!(
-        failure.requirements.contains(&"HS-TX-004".to_string()),
+        failure
+            .requirements
+            .contains(&canif_spec::ReqId::new("HS-TX-004")),
         "{failure:?}"
     );
 }
@@ -212,7 +214,7 @@ fn compare_names_regressions_fixes_and_changes() {
 /// installed (.ci/run installs it), it must read the file too.
 #[test]
 fn traces_are_pcapng_and_candump() {
-    use canif_harness::check::run_scenario;
+    use canif_harness::run_scenario;
     use canif_harness::scenario;
     let dir = std::env::temp_dir().join(format!("canif-trace-{}", std::process::id()));
     let mut config = InterfaceConfig::new(FrameFormat::Fd, 4);

@@ -38,7 +38,7 @@ fn problems(run: &ProfileRun) -> Vec<String> {
                 f.what,
                 f.expected,
                 f.actual,
-                f.requirements.join(", "),
+                canif_spec::ReqId::join(&f.requirements, ", "),
                 f.context.join("\n    ")
             )),
             Outcome::Error(e) => Some(format!("{}: error: {e}", r.scenario)),

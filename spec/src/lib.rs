@@ -15,12 +15,14 @@ mod catalogue;
 pub mod coverage;
 mod error;
 mod profile;
+mod req_id;
 
 pub use catalogue::{
     Area, Capability, Catalogue, Requirement, Ruling, Source, SourceDocument, Status, Verification,
 };
 pub use error::{SpecError, SpecErrors};
 pub use profile::Profile;
+pub use req_id::ReqId;
 
 /// The embedded catalogue's files (path, text), in load order: what a
 /// certificate's catalogue hash covers.

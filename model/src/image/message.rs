@@ -153,6 +153,11 @@ impl<T: AsRef<[u8]>> MessageView<T> {
         self.layout
     }
 
+    /// The whole slot, every byte (for showing it, or comparing it whole).
+    pub fn as_bytes(&self) -> &[u8] {
+        self.buffer.as_ref()
+    }
+
     fn buf(&self) -> &[u8] {
         self.buffer.as_ref()
     }

@@ -14,10 +14,12 @@
 //!   `InfoData: ARRAY[0..15] OF UDINT` when the device offers InfoData;
 //! * the message structures are those of [`MessageLayout`]'s constants.
 
+mod header;
 mod input;
 mod message;
 mod output;
 
+pub use header::{InputHeader, OutputHeader};
 pub use input::InputImage;
 pub use message::{LengthField, MessageError, MessageLayout, MessageRepr, MessageView};
 pub use output::OutputImage;

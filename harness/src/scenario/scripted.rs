@@ -1,9 +1,6 @@
-//! Stimulus: what the PLC does and what the other nodes send, cycle by cycle.
-//! Scripted scenarios target requirement families; generated ones mix
-//! everything from a seed. Steps are produced lazily, so a long run holds
-//! bounded memory.
+//! Scripted stimulus: one scenario per requirement family, in the manual's terms.
 
-use canif_model::config::{FrameFormat, InterfaceConfig, QueueMode, Synchronization};
+use canif_model::config::{FrameFormat, InterfaceConfig, Synchronization};
 use canif_model::dlc::FD_DATA_SIZES;
 use canif_model::exchange::ExchangeMode;
 use canif_model::filter::{manual_example, FilterRow};
@@ -11,316 +8,10 @@ use canif_model::frame::{CanId, Frame};
 use canif_model::image::MessageRepr;
 use canif_model::info_data::ControllerStatus;
 use canif_model::timing::BitRates;
-use canif_model::Nanos;
+use canif_spec::ReqId;
 
-/// One PLC task cycle of stimulus.
-#[derive(Debug, Clone, Default)]
-pub struct Step {
-    /// Messages the PLC program queues before its task.
-    pub send: Vec<MessageRepr>,
-    /// The PLC skips its task (outputs stay as they were).
-    pub plc_busy: bool,
-    /// After its task the PLC writes this TxCounter (a jump: any change counts, G1).
-    pub set_tx_counter: Option<u16>,
-    /// Frames other nodes want to send, ready at this offset into the cycle.
-    pub bus: Vec<(Nanos, Frame)>,
-    pub status: Option<ControllerStatus>,
-}
-
-/// A small deterministic generator (xorshift64*), so a seed gives the same run byte for byte.
-#[derive(Debug, Clone)]
-pub struct Rng(u64);
-
-impl Rng {
-    pub fn new(seed: u64) -> Self {
-        Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
-    }
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    pub fn below(&mut self, n: u64) -> u64 {
-        if n == 0 {
-            0
-        } else {
-            self.next_u64() % n
-        }
-    }
-    pub fn chance(&mut self, percent: u64) -> bool {
-        self.below(100) < percent
-    }
-}
-
-/// How a scenario's steps come about.
-#[derive(Debug, Clone)]
-pub enum Steps {
-    Scripted(Vec<Step>),
-    /// Random PLC and bus behaviour for `cycles` cycles from `seed`, then a drain.
-    Generated {
-        cycles: u64,
-        seed: u64,
-        load_percent: u64,
-    },
-    /// One frame received and read every cycle, long enough for RxCounter to wrap.
-    RxWrap {
-        cycles: u64,
-    },
-}
-
-/// A scenario: an interface, the exchange and bus timing, and the stimulus.
-#[derive(Debug, Clone)]
-pub struct Scenario {
-    pub name: String,
-    /// The requirements it exercises; failures are attributed within these.
-    pub covers: Vec<String>,
-    pub interface: InterfaceConfig,
-    pub exchange: ExchangeMode,
-    pub bit_rates: BitRates,
-    pub cycle_time: Nanos,
-    pub check_confirmation_delay: bool,
-    /// FD Tx messages whose dataLength the PLC writes as this (not a valid
-    /// size), keyed by transaction number; the bytes past it hold junk.
-    pub declared_lengths: Vec<(u16, u8)>,
-    /// How far a receive time stamp may be from the end of reception (the
-    /// profile's timestamp_tolerance_ns, TS-004).
-    pub time_stamp_tolerance: Nanos,
-    /// Write the bus as `DIR/NAME.log` (candump) and `DIR/NAME.pcapng`.
-    pub trace: Option<(std::path::PathBuf, String)>,
-    /// Run on a SocketCAN interface in real time instead of the simulated bus.
-    pub kernel: Option<crate::kernel_bus::KernelBusOptions>,
-    pub steps: Steps,
-}
-
-impl Scenario {
-    pub fn steps(&self) -> Box<dyn Iterator<Item = Step> + '_> {
-        match &self.steps {
-            Steps::Scripted(steps) => Box::new(steps.iter().cloned()),
-            Steps::Generated {
-                cycles,
-                seed,
-                load_percent,
-            } => {
-                let mut gen = Generator::new(self, *seed, *load_percent);
-                let cycles = *cycles;
-                Box::new((0..cycles + 200).map(move |k| {
-                    if k < cycles {
-                        gen.step()
-                    } else {
-                        Step::default()
-                    }
-                }))
-            }
-            Steps::RxWrap { cycles } => {
-                let offset = self.cycle_time / 2;
-                Box::new((0..*cycles).map(move |k| Step {
-                    bus: vec![(
-                        offset,
-                        Frame::classic(CanId::Standard((k % 0x7FF) as u16), &[k as u8]).unwrap(),
-                    )],
-                    ..Step::default()
-                }))
-            }
-        }
-    }
-}
-
-/// Ids every scenario on an interface of this shape exercises.
-fn layout_ids(config: &InterfaceConfig) -> Vec<&'static str> {
-    let mut ids = vec![
-        "LAY-GEN-001",
-        "LAY-GEN-002",
-        "LAY-GEN-003",
-        "LAY-GEN-004",
-        "LAY-GEN-007",
-        "PDX-003",
-    ];
-    match config.format {
-        FrameFormat::Base11 => ids.extend([
-            "LAY-11-001",
-            "LAY-11-002",
-            "LAY-11-003",
-            "LAY-11-004",
-            "LAY-GEN-005",
-        ]),
-        FrameFormat::Extended29 => ids.extend([
-            "LAY-29-001",
-            "LAY-29-002",
-            "LAY-29-003",
-            "LAY-29-004",
-            "LAY-29-005",
-        ]),
-        FrameFormat::Fd => ids.extend([
-            "LAY-FD-001",
-            "LAY-FD-002",
-            "FD-001",
-            "FD-BIT-001",
-            "FD-BIT-002",
-            "FD-BIT-003",
-            "FD-BIT-004",
-        ]),
-    }
-    if config.transaction_number || config.format == FrameFormat::Fd {
-        ids.extend(["LAY-GEN-006", "TN-001", "TN-002", "TN-003"]);
-    } else if config.format != FrameFormat::Fd {
-        ids.push("LAY-GEN-005");
-    }
-    if config.time_stamp {
-        ids.extend(["TS-001", "TS-003", "TS-004"]);
-    }
-    match config.queue {
-        QueueMode::Fast => ids.extend(["FQ-003"]),
-        QueueMode::Optimized => ids.extend(["BQ-001"]),
-        QueueMode::Standard => {}
-    }
-    ids
-}
-
-/// Can a scenario on this interface exercise the requirement at all?
-fn exercisable(id: &str, config: &InterfaceConfig) -> bool {
-    let buffered = config.queue != QueueMode::Fast;
-    let fd = config.format == FrameFormat::Fd;
-    let tn = config.transaction_number || fd;
-    match id {
-        _ if id.starts_with("FQ-") => config.queue == QueueMode::Fast,
-        "BQ-001" => config.queue == QueueMode::Optimized,
-        "BQ-002" | "HS-RX-001" | "HS-RX-004" | "RXQ-003" | "RXQ-004" | "RXQ-006" => buffered,
-        _ if id.starts_with("FD-") || id.starts_with("LAY-FD-") || id == "ERR-R1" => fd,
-        _ if id.starts_with("TN-") || id == "LAY-GEN-006" => tn,
-        _ if id.starts_with("TS-") => config.time_stamp,
-        "FLT-008" => config.filters.is_empty(),
-        "FLT-009" => config.filters == manual_table(),
-        _ if id.starts_with("FLT-") => !config.filters.is_empty(),
-        _ if id.starts_with("LAY-11-") => config.format == FrameFormat::Base11,
-        _ if id.starts_with("LAY-29-") => config.format == FrameFormat::Extended29,
-        "RXQ-005" => config.format == FrameFormat::Base11,
-        _ => true,
-    }
-}
-
-fn scenario(name: &str, config: &InterfaceConfig, covers: &[&str], steps: Steps) -> Scenario {
-    let mut ids: Vec<String> = layout_ids(config)
-        .into_iter()
-        .chain(covers.iter().copied())
-        .filter(|id| exercisable(id, config))
-        .map(String::from)
-        .collect();
-    ids.sort();
-    ids.dedup();
-    let fd = config.format == FrameFormat::Fd;
-    Scenario {
-        name: name.to_string(),
-        covers: ids,
-        interface: config.clone(),
-        exchange: ExchangeMode::SeparateInputUpdate,
-        bit_rates: if fd {
-            BitRates {
-                nominal: 500_000,
-                data: 2_000_000,
-            }
-        } else {
-            BitRates::classic(500_000)
-        },
-        cycle_time: 1_000_000,
-        check_confirmation_delay: false,
-        declared_lengths: Vec::new(),
-        time_stamp_tolerance: 0,
-        trace: None,
-        kernel: None,
-        steps,
-    }
-}
-
-/// A message the interface can carry, from the generator.
-fn random_frame(rng: &mut Rng, format: FrameFormat) -> Frame {
-    let extended = format != FrameFormat::Base11 && rng.chance(50);
-    let id = if extended {
-        CanId::Extended(rng.below(0x2000_0000) as u32)
-    } else {
-        CanId::Standard(rng.below(0x800) as u16)
-    };
-    if format == FrameFormat::Fd && rng.chance(60) {
-        let size = usize::from(FD_DATA_SIZES[rng.below(16) as usize]);
-        let data: Vec<u8> = (0..size).map(|_| rng.next_u64() as u8).collect();
-        return Frame::fd(id, rng.chance(50), rng.chance(20), &data).unwrap();
-    }
-    if rng.chance(10) {
-        return Frame::remote(id, rng.below(9) as u8).unwrap();
-    }
-    let len = rng.below(9) as usize;
-    let data: Vec<u8> = (0..len).map(|_| rng.next_u64() as u8).collect();
-    Frame::classic(id, &data).unwrap()
-}
-
-struct Generator {
-    rng: Rng,
-    format: FrameFormat,
-    slots: u64,
-    cycle_time: Nanos,
-    bit_rates: BitRates,
-    load_percent: u64,
-    /// Bus time still free to offer: a cycle's share of the load is added each
-    /// cycle, every frame offered (PLC or node) spends its duration. Offering
-    /// no more than the bus carries keeps every backlog, and memory, bounded.
-    budget: Nanos,
-    tn: u16,
-}
-
-impl Generator {
-    fn new(scenario: &Scenario, seed: u64, load_percent: u64) -> Self {
-        Generator {
-            rng: Rng::new(seed),
-            format: scenario.interface.format,
-            slots: u64::from(scenario.interface.tx_slots),
-            cycle_time: scenario.cycle_time,
-            bit_rates: scenario.bit_rates,
-            load_percent,
-            budget: 0,
-            tn: 0,
-        }
-    }
-
-    fn affordable(&mut self, frame: &Frame) -> bool {
-        let cost = crate::bus::duration(frame, self.bit_rates);
-        if cost > self.budget {
-            return false;
-        }
-        self.budget -= cost;
-        true
-    }
-
-    fn step(&mut self) -> Step {
-        let share = self.cycle_time * self.load_percent / 100;
-        // Quiet cycles save up for a burst of at most four cycles' worth.
-        self.budget = (self.budget + share).min(4 * share);
-        let mut step = Step {
-            plc_busy: self.rng.chance(15),
-            ..Step::default()
-        };
-        for _ in 0..self.rng.below(self.slots + 3) {
-            let frame = random_frame(&mut self.rng, self.format);
-            if !self.affordable(&frame) {
-                break;
-            }
-            self.tn = self.tn.wrapping_add(1);
-            step.send.push(MessageRepr {
-                transaction_number: self.tn,
-                frame,
-                time_stamp: 0,
-            });
-        }
-        for _ in 0..self.rng.below(2 * self.slots) {
-            let frame = random_frame(&mut self.rng, self.format);
-            if !self.affordable(&frame) {
-                break;
-            }
-            let at = self.rng.below(self.cycle_time);
-            step.bus.push((at, frame));
-        }
-        step
-    }
-}
+use super::generated::random_frame;
+use super::{scenario, Rng, Scenario, Step, Steps};
 
 fn message(frame: Frame, transaction_number: u16) -> MessageRepr {
     MessageRepr {
@@ -424,7 +115,7 @@ pub fn lrw_exchange(config: &InterfaceConfig) -> Scenario {
     scenario.name = "lrw-exchange".into();
     scenario.exchange = ExchangeMode::Lrw;
     scenario.check_confirmation_delay = true;
-    scenario.covers.push("PDX-001".into());
+    scenario.covers.push(ReqId::new("PDX-001"));
     scenario
 }
 
@@ -433,7 +124,7 @@ pub fn separate_input_update(config: &InterfaceConfig) -> Scenario {
     let mut scenario = tx_batches(config, 8);
     scenario.name = "separate-input-update".into();
     scenario.check_confirmation_delay = true;
-    scenario.covers.push("PDX-002".into());
+    scenario.covers.push(ReqId::new("PDX-002"));
     scenario
 }
 
@@ -738,42 +429,5 @@ pub fn distributed_clocks(config: &InterfaceConfig) -> Scenario {
         &config,
         &["PDX-004", "PDX-005"],
         Steps::Scripted(steps),
-    )
-}
-
-/// Random PLC behaviour and bus load from a seed.
-pub fn generated(config: &InterfaceConfig, seed: u64, cycles: u64, load_percent: u64) -> Scenario {
-    let covers = [
-        "HS-TX-001",
-        "HS-TX-002",
-        "HS-TX-004",
-        "HS-TX-006",
-        "HS-TX-007",
-        "HS-TX-008",
-        "HS-TX-009",
-        "HS-TX-011",
-        "HS-RX-001",
-        "HS-RX-002",
-        "HS-RX-003",
-        "HS-RX-004",
-        "HS-RX-006",
-        "HS-RX-007",
-        "BQ-002",
-        "FQ-001",
-        "FQ-002",
-        "FQ-004",
-        "RXQ-003",
-        "RXQ-004",
-        "FD-LEN-005",
-    ];
-    scenario(
-        &format!("generated-{seed}"),
-        config,
-        &covers,
-        Steps::Generated {
-            cycles,
-            seed,
-            load_percent,
-        },
     )
 }

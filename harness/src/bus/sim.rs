@@ -1,6 +1,6 @@
 //! A simulated CAN bus in virtual time: frames take the time the model's bit
 //! timing gives them, and among frames waiting when the bus goes idle the
-//! lowest arbitration field wins.
+//! lowest arbitration field wins (ISO 11898-1 arbitration).
 
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashMap};
@@ -8,6 +8,10 @@ use std::collections::{BinaryHeap, HashMap};
 use canif_model::frame::{CanId, Frame, FrameKind};
 use canif_model::timing::{frame_duration, BitRates, Stuffing};
 use canif_model::Nanos;
+
+use super::Bus;
+use crate::outcome::Outcome;
+use crate::pair::Pair;
 
 /// The bits a frame sends during arbitration, as a number: lower wins.
 /// Standard: id(11) RTR IDE=0; extended: base(11) SRR=1 IDE=1 ext(18) RTR.
@@ -83,5 +87,77 @@ impl Nodes {
 
     pub fn is_empty(&self) -> bool {
         self.len() == 0
+    }
+}
+
+/// The simulated bus of one scenario: the other nodes, and the frame on the wire.
+#[derive(Debug)]
+pub struct SimBus {
+    nodes: Nodes,
+    bit_rates: BitRates,
+    /// The frame on the bus: its end, whether the IUT sent it.
+    on_bus: Option<(Nanos, Frame, bool)>,
+}
+
+impl SimBus {
+    pub fn new(bit_rates: BitRates) -> Self {
+        SimBus {
+            nodes: Nodes::default(),
+            bit_rates,
+            on_bus: None,
+        }
+    }
+}
+
+impl Bus for SimBus {
+    fn schedule(&mut self, at: Nanos, frame: Frame) {
+        self.nodes.schedule(at, frame);
+    }
+
+    /// Completes frames, starts the next winner of arbitration, until `until`.
+    fn run_until(&mut self, pair: &mut Pair, until: Nanos) -> Result<(), Outcome> {
+        loop {
+            pair.poll()?;
+            if self.on_bus.is_none() {
+                let node = self.nodes.best_key(pair.now);
+                let iut = pair.iut_pending.as_ref().map(arbitration_key);
+                let start = match (node, iut) {
+                    (Some(n), Some(k)) if n < k => {
+                        self.nodes.take_best(pair.now).map(|f| (f, false))
+                    }
+                    (Some(_), None) => self.nodes.take_best(pair.now).map(|f| (f, false)),
+                    (_, Some(_)) => pair.iut_pending.take().map(|f| (f, true)),
+                    (None, None) => None,
+                };
+                if let Some((frame, from_iut)) = start {
+                    let end = pair.now + duration(&frame, self.bit_rates);
+                    self.on_bus = Some((end, frame, from_iut));
+                }
+            }
+            let next = [
+                self.on_bus.as_ref().map(|(end, _, _)| *end),
+                self.nodes.next_ready_after(pair.now),
+                pair.iut.poll_timeout().filter(|t| *t > pair.now),
+            ]
+            .into_iter()
+            .flatten()
+            .min();
+            match next {
+                Some(t) if t <= until => {
+                    pair.now = t;
+                    if let Some((end, frame, from_iut)) = self.on_bus.take() {
+                        if end == t {
+                            pair.complete(frame, from_iut, end);
+                        } else {
+                            self.on_bus = Some((end, frame, from_iut));
+                        }
+                    }
+                }
+                _ => {
+                    pair.now = until;
+                    return Ok(());
+                }
+            }
+        }
     }
 }

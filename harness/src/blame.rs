@@ -1,0 +1,118 @@
+//! Which requirements a difference in each place of the interface can break.
+//! The scenario's own list narrows them to what it exercises.
+
+use canif_spec::{req_ids, ReqId};
+
+pub const INPUT_IMAGE_SIZE: &[ReqId] = req_ids!["LAY-GEN-004"];
+pub const TX_COUNTER: &[ReqId] = req_ids![
+    "HS-TX-002",
+    "HS-TX-003",
+    "HS-TX-005",
+    "HS-TX-007",
+    "HS-TX-008",
+    "FQ-003",
+];
+/// The device filled a buffer the PLC had not released.
+pub const RX_UNRELEASED: &[ReqId] = req_ids!["HS-RX-001", "HS-RX-004"];
+/// RxCounter moved with nothing new.
+pub const RX_EMPTY_DELIVERY: &[ReqId] = req_ids!["HS-RX-006"];
+/// A frame came in that should not have (or one was held back that should not).
+pub const RX_ADMISSION: &[ReqId] = req_ids![
+    "RXQ-005", "FLT-001", "FLT-002", "FLT-003", "FLT-004", "FLT-005", "FLT-006", "FLT-007",
+    "FLT-008", "FLT-009",
+];
+/// Nothing delivered although there was something and the buffer was free.
+pub const RX_WITHHELD_FAST: &[ReqId] = req_ids!["FQ-001", "FQ-002"];
+pub const RX_WITHHELD: &[ReqId] = req_ids![
+    "BQ-002",
+    "HS-RX-001",
+    "FLT-001",
+    "FLT-005",
+    "FLT-006",
+    "FLT-008",
+];
+/// Both moved, to different values.
+pub const RX_COUNTING: &[ReqId] = req_ids!["HS-RX-005", "HS-RX-006"];
+pub const RX_SET: &[ReqId] = req_ids![
+    "HS-RX-001",
+    "HS-RX-002",
+    "HS-RX-004",
+    "HS-RX-007",
+    "BQ-002",
+    "RXQ-003",
+    "RXQ-004",
+    "RXQ-005",
+    "RXQ-006",
+    "FQ-004",
+    "FLT-001",
+    "FLT-002",
+    "FLT-003",
+    "FLT-004",
+    "FLT-005",
+    "FLT-006",
+    "FLT-007",
+    "FLT-008",
+    "FLT-009",
+];
+pub const TRANSACTION_NUMBER: &[ReqId] = req_ids!["TN-002", "TN-003"];
+pub const COB_WORD: &[ReqId] = req_ids!["LAY-11-002", "LAY-11-003", "LAY-11-004", "LAY-GEN-003"];
+pub const COB_LOW: &[ReqId] = req_ids!["LAY-29-003", "LAY-GEN-003"];
+pub const COB_RTR: &[ReqId] = req_ids!["LAY-29-004"];
+pub const COB_FORMAT: &[ReqId] = req_ids!["LAY-29-005"];
+pub const LENGTH: &[ReqId] = req_ids!["LAY-11-002", "LAY-29-002", "FD-LEN-005", "LAY-GEN-003"];
+pub const FLAGS: &[ReqId] = req_ids!["FD-BIT-001", "FD-BIT-002", "FD-BIT-003"];
+pub const TIME_STAMP: &[ReqId] = req_ids!["TS-001", "TS-003", "TS-004"];
+pub const TX_MISSING: &[ReqId] = req_ids![
+    "HS-TX-002",
+    "HS-TX-004",
+    "HS-TX-006",
+    "HS-TX-007",
+    "HS-TX-009",
+    "PDX-003",
+    "PDX-005",
+];
+pub const TX_EXTRA: &[ReqId] =
+    req_ids!["HS-TX-006", "HS-TX-009", "HS-TX-011", "PDX-004", "PDX-005"];
+pub const TX_OTHER_FRAME: &[ReqId] = req_ids!["HS-TX-004", "HS-TX-006", "HS-TX-009"];
+pub const TX_REMOTE: &[ReqId] = req_ids!["LAY-11-003", "LAY-29-004"];
+pub const TX_FORMAT: &[ReqId] = req_ids!["LAY-29-005", "FD-BIT-001"];
+pub const TX_FD_FLAGS: &[ReqId] = req_ids!["FD-BIT-001", "FD-BIT-002", "FD-BIT-003"];
+pub const TX_LENGTH: &[ReqId] = req_ids![
+    "FD-LEN-003",
+    "FD-LEN-004",
+    "ERR-R1",
+    "LAY-11-002",
+    "LAY-29-002",
+    "HS-TX-009",
+];
+pub const TX_PADDING: &[ReqId] = req_ids!["FD-LEN-005"];
+pub const TX_DATA: &[ReqId] = req_ids!["HS-TX-006", "LAY-GEN-003"];
+pub const TX_INVALID: &[ReqId] = req_ids!["FD-LEN-003", "FD-LEN-004", "ERR-R1", "LAY-GEN-008"];
+pub const CONFIRMATION: &[ReqId] = req_ids!["PDX-001", "PDX-002"];
+
+/// The requirements of `InfoData[index]`.
+pub fn info_data(index: usize) -> &'static [ReqId] {
+    match index {
+        0 => req_ids!["INFO-002"],
+        1 | 2 => req_ids!["INFO-003"],
+        3 => req_ids!["INFO-004"],
+        4..=6 => req_ids!["INFO-005", "INFO-007"],
+        11 | 15 => req_ids!["INFO-006"],
+        _ => req_ids!["INFO-005"],
+    }
+}
+
+/// The requirements a difference breaks: those of the differing field that the
+/// scenario exercises, or, when it exercises none of them, the field's own.
+pub fn narrow(covers: &[ReqId], candidates: &[ReqId]) -> Vec<ReqId> {
+    let narrowed: Vec<ReqId> = candidates
+        .iter()
+        .filter(|id| covers.contains(id))
+        .copied()
+        .collect();
+    if narrowed.is_empty() {
+        candidates.to_vec()
+    } else {
+        narrowed
+    }
+}

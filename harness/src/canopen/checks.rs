@@ -1,0 +1,289 @@
+//! The node checks of the quick start (002) and the SDO page (004), against
+//! any [`CanNode`].
+
+use canif_model::canopen::cob_id::{default_cob_id, Channel};
+use canif_model::canopen::guarding::{self, GuardChecker};
+use canif_model::canopen::heartbeat;
+use canif_model::canopen::nmt::{command_frame, NmtCommand, NmtState};
+use canif_model::canopen::sdo::{abort_code, SdoRequest, SdoResponse};
+use canif_model::canopen::NodeId;
+use canif_model::frame::{CanId, Frame};
+use canif_model::Nanos;
+
+use super::CanNode;
+
+/// One check's verdict.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CheckResult {
+    pub name: &'static str,
+    pub requirements: &'static [&'static str],
+    pub outcome: Result<(), String>,
+}
+
+pub(super) fn sdo_request(node: NodeId, request: SdoRequest) -> Frame {
+    Frame::classic(
+        CanId::Standard(default_cob_id(Channel::SdoRequest, node)),
+        &request.to_bytes(),
+    )
+    .expect("8 bytes")
+}
+
+/// The one SDO answer to `request`, parsed.
+fn sdo(
+    target: &mut dyn CanNode,
+    node: NodeId,
+    request: SdoRequest,
+    now: Nanos,
+) -> Result<SdoResponse, String> {
+    let answers = target.handle(&sdo_request(node, request), now);
+    let response_id = CanId::Standard(default_cob_id(Channel::SdoResponse, node));
+    let [answer] = answers.as_slice() else {
+        return Err(format!(
+            "expected one answer on 0x{:03X}, got {answers:?}",
+            response_id.raw()
+        ));
+    };
+    if answer.id != response_id {
+        return Err(format!(
+            "the answer came on 0x{:03X}, not 0x{:03X}",
+            answer.id.raw(),
+            response_id.raw()
+        ));
+    }
+    SdoResponse::parse(answer.data()).map_err(|e| format!("{answer} is no SDO response: {e:?}"))
+}
+
+fn guard_state(
+    target: &mut dyn CanNode,
+    node: NodeId,
+    checker: &mut GuardChecker,
+    now: Nanos,
+) -> Result<NmtState, String> {
+    let answers = target.handle(&guarding::request(node), now);
+    let [answer] = answers.as_slice() else {
+        return Err(format!("expected one guarding answer, got {answers:?}"));
+    };
+    checker.check(answer)
+}
+
+/// Runs every check against `target`, a node with id `node`, from its boot
+/// state. `tolerance`: how far a heartbeat may be from its due time (0 in
+/// virtual time; a real bus needs the poll step plus scheduling jitter).
+pub fn check_node(target: &mut dyn CanNode, node: NodeId, tolerance: Nanos) -> Vec<CheckResult> {
+    let mut results = Vec::new();
+    let mut now: Nanos = 0;
+    let mut record = |name, requirements, outcome| {
+        results.push(CheckResult {
+            name,
+            requirements,
+            outcome,
+        })
+    };
+    let mut guard = GuardChecker::default();
+
+    record(
+        "guarding answers with the state and a toggling bit 7",
+        &["GRD-001", "GRD-002", "GRD-003", "GRD-004"],
+        (0..4).try_for_each(|_| {
+            now += 1_000_000;
+            match guard_state(target, node, &mut guard, now)? {
+                NmtState::PreOperational => Ok(()),
+                other => Err(format!(
+                    "state {other:?}, expected pre-operational after boot"
+                )),
+            }
+        }),
+    );
+
+    target.handle(&command_frame(NmtCommand::StartRemoteNode, None), now);
+    record(
+        "NMT start (0x000: 01 00) makes the node operational",
+        &["NMT-001", "NMT-003", "NMT-004", "NMT-006"],
+        guard_state(target, node, &mut guard, now).and_then(|s| {
+            if s == NmtState::Operational {
+                Ok(())
+            } else {
+                Err(format!("state {s:?}"))
+            }
+        }),
+    );
+
+    record(
+        "an RTR on the analog inputs is answered on 0x280 + node id",
+        &["PDO-003", "COB-001", "PDO-002"],
+        {
+            let id = default_cob_id(Channel::AnalogInputs1To4, node);
+            let answers = target.handle(&Frame::remote(CanId::Standard(id), 8).expect("rtr"), now);
+            match answers.as_slice() {
+                [answer]
+                    if answer.id == CanId::Standard(id)
+                        && answer.data().len() % 2 == 0
+                        && !answer.data().is_empty() =>
+                {
+                    Ok(())
+                }
+                other => Err(format!("answers {other:?}")),
+            }
+        },
+    );
+
+    for (name, requirements, index, size, command) in [
+        (
+            "a 4-byte upload (0x1000) is answered with 0x43",
+            &["SDO-001", "SDO-002", "SDO-005", "SDO-009"][..],
+            0x1000u16,
+            4u8,
+            0x43u8,
+        ),
+        (
+            "an Unsigned8 upload (0x1001) is answered with 0x4F, value in D0",
+            &["SDO-005", "SDO-008"][..],
+            0x1001,
+            1,
+            0x4F,
+        ),
+    ] {
+        let outcome = sdo(
+            target,
+            node,
+            SdoRequest::Upload {
+                index,
+                sub_index: 0,
+            },
+            now,
+        )
+        .and_then(|answer| match answer {
+            SdoResponse::Upload {
+                index: i,
+                sub_index: 0,
+                size: s,
+                ..
+            } if i == index && s == size => Ok(()),
+            other => Err(format!(
+                "answer {other:?} ({:02X?}), expected command byte 0x{command:02X}",
+                other.to_bytes()
+            )),
+        });
+        record(name, requirements, outcome);
+    }
+
+    let period_ms = 100u16;
+    let download = sdo(target, node, heartbeat::set_producer_time(period_ms), now);
+    record(
+        "the heartbeat download (22 17 10 00 …) is confirmed with 0x60",
+        &["HB-002", "SDO-003", "SDO-004", "SDO-006"],
+        match download {
+            Ok(SdoResponse::DownloadAck {
+                index: 0x1017,
+                sub_index: 0,
+            }) => Ok(()),
+            other => Err(format!("answer {other:?}")),
+        },
+    );
+    let start = now;
+    let mut beats = Vec::new();
+    for step in 0..=35 {
+        let at = start + step * 10_000_000;
+        for frame in target.poll(at) {
+            if frame.id == CanId::Standard(default_cob_id(Channel::ErrorControl, node)) {
+                beats.push((at, frame.data().to_vec()));
+            }
+        }
+    }
+    record(
+        "heartbeats carry the state every producer time",
+        &["HB-001", "HB-003"],
+        {
+            let times: Vec<Nanos> = beats.iter().map(|(at, _)| at - start).collect();
+            let states_ok = beats
+                .iter()
+                .all(|(_, data)| data == &[NmtState::Operational.code()]);
+            let period = Nanos::from(period_ms) * 1_000_000;
+            let on_time = times.len() == 4
+                && times
+                    .iter()
+                    .zip(0..)
+                    .all(|(t, k)| t.abs_diff(k * period) <= tolerance);
+            if on_time && states_ok {
+                Ok(())
+            } else {
+                Err(format!(
+                    "heartbeats at {times:?} ns, data {:?}",
+                    beats.iter().map(|(_, d)| d).collect::<Vec<_>>()
+                ))
+            }
+        },
+    );
+    now = start + 400_000_000;
+    let stop = sdo(target, node, heartbeat::set_producer_time(0), now);
+    record(
+        "producer time 0 stops the heartbeat",
+        &["HB-002", "SDO-006"],
+        match stop {
+            Ok(SdoResponse::DownloadAck {
+                index: 0x1017,
+                sub_index: 0,
+            }) => {
+                now += 300_000_000;
+                let late: Vec<Frame> = target
+                    .poll(now)
+                    .into_iter()
+                    .filter(|f| {
+                        f.id == CanId::Standard(default_cob_id(Channel::ErrorControl, node))
+                    })
+                    .collect();
+                // One beat may have been on its way when the download arrived.
+                if late.len() <= 1 {
+                    Ok(())
+                } else {
+                    Err(format!("{} heartbeats after the stop", late.len()))
+                }
+            }
+            other => Err(format!("answer {other:?}")),
+        },
+    );
+
+    for (name, index, sub_index, code) in [
+        (
+            "an unknown object is aborted with 0x06020000",
+            0x2345u16,
+            0u8,
+            abort_code::OBJECT_DOES_NOT_EXIST,
+        ),
+        (
+            "an unknown sub-index is aborted with 0x06090011",
+            0x1018,
+            9,
+            abort_code::SUB_INDEX_DOES_NOT_EXIST,
+        ),
+    ] {
+        let outcome =
+            sdo(target, node, SdoRequest::Upload { index, sub_index }, now).and_then(|answer| {
+                match answer {
+                    SdoResponse::Abort {
+                        index: i,
+                        sub_index: s,
+                        code: c,
+                    } if i == index && s == sub_index && c == code => Ok(()),
+                    other => Err(format!("answer {other:?}")),
+                }
+            });
+        record(name, &["SDO-007", "ERR-R8"], outcome);
+    }
+
+    target.handle(&command_frame(NmtCommand::EnterPreOperational, None), now);
+    let pre_operational = guard_state(target, node, &mut guard, now);
+    target.handle(&command_frame(NmtCommand::StopRemoteNode, Some(node)), now);
+    let stopped = guard_state(target, node, &mut guard, now);
+    record(
+        "0x80 enters pre-operational (0x7F), 0x02 stops (0x04)",
+        &[
+            "NMT-002", "NMT-003", "NMT-004", "NMT-005", "ERR-R6", "GRD-003",
+        ],
+        match (pre_operational, stopped) {
+            (Ok(NmtState::PreOperational), Ok(NmtState::Stopped)) => Ok(()),
+            other => Err(format!("states {other:?}")),
+        },
+    );
+    results
+}

@@ -1,0 +1,203 @@
+//! The quick start (002) through an IUT's process image only.
+
+use canif_model::canopen::cob_id::{default_cob_id, Channel};
+use canif_model::canopen::guarding::{self, GuardChecker};
+use canif_model::canopen::heartbeat;
+use canif_model::canopen::nmt::{command_frame, NmtCommand, NmtState};
+use canif_model::canopen::sdo::SdoRequest;
+use canif_model::canopen::NodeId;
+use canif_model::frame::{CanId, Frame};
+use canif_model::Nanos;
+
+use super::checks::{sdo_request, CheckResult};
+
+/// Sends a request (if any) and runs cycles until an answer on the given
+/// identifier arrives or the cycles are over: the last cycle's time and what came.
+type Exchange<'a> = dyn FnMut(Option<Frame>, Option<CanId>, u32) -> Result<(Nanos, Vec<(Nanos, Frame)>), String>
+    + 'a;
+
+/// The quick start (002) from start to stop, driven by a PLC that has only
+/// the CAN interface's process image: every telegram goes out as a Tx message
+/// and every answer comes back as an Rx message of `iut`. `cycle` runs one
+/// interface cycle (it waits for real time on a real bus) and gives its time.
+pub fn quick_start(
+    iut: &mut dyn crate::iut::Iut,
+    layout: canif_model::image::ImageLayout,
+    node: NodeId,
+    cycle: &mut dyn FnMut() -> Nanos,
+) -> Vec<CheckResult> {
+    use canif_model::client::PlcClient;
+    use canif_model::image::MessageRepr;
+    let mut plc = PlcClient::new(layout);
+    let mut results = Vec::new();
+    // Sends `request` (if any) and runs cycles until a message on `answer` comes
+    // back, or `cycles` pass; everything received meanwhile.
+    let mut exchange = |request: Option<Frame>,
+                        answer: Option<CanId>,
+                        cycles: u32|
+     -> Result<(Nanos, Vec<(Nanos, Frame)>), String> {
+        if let Some(frame) = request {
+            plc.send(MessageRepr {
+                transaction_number: 0,
+                frame,
+                time_stamp: 0,
+            })
+            .map_err(|e| format!("the PLC cannot queue {frame}: {e:?}"))?;
+        }
+        let mut received = Vec::new();
+        let mut now = 0;
+        for _ in 0..cycles {
+            now = cycle();
+            let outputs = plc.outputs().to_vec();
+            let inputs = iut.cycle(&outputs, now).map_err(|e| e.0)?;
+            plc.task(&inputs).map_err(|e| format!("{e:?}"))?;
+            received.extend(plc.take_received().into_iter().map(|m| (now, m.frame)));
+            if answer.is_some_and(|id| received.iter().any(|(_, f)| f.id == id)) {
+                break;
+            }
+        }
+        Ok((now, received))
+    };
+    let guard_id = CanId::Standard(default_cob_id(Channel::ErrorControl, node));
+    let sdo_id = CanId::Standard(default_cob_id(Channel::SdoResponse, node));
+    let analog_id = CanId::Standard(default_cob_id(Channel::AnalogInputs1To4, node));
+    let answer_on = |got: &[(Nanos, Frame)], id: CanId| -> Result<Frame, String> {
+        got.iter()
+            .map(|(_, f)| *f)
+            .find(|f| f.id == id)
+            .ok_or_else(|| format!("no answer on 0x{:03X} (received {got:?})", id.raw()))
+    };
+    let mut guard = GuardChecker::default();
+    let mut guard_state = |exchange: &mut Exchange<'_>| -> Result<NmtState, String> {
+        let (_, got) = exchange(Some(guarding::request(node)), Some(guard_id), 50)?;
+        guard.check(&answer_on(&got, guard_id)?)
+    };
+    let mut record = |name, requirements, outcome| {
+        results.push(CheckResult {
+            name,
+            requirements,
+            outcome,
+        })
+    };
+
+    let started = exchange(
+        Some(command_frame(NmtCommand::StartRemoteNode, None)),
+        None,
+        3,
+    )
+    .and_then(|_| guard_state(&mut exchange));
+    record(
+        "NMT start (0x000: 01 00), then guarding says operational",
+        &["NMT-001", "NMT-003", "GRD-001", "GRD-003"][..],
+        match started {
+            Ok(NmtState::Operational) => Ok(()),
+            other => Err(format!("{other:?}")),
+        },
+    );
+    let analog = exchange(
+        Some(Frame::remote(analog_id, 8).expect("rtr")),
+        Some(analog_id),
+        50,
+    )
+    .and_then(|(_, got)| answer_on(&got, analog_id));
+    record(
+        "an RTR on 0x280 + node id is answered with the analog inputs",
+        &["PDO-003", "COB-001"],
+        analog.and_then(|f| {
+            if f.data().len() == 8 {
+                Ok(())
+            } else {
+                Err(format!("answer {f}"))
+            }
+        }),
+    );
+    for (name, requirements, index, expected) in [
+        (
+            "SDO upload 0x1001:0 is answered 4F 01 10 00 …",
+            &["SDO-001", "SDO-005", "SDO-008"][..],
+            0x1001u16,
+            &[0x4F, 0x01, 0x10, 0x00][..],
+        ),
+        (
+            "SDO upload 0x2345:0 is aborted 80 45 23 00 00 00 02 06",
+            &["SDO-007", "ERR-R8"][..],
+            0x2345,
+            &[0x80, 0x45, 0x23, 0x00, 0x00, 0x00, 0x02, 0x06][..],
+        ),
+    ] {
+        let outcome = exchange(
+            Some(sdo_request(
+                node,
+                SdoRequest::Upload {
+                    index,
+                    sub_index: 0,
+                },
+            )),
+            Some(sdo_id),
+            50,
+        )
+        .and_then(|(_, got)| answer_on(&got, sdo_id))
+        .and_then(|f| {
+            if f.data().starts_with(expected) {
+                Ok(())
+            } else {
+                Err(format!("answer {f}"))
+            }
+        });
+        record(name, requirements, outcome);
+    }
+    let heartbeat = exchange(
+        Some(sdo_request(node, heartbeat::set_producer_time(100))),
+        Some(sdo_id),
+        50,
+    )
+    .and_then(|(first, _)| {
+        // About 350 ms of cycles: heartbeats every 100 ms.
+        let mut beats = Vec::new();
+        loop {
+            let (now, got) = exchange(None, None, 1)?;
+            beats.extend(got.into_iter().filter(|(_, f)| f.id == guard_id));
+            if beats.len() >= 4 || now - first > 1_000_000_000 {
+                break;
+            }
+        }
+        exchange(
+            Some(sdo_request(node, heartbeat::set_producer_time(0))),
+            Some(sdo_id),
+            50,
+        )?;
+        if beats.len() >= 3 && beats.iter().all(|(_, f)| f.data() == [0x05]) {
+            Ok(())
+        } else {
+            Err(format!("heartbeats {beats:?}"))
+        }
+    });
+    record(
+        "0x1017 = 100 ms: heartbeats 0x705 with the state (05), then 0 stops them",
+        &["HB-001", "HB-002", "HB-003"],
+        heartbeat,
+    );
+    // Heartbeats still on their way would be read as guarding answers.
+    let _ = exchange(None, None, 30);
+    let pre = exchange(
+        Some(command_frame(NmtCommand::EnterPreOperational, None)),
+        None,
+        3,
+    )
+    .and_then(|_| guard_state(&mut exchange));
+    let stopped = exchange(
+        Some(command_frame(NmtCommand::StopRemoteNode, Some(node))),
+        None,
+        3,
+    )
+    .and_then(|_| guard_state(&mut exchange));
+    record(
+        "0x80 enters pre-operational, 0x02 stops: guarding says 7F, then 04",
+        &["NMT-002", "NMT-005", "ERR-R6", "GRD-003"],
+        match (pre, stopped) {
+            (Ok(NmtState::PreOperational), Ok(NmtState::Stopped)) => Ok(()),
+            other => Err(format!("{other:?}")),
+        },
+    );
+    results
+}

@@ -1,0 +1,231 @@
+//! Where two input images, or two frames, differ, and which requirements that
+//! difference breaks. Images are read only through the model's views; what the
+//! documents call don't-care is skipped: Rx slots at and past NoOfRxMessages
+//! (HS-RX-008, FQ-005) and data bytes past the length.
+
+use canif_model::frame::Frame;
+use canif_model::image::{field, ImageLayout, InputImage, LengthField, MessageRepr, MessageView};
+use canif_model::Nanos;
+use canif_spec::ReqId;
+
+use crate::blame;
+
+/// A difference found, before it becomes a [`crate::Failure`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Difference {
+    pub candidates: &'static [ReqId],
+    pub what: String,
+    pub expected: String,
+    pub actual: String,
+}
+
+/// Bytes as `01 02 0A`.
+pub fn hex(bytes: &[u8]) -> String {
+    bytes
+        .iter()
+        .map(|b| format!("{b:02X}"))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+fn describe_slot(view: &MessageView<&[u8]>) -> String {
+    match MessageRepr::parse(view) {
+        Ok(m) => format!("{} ts={} [{}]", m.frame, m.time_stamp, hex(view.as_bytes())),
+        Err(e) => format!("invalid ({e}) [{}]", hex(view.as_bytes())),
+    }
+}
+
+/// What the Rx handshake looked like going into the cycle (both devices agreed
+/// until now, so one previous RxCounter serves both).
+#[derive(Debug, Clone, Copy)]
+pub struct RxState {
+    pub before: u16,
+    pub plc_released: u16,
+    pub fast: bool,
+}
+
+/// How an input image is judged against the model's.
+pub struct InputCheck<'a> {
+    pub layout: &'a ImageLayout,
+    /// Whether a frame was on the bus lately (a slot holding one carries a real,
+    /// wrong frame; anything else is a frame the IUT encoded wrongly).
+    pub was_on_bus: &'a dyn Fn(&Frame) -> bool,
+    pub time_stamp_tolerance: Nanos,
+    pub rx: RxState,
+}
+
+impl InputCheck<'_> {
+    /// The first difference between the model's and the IUT's input image.
+    pub fn compare(&self, expected: &[u8], actual: &[u8]) -> Option<Difference> {
+        let (Ok(e), Ok(a)) = (
+            InputImage::new_checked(expected, *self.layout),
+            InputImage::new_checked(actual, *self.layout),
+        ) else {
+            return Some(Difference {
+                candidates: blame::INPUT_IMAGE_SIZE,
+                what: "input image size".into(),
+                expected: format!("{} bytes", expected.len()),
+                actual: format!("{} bytes", actual.len()),
+            });
+        };
+        self.header(&e, &a)
+            .or_else(|| self.messages(&e, &a))
+            .or_else(|| self.info_data(&e, &a))
+    }
+
+    fn header(&self, e: &InputImage<&[u8]>, a: &InputImage<&[u8]>) -> Option<Difference> {
+        let (e, a) = (e.header(), a.header());
+        let rx = self.rx;
+        if e.tx_counter != a.tx_counter {
+            return Some(Difference {
+                candidates: blame::TX_COUNTER,
+                what: "Inputs.TxCounter".into(),
+                expected: e.tx_counter.to_string(),
+                actual: a.tx_counter.to_string(),
+            });
+        }
+        if e.rx_counter != a.rx_counter {
+            let (model_moved, iut_moved) = (e.rx_counter != rx.before, a.rx_counter != rx.before);
+            let released = rx.fast || rx.plc_released == rx.before;
+            let candidates = match (model_moved, iut_moved) {
+                (false, true) if !released => blame::RX_UNRELEASED,
+                (false, true) if a.no_of_rx_messages == 0 => blame::RX_EMPTY_DELIVERY,
+                (false, true) => blame::RX_ADMISSION,
+                (true, false) if rx.before == u16::MAX => blame::RX_COUNTING,
+                (true, false) if rx.fast => blame::RX_WITHHELD_FAST,
+                (true, false) => blame::RX_WITHHELD,
+                _ => blame::RX_COUNTING,
+            };
+            return Some(Difference {
+                candidates,
+                what: "Inputs.RxCounter".into(),
+                expected: format!(
+                    "{} (was {}, Outputs.RxCounter {})",
+                    e.rx_counter, rx.before, rx.plc_released
+                ),
+                actual: a.rx_counter.to_string(),
+            });
+        }
+        if e.no_of_rx_messages != a.no_of_rx_messages {
+            return Some(Difference {
+                candidates: blame::RX_SET,
+                what: "Inputs.NoOfRxMessages".into(),
+                expected: e.no_of_rx_messages.to_string(),
+                actual: a.no_of_rx_messages.to_string(),
+            });
+        }
+        if e.transaction_number != a.transaction_number {
+            return Some(Difference {
+                candidates: blame::TRANSACTION_NUMBER,
+                what: "Inputs.TransactionNumber".into(),
+                expected: e.transaction_number.unwrap_or(0).to_string(),
+                actual: a.transaction_number.unwrap_or(0).to_string(),
+            });
+        }
+        None
+    }
+
+    fn messages(&self, e: &InputImage<&[u8]>, a: &InputImage<&[u8]>) -> Option<Difference> {
+        let in_use = usize::from(e.no_of_rx_messages());
+        for slot in 0..in_use.min(self.layout.rx_slots) {
+            let (Some(es), Some(as_)) = (e.rx_message(slot), a.rx_message(slot)) else {
+                continue;
+            };
+            if es.as_bytes() == as_.as_bytes() {
+                continue;
+            }
+            let Some(candidates) = self.slot_difference(&es, &as_) else {
+                continue; // only don't-care bytes (data past the length) differ
+            };
+            return Some(Difference {
+                candidates,
+                what: format!("Inputs.RxMessage[{slot}]"),
+                expected: describe_slot(&es),
+                actual: describe_slot(&as_),
+            });
+        }
+        None
+    }
+
+    /// The requirements of the first field in which two slots differ; `None`
+    /// when only don't-care bytes do.
+    fn slot_difference(
+        &self,
+        e: &MessageView<&[u8]>,
+        a: &MessageView<&[u8]>,
+    ) -> Option<&'static [ReqId]> {
+        let message = e.layout();
+        let parsed = |v: &MessageView<&[u8]>| MessageRepr::parse(v).ok().map(|m| m.frame);
+        let data_len = parsed(e).map_or(0, |f| f.data().len());
+        let different_frame = match (parsed(e), parsed(a)) {
+            (Some(expected), Some(actual)) => expected != actual && (self.was_on_bus)(&actual),
+            _ => false,
+        };
+        let has_own_length = !matches!(message.length, LengthField::InCobIdWord);
+        Some(if different_frame {
+            blame::RX_SET
+        } else if message.cob_id.len() == 2 && e.cob_id_word() != a.cob_id_word() {
+            blame::COB_WORD
+        } else if message.cob_id.len() == 4 && e.cob_id32() != a.cob_id32() {
+            let diff = e.cob_id32().0 ^ a.cob_id32().0;
+            if diff & 0x8000_0000 != 0 {
+                blame::COB_FORMAT
+            } else if diff & 0x4000_0000 != 0 {
+                blame::COB_RTR
+            } else {
+                blame::COB_LOW
+            }
+        } else if has_own_length && e.raw_length() != a.raw_length() {
+            blame::LENGTH
+        } else if message.flags.is_some() && e.flags() != a.flags() {
+            blame::FLAGS
+        } else if e.data_field()[..data_len] != a.data_field()[..data_len] {
+            blame::RX_SET
+        } else if message.time_stamp.is_some()
+            && e.time_stamp().abs_diff(a.time_stamp()) > self.time_stamp_tolerance
+        {
+            blame::TIME_STAMP
+        } else {
+            return None;
+        })
+    }
+
+    fn info_data(&self, e: &InputImage<&[u8]>, a: &InputImage<&[u8]>) -> Option<Difference> {
+        (0..field::INFO_DATA_WORDS).find_map(|index| {
+            let (expected, actual) = (e.info_data(index)?, a.info_data(index)?);
+            (expected != actual).then(|| Difference {
+                candidates: blame::info_data(index),
+                what: format!("InfoData[{index}]"),
+                expected: format!("0x{expected:08X}"),
+                actual: format!("0x{actual:08X}"),
+            })
+        })
+    }
+}
+
+/// The requirements of the first property in which a frame handed to the
+/// controller differs from the model's.
+pub fn frame_difference(expected: &Frame, actual: &Frame) -> &'static [ReqId] {
+    if expected.id != actual.id {
+        if expected.id.raw() == actual.id.raw() {
+            return blame::TX_FORMAT;
+        }
+        return blame::TX_OTHER_FRAME;
+    }
+    if expected.is_remote() != actual.is_remote() {
+        return blame::TX_REMOTE;
+    }
+    if expected.is_fd() != actual.is_fd() {
+        return blame::TX_FORMAT;
+    }
+    if expected.kind != actual.kind {
+        return blame::TX_FD_FLAGS;
+    }
+    if expected.len() != actual.len() {
+        return blame::TX_LENGTH;
+    }
+    if expected.is_fd() {
+        return blame::TX_PADDING;
+    }
+    blame::TX_DATA
+}

@@ -1,0 +1,158 @@
+//! The last cycles and frames of a run, kept in bounded rings (memory does not
+//! grow with run length) and formatted only when a failure shows them.
+
+use std::collections::VecDeque;
+
+use canif_model::frame::Frame;
+use canif_model::image::{ImageLayout, InputHeader, InputImage, OutputHeader, OutputImage};
+use canif_model::Nanos;
+
+use crate::outcome::{BusFrame, CycleView};
+
+/// How many cycles of history a failure shows.
+pub const CONTEXT_CYCLES: usize = 6;
+
+/// How many frames of bus history a failure can show.
+const BUS_LOG: usize = 256;
+
+/// How many received frames the oracle remembers.
+const RECENT_RX: usize = 4_096;
+
+/// What one cycle looked like.
+#[derive(Debug, Clone, Copy)]
+struct CycleRecord {
+    cycle: u64,
+    now: Nanos,
+    outputs: OutputHeader,
+    expected: InputHeader,
+    actual: InputHeader,
+}
+
+/// A frame that ended on the bus during a cycle.
+#[derive(Debug, Clone, Copy)]
+struct Logged {
+    cycle: u64,
+    from_iut: bool,
+    frame: Frame,
+    end: Nanos,
+}
+
+/// The bounded history of one scenario.
+#[derive(Debug, Default)]
+pub struct History {
+    cycles: VecDeque<CycleRecord>,
+    bus: VecDeque<Logged>,
+    /// Frames other nodes sent lately.
+    recent_rx: VecDeque<Frame>,
+}
+
+impl History {
+    /// Remembers one cycle's images (headers only). Images of the wrong size
+    /// are remembered as empty headers: the size itself is the failure.
+    pub fn cycle(
+        &mut self,
+        layout: ImageLayout,
+        (cycle, now): (u64, Nanos),
+        outputs: &[u8],
+        expected: &[u8],
+        actual: &[u8],
+    ) {
+        let input = |b: &[u8]| InputImage::new_checked(b, layout).map(|i| i.header());
+        self.cycles.push_back(CycleRecord {
+            cycle,
+            now,
+            outputs: OutputImage::new_checked(outputs, layout)
+                .map(|o| o.header())
+                .unwrap_or_default(),
+            expected: input(expected).unwrap_or_default(),
+            actual: input(actual).unwrap_or_default(),
+        });
+        if self.cycles.len() > CONTEXT_CYCLES {
+            self.cycles.pop_front();
+        }
+    }
+
+    /// A frame ended on the bus during `cycle`.
+    pub fn frame(&mut self, cycle: u64, from_iut: bool, frame: Frame, end: Nanos) {
+        self.bus.push_back(Logged {
+            cycle,
+            from_iut,
+            frame,
+            end,
+        });
+        if self.bus.len() > BUS_LOG {
+            self.bus.pop_front();
+        }
+        if !from_iut {
+            self.recent_rx.push_back(frame);
+            if self.recent_rx.len() > RECENT_RX {
+                self.recent_rx.pop_front();
+            }
+        }
+    }
+
+    /// Whether another node sent `frame` lately.
+    pub fn received_lately(&self, frame: &Frame) -> bool {
+        self.recent_rx.contains(frame)
+    }
+
+    /// Frames that ended since the cycle before `cycle`.
+    fn frames_before(&self, cycle: u64) -> impl Iterator<Item = &Logged> {
+        self.bus.iter().filter(move |l| l.cycle + 1 == cycle)
+    }
+
+    /// The remembered cycles as data.
+    pub fn timeline(&self) -> Vec<CycleView> {
+        self.cycles
+            .iter()
+            .map(|r| CycleView {
+                cycle: r.cycle,
+                time: r.now,
+                outputs: r.outputs,
+                expected: r.expected,
+                actual: r.actual,
+                frames: self
+                    .frames_before(r.cycle)
+                    .map(|l| BusFrame {
+                        end: l.end,
+                        from_iut: l.from_iut,
+                        text: l.frame.to_string(),
+                    })
+                    .collect(),
+            })
+            .collect()
+    }
+
+    /// The remembered cycles as text, each with the frames that ended on the bus
+    /// since the cycle before.
+    pub fn context(&self) -> Vec<String> {
+        self.cycles
+            .iter()
+            .map(|r| {
+                let o = r.outputs;
+                let i = r.actual;
+                let tn = i.transaction_number.map_or(String::new(), |tn| format!(" tn={tn}"));
+                let frames: Vec<String> = self
+                    .frames_before(r.cycle)
+                    .map(|l| format!("{} {}", if l.from_iut { "tx" } else { "rx" }, l.frame))
+                    .collect();
+                let bus = if frames.is_empty() {
+                    String::new()
+                } else {
+                    format!(" | bus: {}", frames.join(", "))
+                };
+                format!(
+                    "cycle {:>5} t={:>9.3} ms  out[tx={} rx={} n={}]  in[tx={} rx={} n={}{tn}]{bus}",
+                    r.cycle,
+                    r.now as f64 / 1e6,
+                    o.tx_counter,
+                    o.rx_counter,
+                    o.no_of_tx_messages,
+                    i.tx_counter,
+                    i.rx_counter,
+                    i.no_of_rx_messages
+                )
+            })
+            .collect()
+    }
+}

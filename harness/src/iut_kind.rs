@@ -1,0 +1,131 @@
+//! Which implementation a run puts under test, and how it is built for each
+//! configuration: in process (the model, the soft device) or as another
+//! process over the adapter protocol.
+
+use std::time::Duration;
+
+use canif_model::config::{Capabilities, InterfaceConfig};
+use canif_model::device::Device;
+use canif_softdevice::{Fault, SoftDevice};
+
+use crate::adapter::client::ExecIut;
+use crate::adapter::protocol::OwnedBus;
+use crate::iut::{soft_settings, BuildError, Iut, ModelIut, SoftDeviceIut};
+
+/// Which implementation to run.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum IutKind {
+    SoftDevice {
+        faults: Vec<Fault>,
+    },
+    Model,
+    /// Another process speaking the adapter protocol (docs/adapter-protocol.md).
+    Exec {
+        command: String,
+        timeout_ms: u64,
+    },
+}
+
+/// Asks an IUT, configuration after configuration, whether it accepts.
+pub type Configurer = Box<dyn FnMut(&Capabilities, &InterfaceConfig) -> Result<(), BuildError>>;
+
+impl IutKind {
+    /// Builds the IUT for a configuration.
+    pub fn build(
+        &self,
+        caps: &Capabilities,
+        config: &InterfaceConfig,
+    ) -> Result<Box<dyn Iut>, BuildError> {
+        self.build_on(caps, config, None)
+    }
+
+    /// Builds the IUT; with `bus`, an external IUT is told to open that
+    /// interface itself (in-process IUTs are attached by the harness instead).
+    pub fn build_on(
+        &self,
+        caps: &Capabilities,
+        config: &InterfaceConfig,
+        bus: Option<&OwnedBus>,
+    ) -> Result<Box<dyn Iut>, BuildError> {
+        let refused = |e: &dyn std::fmt::Display| BuildError::Refused(e.to_string());
+        match self {
+            IutKind::Model => Ok(Box::new(ModelIut(
+                Device::new(caps, config.clone()).map_err(|e| refused(&e))?,
+            ))),
+            IutKind::SoftDevice { faults } => {
+                let mut device =
+                    SoftDevice::new(soft_settings(caps, config)).map_err(|e| refused(&e))?;
+                for fault in faults {
+                    device.inject(*fault);
+                }
+                Ok(Box::new(SoftDeviceIut(device)))
+            }
+            IutKind::Exec {
+                command,
+                timeout_ms,
+            } => {
+                let mut iut = ExecIut::spawn(command, Duration::from_millis(*timeout_ms))
+                    .map_err(|e| BuildError::Failed(e.0))?;
+                match iut
+                    .configure(caps, config, bus)
+                    .map_err(|e| BuildError::Failed(e.0))?
+                {
+                    Ok(()) => Ok(Box::new(iut)),
+                    Err(reason) => Err(BuildError::Refused(reason)),
+                }
+            }
+        }
+    }
+
+    /// Something that answers configuration after configuration; for an
+    /// external process, one process answers them all.
+    pub fn configurer(&self) -> Configurer {
+        match self {
+            IutKind::Exec {
+                command,
+                timeout_ms,
+            } => {
+                let (command, timeout) = (command.clone(), Duration::from_millis(*timeout_ms));
+                let mut process: Option<ExecIut> = None;
+                Box::new(move |caps, config| {
+                    let iut = match process.as_mut() {
+                        Some(iut) => iut,
+                        None => process.insert(
+                            ExecIut::spawn(&command, timeout)
+                                .map_err(|e| BuildError::Failed(e.0))?,
+                        ),
+                    };
+                    match iut
+                        .configure(caps, config, None)
+                        .map_err(|e| BuildError::Failed(e.0))?
+                    {
+                        Ok(()) => Ok(()),
+                        Err(reason) => Err(BuildError::Refused(reason)),
+                    }
+                })
+            }
+            other => {
+                let kind = other.clone();
+                Box::new(move |caps, config| kind.build(caps, config).map(|_| ()))
+            }
+        }
+    }
+
+    pub fn name(&self) -> String {
+        match self {
+            IutKind::Model => "model".into(),
+            IutKind::SoftDevice { faults } if faults.is_empty() => "softdevice".into(),
+            IutKind::SoftDevice { faults } => {
+                format!(
+                    "softdevice+{}",
+                    faults
+                        .iter()
+                        .map(|f| f.name())
+                        .collect::<Vec<_>>()
+                        .join("+")
+                )
+            }
+            IutKind::Exec { command, .. } => format!("exec:{command}"),
+        }
+    }
+}

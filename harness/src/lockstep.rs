@@ -1,0 +1,213 @@
+//! The lockstep: the reference PLC (001 §6) writes outputs, the model and the
+//! IUT run the same cycle on them, their input images are compared field by
+//! field and every frame either hands to its controller is compared on the
+//! bus. The first difference ends the scenario as a failure naming the
+//! requirements of the differing field.
+
+use canif_model::config::{Capabilities, QueueMode};
+use canif_model::device::Device;
+use canif_model::image::{InputImage, OutputImage};
+use canif_model::Nanos;
+
+use crate::blame;
+use crate::bus::Bus;
+use crate::diff::{Difference, InputCheck, RxState};
+use crate::error::{IutError, RunError};
+use crate::iut::BuildError;
+use crate::iut_kind::IutKind;
+use crate::outcome::{Outcome, ScenarioRun};
+use crate::pair::Pair;
+use crate::plc::{PlcSide, TaskStimulus};
+use crate::scenario::{Scenario, Step};
+use crate::trace::TraceWriter;
+
+/// Runs one scenario against an IUT beside the model.
+pub fn run_scenario(
+    kind: &IutKind,
+    caps: &Capabilities,
+    scenario: &Scenario,
+    steps: impl Iterator<Item = Step>,
+) -> ScenarioRun {
+    let run = |outcome, cycles, frames| ScenarioRun {
+        scenario: scenario.name.clone(),
+        covers: scenario.covers.clone(),
+        outcome,
+        cycles,
+        frames_checked: frames,
+    };
+    let (mut pair, mut bus) = match start(kind, caps, scenario) {
+        Ok(started) => started,
+        Err(error) => return run(Outcome::Error(error), 0, 0),
+    };
+    let result = Lockstep {
+        scenario,
+        plc: PlcSide::new(pair.layout, scenario.exchange),
+        pair: &mut pair,
+        bus: bus.as_mut(),
+    }
+    .run(steps);
+    pair.finish();
+    match result {
+        Ok(cycles) => run(Outcome::Pass, cycles, pair.frames),
+        Err((outcome, cycle)) => run(outcome, cycle, pair.frames),
+    }
+}
+
+/// The model, the bus and the IUT of a scenario, in the order a real bus
+/// needs them: the IUT is told which socket to open.
+fn start(
+    kind: &IutKind,
+    caps: &Capabilities,
+    scenario: &Scenario,
+) -> Result<(Pair, Box<dyn Bus>), RunError> {
+    let model = Device::new(caps, scenario.interface.clone()).map_err(|e| {
+        RunError::Configuration(format!(
+            "the model refuses the scenario's configuration: {e}"
+        ))
+    })?;
+    let bus = scenario
+        .bus
+        .open(scenario.bit_rates, matches!(kind, IutKind::Exec { .. }))?;
+    let iut = match kind.build_on(caps, &scenario.interface, bus.owned_bus().as_ref()) {
+        Ok(iut) => iut,
+        Err(BuildError::Refused(reason)) => {
+            return Err(RunError::Configuration(format!(
+                "the IUT refuses a configuration the profile allows: {reason}"
+            )))
+        }
+        Err(BuildError::Failed(reason)) => return Err(IutError(reason).into()),
+    };
+    let trace = scenario
+        .trace
+        .as_ref()
+        .and_then(|(dir, name)| TraceWriter::create(dir, name).ok());
+    let pair = Pair::new(iut, model, (&scenario.name, &scenario.covers), trace);
+    Ok((pair, bus))
+}
+
+/// One scenario in progress.
+struct Lockstep<'a> {
+    scenario: &'a Scenario,
+    plc: PlcSide,
+    pair: &'a mut Pair,
+    bus: &'a mut dyn Bus,
+}
+
+impl Lockstep<'_> {
+    /// Every step, one cycle each: the number of cycles run, or how it ended
+    /// early and in which cycle.
+    fn run(mut self, steps: impl Iterator<Item = Step>) -> Result<u64, (Outcome, u64)> {
+        let scenario = self.scenario;
+        // On a real-time bus the cycle is real time, and the scenario's offsets scale with it.
+        let cycle_time = self.bus.cycle_time().unwrap_or(scenario.cycle_time);
+        let time_stamp_tolerance = scenario
+            .time_stamp_tolerance
+            .max(self.bus.time_stamp_tolerance());
+        for (k, step) in steps.enumerate() {
+            let k = k as u64;
+            self.cycle(k, k * cycle_time, step, time_stamp_tolerance)
+                .map_err(|outcome| (outcome, k))?;
+        }
+        Ok(self.pair.cycle + 1)
+    }
+
+    fn cycle(
+        &mut self,
+        k: u64,
+        start: Nanos,
+        mut step: Step,
+        time_stamp_tolerance: Nanos,
+    ) -> Result<(), Outcome> {
+        let scenario = self.scenario;
+        let layout = self.pair.layout;
+        self.bus.run_until(self.pair, start)?;
+        let t = if self.bus.real_time() {
+            self.pair.now
+        } else {
+            start
+        };
+        self.pair.cycle = k;
+        for message in &mut step.send {
+            message.frame = self.bus.adapt(message.frame);
+        }
+        for message in step.send {
+            if self.plc.send(message).is_err() {
+                return Err(Outcome::Error(RunError::Harness(format!(
+                    "scenario bug: a message that does not fit {}",
+                    layout.tx_message.name
+                ))));
+            }
+        }
+        if let Some(status) = step.status {
+            self.pair.iut.controller_status(&status);
+            self.pair.model.handle_controller_status(status);
+        }
+        if !step.plc_busy {
+            let stimulus = TaskStimulus {
+                declared_lengths: &scenario.declared_lengths,
+                set_tx_counter: step.set_tx_counter,
+            };
+            let report = self.plc.task(k, stimulus).map_err(|e| {
+                Outcome::Error(RunError::Iut(IutError(format!(
+                    "the PLC cannot read the IUT's input image: {e}"
+                ))))
+            })?;
+            let wanted = u64::from(scenario.exchange.confirmation_cycles());
+            match report.confirmed_after {
+                Some(delay) if scenario.check_confirmation_delay && delay != wanted => {
+                    return Err(self.pair.fail(Difference {
+                        candidates: blame::CONFIRMATION,
+                        what: "cycles until the PLC sees TxCounter confirmed".into(),
+                        expected: wanted.to_string(),
+                        actual: delay.to_string(),
+                    }));
+                }
+                _ => {}
+            }
+        }
+        let outputs = self.plc.outputs().to_vec();
+        let rx = RxState {
+            before: InputImage::new_checked(self.pair.model.inputs(), layout)
+                .map_or(0, |i| i.rx_counter()),
+            plc_released: OutputImage::new_checked(&outputs[..], layout)
+                .map_or(0, |o| o.rx_counter()),
+            fast: scenario.interface.queue == QueueMode::Fast,
+        };
+        let expected = match self.pair.model.cycle(&outputs, t) {
+            Ok(inputs) => inputs.to_vec(),
+            Err(e) => {
+                return Err(Outcome::Error(RunError::Harness(format!(
+                    "harness bug: {e}"
+                ))))
+            }
+        };
+        let actual = self
+            .pair
+            .iut
+            .cycle(&outputs, t)
+            .map_err(|e| Outcome::Error(e.into()))?;
+        self.pair
+            .history
+            .cycle(layout, (k, self.pair.now), &outputs, &expected, &actual);
+        let history = &self.pair.history;
+        let check = InputCheck {
+            layout: &layout,
+            was_on_bus: &|f| history.received_lately(f),
+            time_stamp_tolerance,
+            rx,
+        };
+        if let Some(difference) = check.compare(&expected, &actual) {
+            return Err(self.pair.fail(difference));
+        }
+        self.plc.device_cycle_done(&actual);
+        // The checker judges the images; what the PLC read is not kept (bounded memory).
+        drop(self.plc.take_received());
+        let cycle_time = self.bus.cycle_time().unwrap_or(scenario.cycle_time);
+        for (offset, frame) in step.bus {
+            let offset = offset * cycle_time / scenario.cycle_time.max(1);
+            self.bus
+                .schedule(k * cycle_time + offset, self.bus.adapt(frame));
+        }
+        Ok(())
+    }
+}

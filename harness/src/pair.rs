@@ -1,0 +1,167 @@
+//! The model and the implementation under test side by side: whatever
+//! happens to one happens to the other, and whatever they do differently is a
+//! [`Difference`]. Buses drive a `Pair`; they never touch the two devices
+//! directly.
+
+use canif_model::device::Device;
+use canif_model::frame::Frame;
+use canif_model::image::ImageLayout;
+use canif_model::Nanos;
+use canif_spec::ReqId;
+
+use crate::blame;
+use crate::diff::{frame_difference, Difference};
+use crate::history::History;
+use crate::iut::{InvalidFrame, Iut};
+use crate::outcome::{Failure, Outcome};
+use crate::trace::TraceWriter;
+
+/// The two devices of one scenario and what has been seen of them.
+pub struct Pair {
+    pub iut: Box<dyn Iut>,
+    pub model: Device,
+    pub layout: ImageLayout,
+    /// The frame both devices handed to their controllers, not yet on the bus.
+    pub iut_pending: Option<Frame>,
+    /// Scenario time.
+    pub now: Nanos,
+    pub cycle: u64,
+    /// Frames that ended on the bus and were checked.
+    pub frames: u64,
+    pub history: History,
+    trace: Option<TraceWriter>,
+    scenario: String,
+    covers: Vec<ReqId>,
+}
+
+impl Pair {
+    pub fn new(
+        iut: Box<dyn Iut>,
+        model: Device,
+        (scenario, covers): (&str, &[ReqId]),
+        trace: Option<TraceWriter>,
+    ) -> Self {
+        Pair {
+            iut,
+            layout: model.layout(),
+            model,
+            iut_pending: None,
+            now: 0,
+            cycle: 0,
+            frames: 0,
+            history: History::default(),
+            trace,
+            scenario: scenario.to_string(),
+            covers: covers.to_vec(),
+        }
+    }
+
+    /// A difference as the failure of this scenario, with its history.
+    pub fn fail(&self, difference: Difference) -> Outcome {
+        Outcome::Fail(Box::new(Failure {
+            requirements: blame::narrow(&self.covers, difference.candidates),
+            scenario: self.scenario.clone(),
+            cycle: self.cycle,
+            time: self.now,
+            what: difference.what,
+            expected: difference.expected,
+            actual: difference.actual,
+            context: self.history.context(),
+            timeline: self.history.timeline(),
+        }))
+    }
+
+    /// Asks both devices for their next frame when the controller is free.
+    pub fn poll(&mut self) -> Result<(), Outcome> {
+        if self.iut_pending.is_some() {
+            return Ok(());
+        }
+        let expected = self.model.poll_transmit(self.now);
+        let actual = self.iut.poll_transmit(self.now);
+        match self.transmit_difference(expected, actual) {
+            Ok(frame) => {
+                self.iut_pending = frame;
+                Ok(())
+            }
+            Err(difference) => Err(self.fail(difference)),
+        }
+    }
+
+    /// The frame both devices agree to send (or none), or how they differ.
+    pub fn transmit_difference(
+        &self,
+        expected: Option<Frame>,
+        actual: Option<Result<Frame, InvalidFrame>>,
+    ) -> Result<Option<Frame>, Difference> {
+        let what = "frame handed to the controller".to_string();
+        Err(match (expected, actual) {
+            (None, None) => return Ok(None),
+            (Some(e), Some(Ok(a))) if e == a => return Ok(Some(a)),
+            (Some(e), Some(Ok(a))) => {
+                // A frame the model still holds is a real message sent out of turn.
+                let queued_later = self.model.send_queue().any(|f| *f == a);
+                Difference {
+                    candidates: if queued_later {
+                        blame::TX_OTHER_FRAME
+                    } else {
+                        frame_difference(&e, &a)
+                    },
+                    what,
+                    expected: e.to_string(),
+                    actual: a.to_string(),
+                }
+            }
+            (e, Some(Err(invalid))) => Difference {
+                candidates: blame::TX_INVALID,
+                what,
+                expected: e.map_or("no frame".into(), |f| f.to_string()),
+                actual: format!("invalid frame: {}", invalid.0),
+            },
+            (Some(e), None) => Difference {
+                candidates: blame::TX_MISSING,
+                what,
+                expected: e.to_string(),
+                actual: "no frame".into(),
+            },
+            (None, Some(Ok(a))) => Difference {
+                candidates: blame::TX_EXTRA,
+                what,
+                expected: "no frame".into(),
+                actual: a.to_string(),
+            },
+        })
+    }
+
+    /// A frame ended on the bus, and the IUT's controller learns of it.
+    pub fn complete(&mut self, frame: Frame, from_iut: bool, end: Nanos) {
+        if from_iut {
+            self.iut.transmit_complete();
+        } else {
+            self.iut.receive(&frame, end);
+        }
+        self.observe(frame, from_iut, end);
+    }
+
+    /// A frame ended on the bus: the model, the trace and the history learn of it.
+    pub fn observe(&mut self, frame: Frame, from_iut: bool, end: Nanos) {
+        self.frames += 1;
+        if let Some(trace) = self.trace.as_mut() {
+            if trace.frame(end, &frame).is_err() {
+                self.trace = None; // a full disk ends the trace, not the run
+            }
+        }
+        if from_iut {
+            self.model.handle_transmit_complete();
+        } else {
+            self.model.handle_received(frame, end);
+        }
+        self.history.frame(self.cycle, from_iut, frame, end);
+    }
+
+    /// Closes the trace files.
+    pub fn finish(&mut self) {
+        if let Some(trace) = self.trace.take() {
+            let _ = trace.finish();
+        }
+    }
+}

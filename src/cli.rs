@@ -1,0 +1,320 @@
+//! The command line as types: every value is parsed and checked by clap before
+//! a command runs, so a command never sees a malformed one.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(
+    name = "canif",
+    version,
+    about = "Conformance suite for the Beckhoff CAN interface"
+)]
+pub struct Cli {
+    /// A catalogue folder of the shape of spec/ instead of the embedded one.
+    #[arg(long, global = true, value_name = "DIR")]
+    pub spec: Option<PathBuf>,
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The implementation under test, as the command line names it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum IutArg {
+    SoftDevice,
+    Model,
+    /// `exec:COMMAND`: a process speaking the adapter protocol.
+    Exec(String),
+}
+
+fn iut_arg(text: &str) -> Result<IutArg, String> {
+    match text {
+        "softdevice" => Ok(IutArg::SoftDevice),
+        "model" => Ok(IutArg::Model),
+        _ => match text.strip_prefix("exec:") {
+            Some(command) if !command.trim().is_empty() => Ok(IutArg::Exec(command.to_string())),
+            Some(_) => Err("exec: needs a command, e.g. exec:'python3 my_iut.py'".into()),
+            None => Err("use softdevice, model or exec:'COMMAND'".into()),
+        },
+    }
+}
+
+/// The bus, as the command line names it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum BusArg {
+    Sim,
+    /// `socketcan:IFACE` or `socketcan:IUT_IFACE,OTHER_IFACE`.
+    #[cfg(feature = "socketcan")]
+    SocketCan(canif_kernel::BusSpec),
+}
+
+fn bus_arg(text: &str) -> Result<BusArg, String> {
+    if text == "sim" {
+        return Ok(BusArg::Sim);
+    }
+    #[cfg(feature = "socketcan")]
+    {
+        canif_kernel::BusSpec::parse(text).map(BusArg::SocketCan)
+    }
+    #[cfg(not(feature = "socketcan"))]
+    {
+        Err(format!(
+            "`{text}`: this canif was built without SocketCAN (cargo feature `socketcan`); use sim"
+        ))
+    }
+}
+
+/// Virtual seconds: finite, above 0, at most a virtual day (86.4 million cycles).
+fn seconds(text: &str) -> Result<f64, String> {
+    let value: f64 = text.parse().map_err(|e| format!("{e}"))?;
+    if value.is_finite() && value > 0.0 && value <= 86_400.0 {
+        Ok(value)
+    } else {
+        Err(format!(
+            "{text}: a duration is a number of virtual seconds above 0 and at most 86400"
+        ))
+    }
+}
+
+/// Which implementation, and how an external one is run.
+#[derive(Args, Debug, Clone)]
+pub struct IutOptions {
+    /// softdevice (the built-in soft EL6751), model (the reference itself), or
+    /// exec:'COMMAND' (a process speaking the adapter protocol).
+    #[arg(long, default_value = "softdevice", value_parser = iut_arg)]
+    pub iut: IutArg,
+    /// How long an external IUT may take to answer one request, in ms.
+    #[arg(long, default_value_t = 5000, value_parser = clap::value_parser!(u64).range(1..=600_000))]
+    pub timeout_ms: u64,
+    /// Switch on a soft-device fault (repeatable; see `canif faults`).
+    #[arg(long)]
+    pub fault: Vec<String>,
+}
+
+/// How a SocketCAN bus is run (ignored on the simulated bus).
+#[derive(Args, Debug, Clone)]
+pub struct RealTimeOptions {
+    /// On a SocketCAN bus: the real cycle time in microseconds.
+    #[arg(long, default_value_t = 2000, value_parser = clap::value_parser!(u64).range(100..=10_000_000))]
+    pub cycle_us: u64,
+    /// On a SocketCAN bus: how far the IUT's receive time stamps may be from the harness's, in µs.
+    #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u64).range(0..=10_000_000))]
+    pub time_stamp_tolerance_us: u64,
+    /// On a SocketCAN bus: how long a frame may take to cross the kernel, in ms.
+    #[arg(long, default_value_t = 2000, value_parser = clap::value_parser!(u64).range(1..=600_000))]
+    pub frame_timeout_ms: u64,
+    /// On a SocketCAN bus: send the scenarios' remote frames as data frames
+    /// (for controllers that cannot carry them, such as QEMU's SJA1000).
+    #[arg(long)]
+    pub no_remote_frames: bool,
+    /// On a SocketCAN bus: the controllers send ESI from their own error
+    /// state (real CAN FD controllers), so the scenarios' ESI bits are left out.
+    #[arg(long)]
+    pub esi_from_controller: bool,
+}
+
+/// Which suite `canif run` runs.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Suite {
+    /// The CAN interface (the default).
+    Interface,
+    /// The CANopen node checks (002, 004).
+    Canopen,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Certify an implementation against the model, per profile, on the
+    /// simulated bus or a SocketCAN interface.
+    Run {
+        #[command(flatten)]
+        iut: IutOptions,
+        /// A profile name (see `canif profiles`) or `all`.
+        #[arg(long, default_value = "all")]
+        profile: String,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Generated scenarios per interface.
+        #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u64).range(0..=10_000))]
+        cases: u64,
+        /// Virtual seconds of generated traffic per scenario (a soak run).
+        #[arg(long, value_parser = seconds)]
+        duration: Option<f64>,
+        /// Leave out the 65,540-cycle RxCounter wrap.
+        #[arg(long)]
+        no_counter_wrap: bool,
+        /// Where to write junit.xml, report.json and summary.md.
+        #[arg(long, default_value = "reports/latest")]
+        report: PathBuf,
+        /// Also write every scenario's bus as a candump log and a pcapng file here.
+        #[arg(long, value_name = "DIR")]
+        trace: Option<PathBuf>,
+        /// What to check: the CAN interface, or a CANopen node.
+        #[arg(long, value_enum, default_value = "interface")]
+        suite: Suite,
+        /// `sim` (the simulated bus, virtual time) or `socketcan:IFACE` (a Linux
+        /// SocketCAN interface, real time; `socketcan:IUT_IFACE,OTHER_IFACE` for
+        /// two controllers on one bus).
+        #[arg(long, default_value = "sim", value_parser = bus_arg)]
+        bus: BusArg,
+        #[command(flatten)]
+        real_time: RealTimeOptions,
+        /// Only scenarios whose name contains this text (repeatable: any of them).
+        #[arg(long, value_name = "TEXT")]
+        scenario: Vec<String>,
+        /// With --suite canopen: the node id to check.
+        #[arg(long, default_value_t = 5)]
+        node: u8,
+        /// With --suite canopen on the simulated bus: a coupler fault (toggle-stuck, sdo-size-always-4, no-abort).
+        #[arg(long)]
+        coupler_fault: Option<String>,
+    },
+    /// Certify one profile: a sealed certificate (JSON + HTML) of every requirement's verdict.
+    Certify {
+        /// The profile to certify.
+        #[arg(long, required_unless_present = "verify")]
+        profile: Option<String>,
+        #[command(flatten)]
+        iut: IutOptions,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Where to write certificate.json and certificate.html.
+        #[arg(long, default_value = "reports/certificate")]
+        out: PathBuf,
+        /// Check the seal of an existing certificate.json instead.
+        #[arg(long, value_name = "CERTIFICATE")]
+        verify: Option<PathBuf>,
+    },
+    /// What changed between two report.json files; exit 1 on a regression.
+    Compare { base: PathBuf, new: PathBuf },
+    /// The soft device's deliberate faults.
+    Faults,
+    /// A simulated Beckhoff CANopen coupler for tools by others: behind
+    /// socketcand's protocol on 127.0.0.1 (python-can's `socketcand` interface),
+    /// or as a node on a SocketCAN interface.
+    Coupler {
+        /// TCP port on 127.0.0.1 (0: any free port, printed on stdout).
+        #[arg(long, required_unless_present = "bus", conflicts_with = "bus")]
+        socketcand: Option<u16>,
+        /// `socketcan:IFACE`: be a node on that interface (real time) until stopped.
+        #[arg(long)]
+        bus: Option<String>,
+        /// The coupler's node id (1..63).
+        #[arg(long, default_value_t = 5)]
+        node: u8,
+        /// A deliberate defect: toggle-stuck, sdo-size-always-4 or no-abort.
+        #[arg(long)]
+        fault: Option<String>,
+    },
+    /// Run the soft device on its own, behind the adapter protocol on stdin/stdout.
+    Device {
+        /// Speak the adapter protocol (docs/adapter-protocol.md) on stdin/stdout.
+        #[arg(long)]
+        stdio: bool,
+        /// Switch on a fault (repeatable).
+        #[arg(long)]
+        fault: Vec<String>,
+        /// Put the device's CAN side on a SocketCAN interface (`socketcan:IFACE`):
+        /// it sends and receives real frames there, and the adapter protocol
+        /// carries only configure, cycle and controller_status.
+        #[arg(long)]
+        bus: Option<String>,
+    },
+    /// The suite's power: run every fault on every profile; exit 1 if one goes uncaught.
+    SelfCheck {
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// The requirement catalogue.
+    Spec {
+        #[command(subcommand)]
+        command: SpecCommand,
+    },
+    /// The device profiles and what each offers.
+    Profiles,
+    /// Message slots a cycle time needs (the manual's §4, ruling R4).
+    Size {
+        /// Bit rate in bit/s, e.g. 500000.
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+        bitrate: u32,
+        /// PLC task / CAN interface cycle time in µs.
+        #[arg(long = "cycle-us", value_parser = clap::value_parser!(u64).range(1..=10_000_000))]
+        cycle_us: u64,
+        /// Data bytes per frame (0..=8).
+        #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u8).range(0..=8))]
+        payload: u8,
+    },
+    /// How long one frame occupies the bus (nominal and worst-case stuffing).
+    FrameTime {
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+        bitrate: u32,
+        /// Data-phase bit rate for CAN FD with bit rate switch.
+        #[arg(long = "data-bitrate", value_parser = clap::value_parser!(u32).range(1..))]
+        data_bitrate: Option<u32>,
+        #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u8).range(0..=64))]
+        payload: u8,
+        /// 29-bit identifier.
+        #[arg(long)]
+        extended: bool,
+        /// CAN FD frame (payload rounds up to a valid size).
+        #[arg(long)]
+        fd: bool,
+    },
+}
+
+#[derive(Subcommand)]
+pub enum SpecCommand {
+    /// Every requirement, one line each.
+    List {
+        /// Only ids starting with this prefix (e.g. HS-TX).
+        #[arg(long)]
+        area: Option<String>,
+    },
+    /// One requirement in full.
+    Show { id: String },
+    /// Counts by area and status, and the assumptions.
+    Summary,
+    /// Validates the catalogue (the embedded one, or --spec DIR).
+    Check,
+    /// Which tests name which requirement; exit 1 if a normative or derived one has none.
+    Coverage {
+        /// The workspace whose tests to read.
+        #[arg(long, default_value = ".")]
+        root: PathBuf,
+        /// List every requirement with the tests, properties and scenarios that cover it.
+        #[arg(long)]
+        each: bool,
+    },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn absurd_numbers_are_refused_before_anything_runs() {
+        for duration in ["inf", "nan", "-5", "0", "1e12"] {
+            assert!(seconds(duration).is_err(), "--duration {duration}");
+        }
+        assert_eq!(seconds("60"), Ok(60.0));
+        for args in [
+            &["canif", "size", "--bitrate", "0", "--cycle-us", "1000"][..],
+            &[
+                "canif",
+                "size",
+                "--bitrate",
+                "500000",
+                "--cycle-us",
+                "18446744073709551615",
+            ],
+            &["canif", "frame-time", "--bitrate", "0"],
+            &["canif", "run", "--iut", "exec:"],
+            &["canif", "run", "--iut", "firmware"],
+            &["canif", "run", "--duration", "inf"],
+        ] {
+            assert!(Cli::try_parse_from(args).is_err(), "{args:?} was accepted");
+        }
+        assert!(Cli::try_parse_from(["canif", "run", "--iut", "exec:./my-iut"]).is_ok());
+    }
+}

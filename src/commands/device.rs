@@ -1,0 +1,218 @@
+//! `canif device`, `canif coupler` and `canif run --suite canopen`: the soft
+//! device and the simulated coupler served to others, and the CANopen checks.
+
+use std::io::Write as _;
+use std::process::ExitCode;
+
+use canif_harness::adapter::server::{self, Build};
+use canif_harness::bus::BusChoice;
+use canif_harness::IutKind;
+
+use super::soft_device_faults;
+
+/// `canif device --stdio [--bus socketcan:IFACE]`: the soft device behind the
+/// adapter protocol.
+pub fn device(stdio: bool, faults: &[String], bus: Option<&str>) -> ExitCode {
+    if !stdio {
+        eprintln!("canif device needs --stdio: its process image is served over the adapter protocol (docs/adapter-protocol.md)");
+        return ExitCode::from(2);
+    }
+    let kind = match soft_device_faults(faults) {
+        Ok(faults) => IutKind::SoftDevice { faults },
+        Err(code) => return code,
+    };
+    let build: &Build<'_> = &|caps, config| kind.build(caps, config);
+    let served = match bus {
+        None => server::serve(build, std::io::stdin().lock(), std::io::stdout())
+            .map_err(|e| e.to_string()),
+        Some(bus) => serve_on_bus(build, bus),
+    };
+    match served {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("canif device: {error}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+#[cfg(feature = "socketcan")]
+fn serve_on_bus(build: &Build<'_>, bus: &str) -> Result<(), String> {
+    let spec = canif_kernel::BusSpec::parse(bus).map_err(|e| format!("--bus {e}"))?;
+    canif_kernel::probe().map_err(|e| format!("--bus {bus}: {e}"))?;
+    canif_harness::adapter::device_bus::serve_on_bus(build, Some(&spec.iut))
+        .map_err(|e| e.to_string())
+}
+
+#[cfg(not(feature = "socketcan"))]
+fn serve_on_bus(_: &Build<'_>, bus: &str) -> Result<(), String> {
+    Err(format!(
+        "--bus {bus}: this canif was built without SocketCAN (cargo feature `socketcan`)"
+    ))
+}
+
+/// `canif coupler`: the simulated coupler behind socketcand on loopback TCP,
+/// or as a node on a SocketCAN interface.
+pub fn coupler(
+    socketcand: Option<u16>,
+    bus: Option<&str>,
+    node: u8,
+    fault: Option<&str>,
+) -> ExitCode {
+    let mut coupler = match (node_id(node), coupler_fault(fault)) {
+        (Ok(node), Ok(fault)) => simulated_coupler(node, fault),
+        (Err(code), _) | (_, Err(code)) => return code,
+    };
+    match (socketcand, bus) {
+        (Some(port), _) => {
+            let listener = match std::net::TcpListener::bind(("127.0.0.1", port)) {
+                Ok(listener) => listener,
+                Err(error) => {
+                    eprintln!("cannot listen on 127.0.0.1:{port}: {error}");
+                    return ExitCode::from(2);
+                }
+            };
+            // The port goes to stdout first, so a caller that asked for port 0 learns it.
+            println!(
+                "{}",
+                listener.local_addr().map(|a| a.port()).unwrap_or(port)
+            );
+            let _ = std::io::stdout().flush();
+            match canif_harness::canopen::socketcand::serve(&listener, &mut coupler) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(_) => ExitCode::from(2),
+            }
+        }
+        (None, Some(bus)) => coupler_on_bus(bus, &mut coupler),
+        (None, None) => ExitCode::from(2),
+    }
+}
+
+#[cfg(feature = "socketcan")]
+fn coupler_on_bus(bus: &str, coupler: &mut canif_model::canopen::coupler::Coupler) -> ExitCode {
+    let opened = canif_kernel::BusSpec::parse(bus)
+        .and_then(|spec| canif_kernel::probe().map(|()| spec))
+        .and_then(|spec| canif_kernel::KernelSocket::open(&spec.iut, false));
+    let socket = match opened {
+        Ok(socket) => socket,
+        Err(error) => {
+            eprintln!("canif coupler --bus {bus}: {error}");
+            return ExitCode::from(2);
+        }
+    };
+    println!(
+        "ready: node {} on {}",
+        coupler.node().get(),
+        socket.interface
+    );
+    let _ = std::io::stdout().flush();
+    let error = canif_harness::canopen::on_bus::serve(&socket, coupler);
+    eprintln!("{error}");
+    ExitCode::from(2)
+}
+
+#[cfg(not(feature = "socketcan"))]
+fn coupler_on_bus(bus: &str, _: &mut canif_model::canopen::coupler::Coupler) -> ExitCode {
+    eprintln!("canif coupler --bus {bus}: this canif was built without SocketCAN (cargo feature `socketcan`)");
+    ExitCode::from(2)
+}
+
+/// `canif run --suite canopen`: the CANopen node checks (002, 004), on the
+/// simulated coupler or on a node on a SocketCAN interface.
+pub fn canopen_suite(bus: &BusChoice, node: u8, fault: Option<&str>) -> ExitCode {
+    let node = match node_id(node) {
+        Ok(node) => node,
+        Err(code) => return code,
+    };
+    let (results, target) = match bus {
+        BusChoice::Sim => {
+            let mut coupler = match coupler_fault(fault) {
+                Ok(chosen) => simulated_coupler(node, chosen),
+                Err(code) => return code,
+            };
+            let results = canif_harness::canopen::check_node(&mut coupler, node, 0);
+            let target = format!(
+                "simulated coupler, node {}{}",
+                node.get(),
+                fault.map_or(String::new(), |f| format!(" with {f}"))
+            );
+            (results, target)
+        }
+        #[cfg(feature = "socketcan")]
+        BusChoice::SocketCan(options) => {
+            if fault.is_some() {
+                eprintln!("--coupler-fault applies to the simulated coupler; on a SocketCAN bus, start `canif coupler --bus … --fault …` instead");
+                return ExitCode::from(2);
+            }
+            let mut remote =
+                match canif_harness::canopen::SocketCanNode::open(&options.spec.tester, node) {
+                    Ok(remote) => remote,
+                    Err(error) => {
+                        eprintln!("error: {error}");
+                        return ExitCode::from(2);
+                    }
+                };
+            remote.answer_timeout = options.timeout.min(std::time::Duration::from_millis(500));
+            // Real time: heartbeats are seen at the 10 ms poll step, plus scheduling jitter.
+            let results = canif_harness::canopen::check_node(&mut remote, node, 30_000_000);
+            let target = format!(
+                "node {} on {} (Linux {})",
+                node.get(),
+                options.spec.tester,
+                canif_kernel::kernel_release()
+            );
+            (results, target)
+        }
+    };
+    let mut failed = 0;
+    for result in &results {
+        match &result.outcome {
+            Ok(()) => println!("pass  {} ({})", result.name, result.requirements.join(", ")),
+            Err(why) => {
+                failed += 1;
+                println!(
+                    "FAIL  {} ({}): {why}",
+                    result.name,
+                    result.requirements.join(", ")
+                );
+            }
+        }
+    }
+    println!("{target}: {} checks, {failed} failed", results.len());
+    ExitCode::from(u8::from(failed > 0))
+}
+
+/// The quick start's coupler (2 digital, 4 analog channels), with a fault if asked.
+fn simulated_coupler(
+    node: canif_model::canopen::NodeId,
+    fault: Option<canif_model::canopen::coupler::CouplerFault>,
+) -> canif_model::canopen::coupler::Coupler {
+    let mut coupler = canif_model::canopen::coupler::Coupler::new(node, 2, 4);
+    if let Some(fault) = fault {
+        coupler.inject(fault);
+    }
+    coupler
+}
+
+/// A CANopen node id from the command line, or the exit code of a usage error.
+fn node_id(node: u8) -> Result<canif_model::canopen::NodeId, ExitCode> {
+    canif_model::canopen::NodeId::new(node).ok_or_else(|| {
+        eprintln!("node ids are 1..63, not {node}");
+        ExitCode::from(2)
+    })
+}
+
+/// The coupler fault named on the command line, or the exit code of a usage error.
+fn coupler_fault(
+    name: Option<&str>,
+) -> Result<Option<canif_model::canopen::coupler::CouplerFault>, ExitCode> {
+    use canif_model::canopen::coupler::CouplerFault;
+    match name {
+        None => Ok(None),
+        Some(name) => CouplerFault::from_name(name).map(Some).ok_or_else(|| {
+            let known: Vec<&str> = CouplerFault::ALL.iter().map(|f| f.name()).collect();
+            eprintln!("unknown coupler fault `{name}`: {}", known.join(", "));
+            ExitCode::from(2)
+        }),
+    }
+}

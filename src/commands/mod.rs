@@ -1,0 +1,54 @@
+//! The commands, one module each; `main.rs` only parses and dispatches.
+
+pub mod certify;
+pub mod device;
+pub mod run;
+pub mod spec;
+pub mod tools;
+
+use std::process::ExitCode;
+
+use canif_harness::IutKind;
+use canif_softdevice::Fault;
+
+use crate::cli::{IutArg, IutOptions};
+
+/// The soft-device faults named on the command line, or the exit code of a usage error.
+pub fn soft_device_faults(names: &[String]) -> Result<Vec<Fault>, ExitCode> {
+    names
+        .iter()
+        .map(|name| {
+            Fault::from_name(name).ok_or_else(|| {
+                eprintln!("unknown fault `{name}`; `canif faults` lists them");
+                ExitCode::from(2)
+            })
+        })
+        .collect()
+}
+
+/// The IUT named on the command line, or the exit code of a usage error.
+pub fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
+    let chosen = soft_device_faults(&iut.fault)?;
+    let only_soft = |chosen: &[Fault]| {
+        if chosen.is_empty() {
+            Ok(())
+        } else {
+            eprintln!("--fault applies to the soft device only (pass it to the IUT's own command)");
+            Err(ExitCode::from(2))
+        }
+    };
+    Ok(match &iut.iut {
+        IutArg::Exec(command) => {
+            only_soft(&chosen)?;
+            IutKind::Exec {
+                command: command.clone(),
+                timeout_ms: iut.timeout_ms,
+            }
+        }
+        IutArg::SoftDevice => IutKind::SoftDevice { faults: chosen },
+        IutArg::Model => {
+            only_soft(&chosen)?;
+            IutKind::Model
+        }
+    })
+}

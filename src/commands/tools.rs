@@ -1,0 +1,117 @@
+//! `canif size` and `canif frame-time`: the manual's sizing and timing, as tools.
+
+use std::process::ExitCode;
+
+use canif_model::frame::{CanId, Frame};
+use canif_model::sizing::{self, FrameTimeBasis};
+use canif_model::timing::{frame_bits, frame_duration, BitRates, Stuffing};
+
+pub fn size(bitrate: u32, cycle_us: u64, payload: u8, out: &mut String) -> ExitCode {
+    let cycle = cycle_us * 1_000;
+    let Some(recommended) = sizing::recommend(bitrate, cycle, payload) else {
+        eprintln!("cannot size: payload must be 0..=8 and the bit rate above 0");
+        return ExitCode::from(2);
+    };
+    outln!(
+        out,
+        "{bitrate} bit/s, {cycle_us} µs cycle, {payload}-byte 11-bit frames at 100 % bus load:"
+    );
+    for basis in [
+        FrameTimeBasis::CiaTable,
+        FrameTimeBasis::Nominal,
+        FrameTimeBasis::WorstCase,
+    ] {
+        if let Some(s) = sizing::size(bitrate, cycle, payload, basis) {
+            let mark = if s.basis == recommended.basis {
+                "  <- recommended"
+            } else {
+                ""
+            };
+            outln!(
+                out,
+                "  {:<10} frame time {:>8.1} µs -> {:>4} slots{mark}",
+                format!("{basis:?}"),
+                s.frame_time as f64 / 1000.0,
+                s.slots
+            );
+        }
+    }
+    if recommended.slots > 32 {
+        outln!(
+            out,
+            "  more than 32 slots cannot be configured: shorten the cycle time (000 §4)"
+        );
+    }
+    ExitCode::SUCCESS
+}
+
+pub fn frame_time(
+    bitrate: u32,
+    data_bitrate: Option<u32>,
+    payload: u8,
+    extended: bool,
+    fd: bool,
+    out: &mut String,
+) -> ExitCode {
+    let id = if extended {
+        CanId::Extended(0)
+    } else {
+        CanId::Standard(0)
+    };
+    let frame = if fd {
+        let Some(size) = canif_model::dlc::fd_round_up(payload) else {
+            eprintln!("a CAN FD frame carries at most 64 bytes");
+            return ExitCode::from(2);
+        };
+        Frame::fd(
+            id,
+            data_bitrate.is_some(),
+            false,
+            &vec![0; usize::from(size)],
+        )
+    } else {
+        Frame::classic(id, &vec![0; usize::from(payload)])
+    };
+    let frame = match frame {
+        Ok(frame) => frame,
+        Err(error) => {
+            eprintln!("{error}");
+            return ExitCode::from(2);
+        }
+    };
+    let rates = BitRates {
+        nominal: bitrate,
+        data: data_bitrate.unwrap_or(bitrate),
+    };
+    let bits = frame_bits(&frame);
+    outln!(
+        out,
+        "{} frame, {} data bytes: {} bits nominal, {} worst case (arbitration {}/{}, data phase {}/{})",
+        if fd { "CAN FD" } else { "classic" },
+        frame.len(),
+        bits.arbitration.nominal + bits.data.nominal,
+        bits.arbitration.worst_case + bits.data.worst_case,
+        bits.arbitration.nominal,
+        bits.arbitration.worst_case,
+        bits.data.nominal,
+        bits.data.worst_case
+    );
+    for stuffing in [Stuffing::Nominal, Stuffing::WorstCase] {
+        outln!(
+            out,
+            "  {:<10} {:>9.2} µs",
+            format!("{stuffing:?}"),
+            frame_duration(&frame, rates, stuffing) as f64 / 1000.0
+        );
+    }
+    if let Some(cell) =
+        canif_model::cia_table::frame_time(bitrate, payload).filter(|_| !fd && !extended)
+    {
+        outln!(
+            out,
+            "  CiA table  {:>9.2} µs (000 §4)",
+            cell as f64 / 1000.0
+        );
+    }
+    ExitCode::SUCCESS
+}
