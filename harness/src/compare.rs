@@ -7,34 +7,27 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-use serde_json::Value;
+use crate::report::ReportFile;
 
-/// Verdicts of a report.json, keyed `profile :: requirement` and `suite :: file:line`.
-pub fn verdicts(report: &Value) -> Result<BTreeMap<String, String>, String> {
-    let profiles = report["profiles"]
-        .as_array()
-        .ok_or("not a canif report.json: no \"profiles\"")?;
+/// Verdicts of a report, keyed `profile :: requirement` and `suite :: file:line name`.
+pub fn verdicts(report: &ReportFile) -> BTreeMap<String, String> {
     let mut all = BTreeMap::new();
-    for profile in profiles {
-        let name = profile["profile"].as_str().unwrap_or("?");
-        for (id, verdict) in profile["verdicts"].as_object().into_iter().flatten() {
+    for profile in &report.profiles {
+        for (id, verdict) in &profile.verdicts {
             all.insert(
-                format!("{name} :: {id}"),
-                verdict["verdict"].as_str().unwrap_or("?").to_string(),
+                format!("{} :: {id}", profile.profile),
+                verdict.verdict.label().to_string(),
             );
         }
     }
-    for scenario in report["scenarios"].as_array().into_iter().flatten() {
+    for scenario in &report.scenarios {
         let key = format!(
             "{} :: {}:{} {}",
-            scenario["suite"].as_str().unwrap_or("?"),
-            scenario["file"].as_str().unwrap_or("?"),
-            scenario["line"],
-            scenario["name"].as_str().unwrap_or("")
+            scenario.suite, scenario.file, scenario.line, scenario.name
         );
-        all.insert(key, scenario["outcome"].as_str().unwrap_or("?").to_string());
+        all.insert(key, scenario.outcome.label().to_string());
     }
-    Ok(all)
+    all
 }
 
 fn bad(verdict: &str) -> bool {

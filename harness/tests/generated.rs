@@ -139,7 +139,7 @@ fn a_failure_shrinks_to_a_minimal_run() {
     );
 }
 
-fn report(seed: u64) -> serde_json::Value {
+fn report(seed: u64) -> canif_harness::report::ReportFile {
     let catalogue = Catalogue::embedded().unwrap();
     let profile = catalogue.profile("el6751-mdp").unwrap();
     let options = Options {
@@ -181,14 +181,16 @@ fn the_same_seed_gives_the_same_run_byte_for_byte() {
 #[test]
 fn compare_names_regressions_fixes_and_changes() {
     use canif_harness::compare::{compare, verdicts};
+    use canif_harness::report::ReportFile;
     let report = |a: &str, b: &str, scenario: &str| {
-        serde_json::json!({
+        ReportFile::parse(&serde_json::json!({
             "profiles": [{"profile": "p", "verdicts": {"A-001": {"verdict": a}, "B-001": {"verdict": b}}}],
-            "scenarios": [{"suite": "p", "file": "f.feature", "line": 3, "name": "s", "outcome": scenario}],
-        })
+            "scenarios": [{"suite": "p", "file": "f.feature", "line": 3, "name": "s", "outcome": scenario, "report": null, "requirements": []}],
+        }).to_string())
+        .unwrap()
     };
-    let base = verdicts(&report("pass", "fail", "pass")).unwrap();
-    let new = verdicts(&report("error", "pass", "fail")).unwrap();
+    let base = verdicts(&report("pass", "fail", "pass"));
+    let new = verdicts(&report("error", "pass", "fail"));
     let result = compare(&base, &new);
     let keys =
         |rows: &Vec<(String, String, String)>| rows.iter().map(|r| r.0.clone()).collect::<Vec<_>>();
@@ -205,7 +207,11 @@ fn compare_names_regressions_fixes_and_changes() {
     let result = compare(&base, &newer);
     assert!(keys(&result.regressions).contains(&"p :: C-001".to_string()));
     assert_eq!(keys(&result.changes), ["p :: B-001"]);
-    assert!(verdicts(&serde_json::json!({"x": 1})).is_err());
+    assert!(ReportFile::parse(r#"{"x": 1}"#).is_err());
+    assert!(ReportFile::parse(
+        r#"{"profiles": [{"profile": "p", "verdicts": {"A-001": {"verdict": "great"}}}]}"#
+    )
+    .is_err());
 }
 
 /// The pcapng of a run: section header, one interface of link type 227 with

@@ -124,9 +124,9 @@ pub fn verify_certificate(path: &Path) -> ExitCode {
 pub fn compare(base: &Path, new: &Path) -> ExitCode {
     let load = |path: &Path| -> Result<std::collections::BTreeMap<String, String>, String> {
         let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let value: serde_json::Value =
-            serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
-        canif_harness::compare::verdicts(&value).map_err(|e| format!("{}: {e}", path.display()))
+        let report = canif_harness::report::ReportFile::parse(&text)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        Ok(canif_harness::compare::verdicts(&report))
     };
     let (base, new) = match (load(base), load(new)) {
         (Ok(base), Ok(new)) => (base, new),

@@ -26,9 +26,11 @@ pub fn quick_start(
     node: NodeId,
     cycle: &mut dyn FnMut() -> Nanos,
 ) -> Vec<CheckResult> {
-    use canif_model::client::PlcClient;
+    use crate::plc::{PlcSide, TaskStimulus};
+    use canif_model::exchange::ExchangeMode;
     use canif_model::image::MessageRepr;
-    let mut plc = PlcClient::new(layout);
+    let mut plc = PlcSide::new(layout, ExchangeMode::SeparateInputUpdate);
+    let mut task_cycle = 0;
     let mut results = Vec::new();
     // Sends `request` (if any) and runs cycles until a message on `answer` comes
     // back, or `cycles` pass; everything received meanwhile.
@@ -50,7 +52,10 @@ pub fn quick_start(
             now = cycle();
             let outputs = plc.outputs().to_vec();
             let inputs = iut.cycle(&outputs, now).map_err(|e| e.0)?;
-            plc.task(&inputs).map_err(|e| format!("{e:?}"))?;
+            plc.device_cycle_done(&inputs);
+            plc.task(task_cycle, TaskStimulus::default())
+                .map_err(|e| format!("{e:?}"))?;
+            task_cycle += 1;
             received.extend(plc.take_received().into_iter().map(|m| (now, m.frame)));
             if answer.is_some_and(|id| received.iter().any(|(_, f)| f.id == id)) {
                 break;
