@@ -310,7 +310,7 @@ fn the_configure_of_a_socketcan_bus_fits_the_schema() {
             Some(&bus),
         )
         .unwrap();
-    assert_eq!(answer, Ok(()));
+    assert_eq!(answer, canif_harness::adapter::client::Configured::Accepted);
     drop(iut);
     std::thread::sleep(Duration::from_millis(100));
     let requests = std::fs::read_to_string(&requests).unwrap();

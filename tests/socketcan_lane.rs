@@ -374,7 +374,9 @@ fn quick_start_over(interface: &str) -> Result<(), Failed> {
             interface: interface.to_string(),
             epoch_ns: epoch,
         };
-        if let Err(reason) = iut.configure(&caps, &config, Some(&bus))? {
+        if let canif_harness::adapter::client::Configured::Refused(reason) =
+            iut.configure(&caps, &config, Some(&bus))?
+        {
             return Err(
                 format!("{}: the device refuses {config:?}: {reason}", profile.name).into(),
             );

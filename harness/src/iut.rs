@@ -102,17 +102,20 @@ impl Iut for SoftDeviceIut {
         self.0.tx_done_interrupt();
     }
     fn controller_status(&mut self, status: &ControllerStatus) {
-        self.0.set_controller_word(0, status.status_word());
-        self.0.set_controller_word(3, status.transceiver_delay);
+        use canif_softdevice::field::info;
+        self.0
+            .set_controller_word(info::STATUS, status.status_word());
+        self.0
+            .set_controller_word(info::TRANSCEIVER_DELAY, status.transceiver_delay);
         for (index, value) in [
-            (7, status.ack_errors),
-            (8, status.bit_errors),
-            (9, status.crc_errors),
-            (10, status.form_errors),
-            (11, u32::from(status.core_running)),
-            (12, status.stuff_errors),
-            (13, status.receive_error_counter),
-            (14, status.transmit_error_counter),
+            (info::ACK_ERRORS, status.ack_errors),
+            (info::BIT_ERRORS, status.bit_errors),
+            (info::CRC_ERRORS, status.crc_errors),
+            (info::FORM_ERRORS, status.form_errors),
+            (info::CORE_RUNNING, u32::from(status.core_running)),
+            (info::STUFF_ERRORS, status.stuff_errors),
+            (info::RECEIVE_ERROR_COUNTER, status.receive_error_counter),
+            (info::TRANSMIT_ERROR_COUNTER, status.transmit_error_counter),
         ] {
             self.0.set_controller_word(index, value);
         }

@@ -8,7 +8,7 @@ use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_model::device::Device;
 use canif_softdevice::{Fault, SoftDevice};
 
-use crate::adapter::client::ExecIut;
+use crate::adapter::client::{Configured, ExecIut};
 use crate::adapter::protocol::OwnedBus;
 use crate::iut::{soft_settings, BuildError, Iut, ModelIut, SoftDeviceIut};
 
@@ -70,8 +70,8 @@ impl IutKind {
                     .configure(caps, config, bus)
                     .map_err(|e| BuildError::Failed(e.0))?
                 {
-                    Ok(()) => Ok(Box::new(iut)),
-                    Err(reason) => Err(BuildError::Refused(reason)),
+                    Configured::Accepted => Ok(Box::new(iut)),
+                    Configured::Refused(reason) => Err(BuildError::Refused(reason)),
                 }
             }
         }
@@ -99,8 +99,8 @@ impl IutKind {
                         .configure(caps, config, None)
                         .map_err(|e| BuildError::Failed(e.0))?
                     {
-                        Ok(()) => Ok(()),
-                        Err(reason) => Err(BuildError::Refused(reason)),
+                        Configured::Accepted => Ok(()),
+                        Configured::Refused(reason) => Err(BuildError::Refused(reason)),
                     }
                 })
             }

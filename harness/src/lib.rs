@@ -10,7 +10,8 @@
 //! scenario against the requirement ids it breaks.
 //!
 //! The arrows run one way (see README.md): `suite` → `lockstep` → `plc`,
-//! `pair`, `bus` → `diff`, `blame`, `history`; `iut_kind` → `adapter`, `iut`.
+//! `pair`, `bus` → `diff`, `blame`, `history`; `iut_kind` → `adapter`, `iut`;
+//! `device_side` → `bus::sim` (the device the harness plays for a PLC-side client).
 
 #![forbid(unsafe_code)]
 
@@ -20,6 +21,7 @@ pub mod bus;
 pub mod canopen;
 pub mod certificate;
 pub mod compare;
+pub mod device_side;
 pub mod diff;
 pub mod error;
 mod history;

@@ -11,6 +11,7 @@
 #![forbid(unsafe_code)]
 
 mod fault;
+pub mod field;
 mod frame;
 mod settings;
 
@@ -19,6 +20,8 @@ pub use frame::CanFrame;
 pub use settings::{FilterRule, Format, Offer, Queue, Settings, SettingsError};
 
 use std::collections::VecDeque;
+
+use field::{header, info};
 
 /// Byte offsets of one message structure. Names follow the PLC types of the manual.
 #[derive(Clone, Copy, Debug)]
@@ -198,12 +201,21 @@ impl SoftDevice {
             settings.format,
             settings.time_stamp || settings.format == Format::Fd,
         );
-        let rx_base = if has_tn { 8 } else { 6 };
+        let rx_base = if has_tn {
+            header::MESSAGES_AFTER_TRANSACTION_NUMBER
+        } else {
+            header::MESSAGES
+        };
         let info_base = rx_base + usize::from(settings.rx_slots) * rx_geo.size;
-        let input_len = info_base + if settings.offer.info_data { 64 } else { 0 };
-        let mut controller = [0u32; 16];
-        controller[0] = 1 << 2; // node active
-        controller[11] = 1; // CAN core running
+        let input_len = info_base
+            + if settings.offer.info_data {
+                4 * info::WORDS
+            } else {
+                0
+            };
+        let mut controller = [0u32; info::WORDS];
+        controller[info::STATUS] = info::NODE_ACTIVE;
+        controller[info::CORE_RUNNING] = 1;
         Ok(SoftDevice {
             tx_geo,
             rx_geo,
@@ -261,18 +273,19 @@ impl SoftDevice {
             });
         }
         self.transmit_side(output, now);
-        self.receive_side(get16(output, 2));
+        self.receive_side(get16(output, header::RX_COUNTER));
         let tn = self.last_tn;
-        if self.rx_base == 8 {
-            put16(&mut self.input, 6, tn);
+        if self.rx_base == header::MESSAGES_AFTER_TRANSACTION_NUMBER {
+            put16(&mut self.input, header::TRANSACTION_NUMBER, tn);
         }
         if self.settings.offer.info_data {
-            self.controller[1] = u32::from_le_bytes(self.settings.nominal_timing);
-            self.controller[2] = u32::from_le_bytes(self.settings.data_timing);
-            self.controller[4] = 0;
-            self.controller[5] =
+            self.controller[info::NOMINAL_TIMING] =
+                u32::from_le_bytes(self.settings.nominal_timing);
+            self.controller[info::DATA_TIMING] = u32::from_le_bytes(self.settings.data_timing);
+            self.controller[info::TX_ERROR_FRAMES] = 0;
+            self.controller[info::TX_FIFO_LEVEL] =
                 (self.send_fifo.len() + usize::from(self.on_wire.is_some())) as u32;
-            self.controller[6] = if self.has(Fault::ReceiveFifoNotReported) {
+            self.controller[info::RX_FIFO_LEVEL] = if self.has(Fault::ReceiveFifoNotReported) {
                 0
             } else {
                 self.recv_fifo.len() as u32
@@ -289,18 +302,19 @@ impl SoftDevice {
             // Fault AckBeforeAccept: the batch acknowledged last cycle is only read now.
             self.copy_batch(output, now);
         }
-        let requested = get16(output, 0);
-        let acknowledged = get16(&self.input, 0);
+        let requested = get16(output, header::TX_COUNTER);
+        let acknowledged = get16(&self.input, header::TX_COUNTER);
         if requested == acknowledged {
             return;
         }
-        let mut count = usize::from(get16(output, 4)).min(usize::from(self.settings.tx_slots));
+        let mut count = usize::from(get16(output, header::NO_OF_MESSAGES))
+            .min(usize::from(self.settings.tx_slots));
         if self.has(Fault::SendsOneMoreThanAsked) {
             count = (count + 1).min(usize::from(self.settings.tx_slots));
         }
         let busy = self.send_fifo.len() + usize::from(self.on_wire.is_some());
         if self.has(Fault::AckBeforeAccept) {
-            put16(&mut self.input, 0, requested);
+            put16(&mut self.input, header::TX_COUNTER, requested);
             self.deferred_tx = Some(requested);
             return;
         }
@@ -308,11 +322,12 @@ impl SoftDevice {
             return; // no room: acknowledge later
         }
         self.copy_batch_n(output, now, count);
-        put16(&mut self.input, 0, requested);
+        put16(&mut self.input, header::TX_COUNTER, requested);
     }
 
     fn copy_batch(&mut self, output: &[u8], now: u64) {
-        let count = usize::from(get16(output, 4)).min(usize::from(self.settings.tx_slots));
+        let count = usize::from(get16(output, header::NO_OF_MESSAGES))
+            .min(usize::from(self.settings.tx_slots));
         self.copy_batch_n(output, now, count);
     }
 
@@ -409,7 +424,7 @@ impl SoftDevice {
 
     fn receive_side(&mut self, plc_rx_counter: u16) {
         let fast = self.settings.queue == Queue::Fast;
-        let free = plc_rx_counter == get16(&self.input, 2);
+        let free = plc_rx_counter == get16(&self.input, header::RX_COUNTER);
         let may_fill = if fast {
             !self.has(Fault::FastQueueWaitsForAck) || free
         } else {
@@ -420,9 +435,9 @@ impl SoftDevice {
         }
         if self.recv_fifo.is_empty() {
             if self.has(Fault::RxCounterCountsEmptyCycles) {
-                put16(&mut self.input, 4, 0);
-                let next = self.bump(get16(&self.input, 2));
-                put16(&mut self.input, 2, next);
+                put16(&mut self.input, header::NO_OF_MESSAGES, 0);
+                let next = self.bump(get16(&self.input, header::RX_COUNTER));
+                put16(&mut self.input, header::RX_COUNTER, next);
             }
             return;
         }
@@ -447,9 +462,9 @@ impl SoftDevice {
         if fast {
             self.recv_fifo.clear();
         }
-        put16(&mut self.input, 4, count as u16);
-        let next = self.bump(get16(&self.input, 2));
-        put16(&mut self.input, 2, next);
+        put16(&mut self.input, header::NO_OF_MESSAGES, count as u16);
+        let next = self.bump(get16(&self.input, header::RX_COUNTER));
+        put16(&mut self.input, header::RX_COUNTER, next);
     }
 
     fn encode_rx(&self, job: &RxJob) -> Vec<u8> {

@@ -29,6 +29,14 @@ use crate::iut::{InvalidFrame, Iut};
 /// How many lines of the IUT's stderr an error shows.
 const STDERR_LINES: usize = 20;
 
+/// How an IUT answered a configuration.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Configured {
+    Accepted,
+    /// A legitimate answer, judged by the refusal grid.
+    Refused(String),
+}
+
 /// A running IUT process.
 pub struct ExecIut {
     command: String,
@@ -177,14 +185,13 @@ impl ExecIut {
         }
     }
 
-    /// Offers a configuration. `Ok(Ok(()))`: accepted; `Ok(Err(reason))`:
-    /// refused (a legitimate answer); `Err`: the IUT failed.
+    /// Offers a configuration; `Err`: the IUT failed (refusing is an answer).
     pub fn configure(
         &mut self,
         caps: &Capabilities,
         config: &InterfaceConfig,
         bus: Option<&OwnedBus>,
-    ) -> Result<Result<(), String>, IutError> {
+    ) -> Result<Configured, IutError> {
         let layout = ImageLayout::new(config, caps.info_data);
         let request = Request::Configure {
             protocol: PROTOCOL_VERSION,
@@ -207,9 +214,9 @@ impl ExecIut {
         }
         self.input_size = layout.input_size();
         Ok(if accepted {
-            Ok(())
+            Configured::Accepted
         } else {
-            Err(reason.unwrap_or_else(|| "refused".into()))
+            Configured::Refused(reason.unwrap_or_else(|| "refused".into()))
         })
     }
 }

@@ -90,12 +90,30 @@ impl Nodes {
     }
 }
 
+/// What the simulated bus needs of the node whose controller it serves: the
+/// device under test beside the model (the lockstep's pair), or the model
+/// device alone (the device side, when a PLC-side client is under test).
+pub trait Controller {
+    /// Why the run cannot go on.
+    type Error;
+    /// Scenario time.
+    fn now(&mut self) -> &mut Nanos;
+    /// The frame handed to the controller and not yet on the bus.
+    fn pending(&mut self) -> &mut Option<Frame>;
+    /// Asks the device for its next frame when the controller is free.
+    fn poll(&mut self) -> Result<(), Self::Error>;
+    /// When a held frame becomes due (Distributed Clocks).
+    fn due(&self) -> Option<Nanos>;
+    /// A frame ended on the bus; `own`: the controller sent it.
+    fn ended(&mut self, frame: Frame, own: bool, end: Nanos);
+}
+
 /// The simulated bus of one scenario: the other nodes, and the frame on the wire.
 #[derive(Debug)]
 pub struct SimBus {
     nodes: Nodes,
     bit_rates: BitRates,
-    /// The frame on the bus: its end, whether the IUT sent it.
+    /// The frame on the bus: its end, whether the controller sent it.
     on_bus: Option<(Nanos, Frame, bool)>,
 }
 
@@ -107,6 +125,52 @@ impl SimBus {
             on_bus: None,
         }
     }
+
+    /// Completes frames and starts the next winner of arbitration, until `until`.
+    pub fn drive<C: Controller>(&mut self, node: &mut C, until: Nanos) -> Result<(), C::Error> {
+        loop {
+            node.poll()?;
+            let now = *node.now();
+            if self.on_bus.is_none() {
+                let other = self.nodes.best_key(now);
+                let own = node.pending().as_ref().map(arbitration_key);
+                let start = match (other, own) {
+                    (Some(o), Some(k)) if o < k => self.nodes.take_best(now).map(|f| (f, false)),
+                    (Some(_), None) => self.nodes.take_best(now).map(|f| (f, false)),
+                    (_, Some(_)) => node.pending().take().map(|f| (f, true)),
+                    (None, None) => None,
+                };
+                if let Some((frame, own)) = start {
+                    let end = now + duration(&frame, self.bit_rates);
+                    self.on_bus = Some((end, frame, own));
+                }
+            }
+            let next = [
+                self.on_bus.as_ref().map(|(end, _, _)| *end),
+                self.nodes.next_ready_after(now),
+                node.due().filter(|t| *t > now),
+            ]
+            .into_iter()
+            .flatten()
+            .min();
+            match next {
+                Some(t) if t <= until => {
+                    *node.now() = t;
+                    if let Some((end, frame, own)) = self.on_bus.take() {
+                        if end == t {
+                            node.ended(frame, own, end);
+                        } else {
+                            self.on_bus = Some((end, frame, own));
+                        }
+                    }
+                }
+                _ => {
+                    *node.now() = until;
+                    return Ok(());
+                }
+            }
+        }
+    }
 }
 
 impl Bus for SimBus {
@@ -114,50 +178,26 @@ impl Bus for SimBus {
         self.nodes.schedule(at, frame);
     }
 
-    /// Completes frames, starts the next winner of arbitration, until `until`.
     fn run_until(&mut self, pair: &mut Pair, until: Nanos) -> Result<(), Outcome> {
-        loop {
-            pair.poll()?;
-            if self.on_bus.is_none() {
-                let node = self.nodes.best_key(pair.now);
-                let iut = pair.iut_pending.as_ref().map(arbitration_key);
-                let start = match (node, iut) {
-                    (Some(n), Some(k)) if n < k => {
-                        self.nodes.take_best(pair.now).map(|f| (f, false))
-                    }
-                    (Some(_), None) => self.nodes.take_best(pair.now).map(|f| (f, false)),
-                    (_, Some(_)) => pair.iut_pending.take().map(|f| (f, true)),
-                    (None, None) => None,
-                };
-                if let Some((frame, from_iut)) = start {
-                    let end = pair.now + duration(&frame, self.bit_rates);
-                    self.on_bus = Some((end, frame, from_iut));
-                }
-            }
-            let next = [
-                self.on_bus.as_ref().map(|(end, _, _)| *end),
-                self.nodes.next_ready_after(pair.now),
-                pair.iut.poll_timeout().filter(|t| *t > pair.now),
-            ]
-            .into_iter()
-            .flatten()
-            .min();
-            match next {
-                Some(t) if t <= until => {
-                    pair.now = t;
-                    if let Some((end, frame, from_iut)) = self.on_bus.take() {
-                        if end == t {
-                            pair.complete(frame, from_iut, end);
-                        } else {
-                            self.on_bus = Some((end, frame, from_iut));
-                        }
-                    }
-                }
-                _ => {
-                    pair.now = until;
-                    return Ok(());
-                }
-            }
-        }
+        self.drive(pair, until)
+    }
+}
+
+impl Controller for Pair {
+    type Error = Outcome;
+    fn now(&mut self) -> &mut Nanos {
+        &mut self.now
+    }
+    fn pending(&mut self) -> &mut Option<Frame> {
+        &mut self.iut_pending
+    }
+    fn poll(&mut self) -> Result<(), Outcome> {
+        Pair::poll(self)
+    }
+    fn due(&self) -> Option<Nanos> {
+        self.iut.poll_timeout()
+    }
+    fn ended(&mut self, frame: Frame, own: bool, end: Nanos) {
+        self.complete(frame, own, end);
     }
 }
