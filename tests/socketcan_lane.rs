@@ -25,15 +25,25 @@ use libtest_mimic::{Arguments, Failed, Trial};
 
 /// The `canif` under test: this build's, or CANIF_BIN (the kernel lane points
 /// it at the release build: under emulation a debug build is several times slower).
+/// A missing binary is named, with where the path came from.
 fn canif_bin() -> String {
-    std::env::var("CANIF_BIN").unwrap_or_else(|_| env!("CARGO_BIN_EXE_canif").to_string())
+    let (path, from) = match std::env::var("CANIF_BIN") {
+        Ok(path) => (path, "CANIF_BIN"),
+        Err(_) => (env!("CARGO_BIN_EXE_canif").to_string(), "cargo"),
+    };
+    assert!(
+        std::path::Path::new(&path).is_file(),
+        "the canif binary {path} (from {from}) does not exist"
+    );
+    path
 }
 
 fn canif(args: &[&str]) -> Output {
-    Command::new(canif_bin())
+    let bin = canif_bin();
+    Command::new(&bin)
         .args(args)
         .output()
-        .expect("canif starts")
+        .unwrap_or_else(|e| panic!("{bin} does not start: {e}"))
 }
 
 fn text(output: &Output) -> String {

@@ -80,7 +80,7 @@ fn start(
     let trace = scenario
         .trace
         .as_ref()
-        .and_then(|(dir, name)| TraceWriter::create(dir, name).ok());
+        .and_then(|(dir, name)| TraceWriter::create(dir, name, &bus.interface_name()).ok());
     let pair = Pair::new(iut, model, (&scenario.name, &scenario.covers), trace);
     Ok((pair, bus))
 }

@@ -146,7 +146,7 @@ impl Pair {
     pub fn observe(&mut self, frame: Frame, from_iut: bool, end: Nanos) {
         self.frames += 1;
         if let Some(trace) = self.trace.as_mut() {
-            if trace.frame(end, &frame).is_err() {
+            if trace.frame(end, &frame, from_iut).is_err() {
                 self.trace = None; // a full disk ends the trace, not the run
             }
         }

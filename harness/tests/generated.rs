@@ -238,8 +238,22 @@ fn traces_are_pcapng_and_candump() {
 
     let bytes = std::fs::read(dir.join("fd.pcapng")).unwrap();
     let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
+    let half = |at: usize| u16::from_le_bytes([bytes[at], bytes[at + 1]]);
+    // (code, value) of the options from `at` to the block's end.
+    let options = |mut at: usize, end: usize| {
+        let mut found = Vec::new();
+        while at + 4 <= end {
+            let (code, len) = (half(at), usize::from(half(at + 2)));
+            if code == 0 {
+                break;
+            }
+            found.push((code, bytes[at + 4..at + 4 + len].to_vec()));
+            at += 4 + len.div_ceil(4) * 4;
+        }
+        found
+    };
     let (mut at, mut packets, mut ids) = (0, 0, Vec::new());
-    let mut kinds = Vec::new();
+    let (mut kinds, mut directions) = (Vec::new(), Vec::new());
     while at < bytes.len() {
         let (kind, length) = (word(at), word(at + 4) as usize);
         assert_eq!(
@@ -249,15 +263,15 @@ fn traces_are_pcapng_and_candump() {
         );
         kinds.push(kind);
         if kind == 1 {
-            assert_eq!(
-                u16::from_le_bytes([bytes[at + 8], bytes[at + 9]]),
-                227,
-                "LINKTYPE_CAN_SOCKETCAN"
+            assert_eq!(half(at + 8), 227, "LINKTYPE_CAN_SOCKETCAN");
+            let idb = options(at + 16, at + length - 4);
+            assert!(
+                idb.contains(&(2, b"canif-sim".to_vec())),
+                "if_name: {idb:?}"
             );
-            assert_eq!(
-                &bytes[at + 16..at + 21],
-                &[9, 0, 1, 0, 9],
-                "if_tsresol = 9 (nanoseconds)"
+            assert!(
+                idb.contains(&(9, vec![9])),
+                "if_tsresol = 9 (nanoseconds): {idb:?}"
             );
         }
         if kind == 6 {
@@ -266,6 +280,10 @@ fn traces_are_pcapng_and_candump() {
             ids.push(u32::from_be_bytes(
                 bytes[data..data + 4].try_into().unwrap(),
             ));
+            let captured = word(at + 20) as usize;
+            let epb = options(data + captured.div_ceil(4) * 4, at + length - 4);
+            let flags = epb.iter().find(|(code, _)| *code == 2).expect("epb_flags");
+            directions.push(u32::from_le_bytes(flags.1[..4].try_into().unwrap()) & 0b11);
         }
         at += length;
     }
@@ -275,23 +293,52 @@ fn traces_are_pcapng_and_candump() {
         ids.contains(&(0x8000_1000)),
         "an extended id with the EFF flag, big-endian"
     );
+    // The scenario has frames both ways: the IUT's are outbound (2), the other nodes' inbound (1).
+    assert!(
+        directions.iter().all(|d| *d == 1 || *d == 2),
+        "{directions:?}"
+    );
+    assert!(
+        directions.contains(&1) && directions.contains(&2),
+        "{directions:?}"
+    );
     let log = std::fs::read_to_string(dir.join("fd.log")).unwrap();
     assert_eq!(log.lines().count() as u64, run.frames_checked);
     assert!(
         log.lines()
-            .any(|l| l.contains(" sim0 ") && l.contains("##")),
+            .any(|l| l.contains(" canif-sim ") && l.contains("##")),
         "FD frames as ##"
     );
 
     let tshark = std::process::Command::new("tshark")
         .args(["-r"])
         .arg(dir.join("fd.pcapng"))
-        .args(["-T", "fields", "-e", "can.id"])
+        .args(["-T", "fields", "-E", "separator=,"])
+        .args([
+            "-e",
+            "can.id",
+            "-e",
+            "frame.interface_name",
+            "-e",
+            "frame.packet_flags_direction",
+        ])
         .output();
     match tshark {
         Ok(out) if out.status.success() => {
             let text = String::from_utf8_lossy(&out.stdout);
             assert_eq!(text.lines().count() as u64, run.frames_checked, "tshark reads every frame: {text}");
+            // Wireshark names the interface and tells the IUT's frames from the other nodes'.
+            let seen: Vec<(String, String)> = text
+                .lines()
+                .map(|l| {
+                    let fields: Vec<&str> = l.split(',').collect();
+                    (fields[1].to_string(), fields[2].to_string())
+                })
+                .collect();
+            assert!(seen.iter().all(|(name, _)| name == "canif-sim"), "{text}");
+            let expected: Vec<String> = directions.iter().map(|d| format!("0x{d:08x}")).collect();
+            let got: Vec<String> = seen.iter().map(|(_, d)| d.clone()).collect();
+            assert_eq!(got, expected, "tshark's packet_flags_direction");
         }
         Ok(out) => panic!("tshark cannot read the pcapng: {}", String::from_utf8_lossy(&out.stderr)),
         // .ci/run installs tshark: in CI its absence is a failure, not a skip.

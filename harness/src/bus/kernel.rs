@@ -343,6 +343,10 @@ impl Bus for KernelBus {
         self.options.adapt(frame)
     }
 
+    fn interface_name(&self) -> String {
+        self.options.spec.iut.clone()
+    }
+
     fn owned_bus(&self) -> Option<OwnedBus> {
         matches!(self.side, Side::Owned).then(|| OwnedBus {
             interface: self.options.spec.iut.clone(),

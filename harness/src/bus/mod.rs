@@ -48,6 +48,11 @@ pub trait Bus {
         frame
     }
 
+    /// The bus's name in traces: the simulated bus, or the IUT's interface.
+    fn interface_name(&self) -> String {
+        crate::trace::SIM_INTERFACE.to_string()
+    }
+
     /// The interface an external IUT must open itself, if any.
     fn owned_bus(&self) -> Option<OwnedBus> {
         None
