@@ -160,6 +160,10 @@ pub enum Command {
         bus: BusArg,
         #[command(flatten)]
         real_time: RealTimeOptions,
+        /// After the IUT breaks, still start it for every remaining scenario
+        /// (by default they are reported as skipped, and the Gherkin stage is left out).
+        #[arg(long)]
+        no_fail_fast: bool,
         /// Only scenarios whose name contains this text (repeatable: any of them).
         #[arg(long, value_name = "TEXT")]
         scenario: Vec<String>,

@@ -28,6 +28,14 @@ use commands::{certify, device, run, spec, tools};
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // SIGINT, SIGTERM: the run stops at the next cycle and still writes its
+    // reports; a second signal ends canif at once.
+    let _ = ctrlc::set_handler(|| {
+        if canif_harness::interrupt::requested() {
+            std::process::exit(130);
+        }
+        canif_harness::interrupt::request();
+    });
     let mut out = String::new();
     let code = match run(cli, &mut out) {
         Ok(code) => code,
@@ -60,6 +68,7 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
             suite,
             bus,
             real_time,
+            no_fail_fast,
             scenario,
             node,
             coupler_fault,
@@ -76,6 +85,7 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                 trace_dir: trace,
                 bus,
                 only: scenario,
+                fail_fast: !no_fail_fast,
             };
             run::run(&catalogue, &iut, &profile, &options, &report)
         }

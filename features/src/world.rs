@@ -35,6 +35,20 @@ fn record_iut_error(message: &str) {
     IUT_ERROR.with(|e| *e.borrow_mut() = Some(message.to_string()));
 }
 
+/// What the IUT answered; when it broke, that is recorded as the scenario's
+/// error (not a failure) and the step ends.
+fn iut_said<T>(result: Result<T, canif_harness::IutError>) -> Result<T, String> {
+    result.map_err(|e| {
+        record_iut_error(&e.0);
+        e.0
+    })
+}
+
+/// How many frames (or due times) one cycle may ask of the IUT's controller:
+/// far more than a 1 ms cycle carries at 1 Mbit/s (about 20), so only a
+/// babbling controller or a time that never advances reaches it.
+const MOST_POLLS_PER_CYCLE: usize = 10_000;
+
 /// Sets the target for scenarios run on this thread.
 pub fn set_target(target: Target) {
     TARGET.with(|t| *t.borrow_mut() = Some(target));
@@ -205,12 +219,9 @@ impl CanWorld {
         let outputs = plc.outputs().to_vec();
         let iut = self.iut.as_mut().expect("started");
         if let Some(status) = self.status.take() {
-            iut.controller_status(&status);
+            iut_said(iut.controller_status(&status))?;
         }
-        self.inputs = iut.cycle(&outputs, self.now).map_err(|e| {
-            record_iut_error(&e.0);
-            e.0
-        })?;
+        self.inputs = iut_said(iut.cycle(&outputs, self.now))?;
         plc.device_cycle_done(&self.inputs);
         let sent_before = self.on_bus.len();
         let result = self.run_bus();
@@ -247,7 +258,7 @@ impl CanWorld {
         if let (Some(coupler), true) = (self.coupler.as_mut(), self.coupler_alive) {
             let iut = self.iut.as_mut().expect("started");
             for (i, frame) in coupler.poll(self.now + CYCLE / 2).into_iter().enumerate() {
-                iut.receive(&frame, self.now + CYCLE / 2 + i as u64 * 200);
+                iut_said(iut.receive(&frame, self.now + CYCLE / 2 + i as u64 * 200))?;
             }
         }
         self.now += CYCLE;
@@ -262,7 +273,7 @@ impl CanWorld {
         if self.bus_blocked {
             // The controller takes the first frame but loses every arbitration.
             if self.in_controller.is_none() {
-                match iut.poll_transmit(self.now) {
+                match iut_said(iut.poll_transmit(self.now))? {
                     Some(Ok(frame)) => self.in_controller = Some(frame),
                     Some(Err(invalid)) => {
                         return Err(format!(
@@ -278,23 +289,23 @@ impl CanWorld {
         if let Some(frame) = self.in_controller.take() {
             self.on_bus.push(frame);
             self.bus_times.push(self.now);
-            iut.transmit_complete();
+            iut_said(iut.transmit_complete())?;
         }
         let mut at = self.now;
-        loop {
+        for _ in 0..MOST_POLLS_PER_CYCLE {
             if let Some(due) = iut.poll_timeout() {
                 at = at.max(due);
             }
-            match iut.poll_transmit(at) {
+            match iut_said(iut.poll_transmit(at))? {
                 Some(Ok(frame)) => {
                     self.on_bus.push(frame);
                     self.bus_times.push(at);
-                    iut.transmit_complete();
+                    iut_said(iut.transmit_complete())?;
                     at += 1_000;
                     if let (Some(coupler), true) = (self.coupler.as_mut(), self.coupler_alive) {
                         for answer in coupler.handle(&frame, at) {
                             at += 200;
-                            iut.receive(&answer, at);
+                            iut_said(iut.receive(&answer, at))?;
                         }
                     }
                 }
@@ -313,6 +324,12 @@ impl CanWorld {
                 None => return Ok(()),
             }
         }
+        let error = format!(
+            "the IUT's controller was polled {MOST_POLLS_PER_CYCLE} times in one cycle \
+             (a babbling controller, or a due time that never advances: now {at} ns)"
+        );
+        record_iut_error(&error);
+        Err(error)
     }
 
     /// The coupler's own frames (an input changed) go on the bus now.
@@ -323,7 +340,7 @@ impl CanWorld {
         }
         let iut = self.iut.as_mut().expect("started");
         for (i, frame) in frames.iter().enumerate() {
-            iut.receive(frame, self.now + 5_000 + i as u64 * 200);
+            iut_said(iut.receive(frame, self.now + 5_000 + i as u64 * 200))?;
         }
         Ok(())
     }
@@ -333,7 +350,7 @@ impl CanWorld {
         self.start()?;
         let end = self.now + 10_000 + 1_000 * self.sent_by_nodes.len() as u64 % CYCLE;
         self.sent_by_nodes.push((frame, end));
-        self.iut.as_mut().expect("started").receive(&frame, end);
+        iut_said(self.iut.as_mut().expect("started").receive(&frame, end))?;
         Ok(())
     }
 

@@ -97,3 +97,44 @@ fn a_broken_iut_makes_a_scenario_an_error() {
         other => panic!("expected an error, got {other:?}"),
     }
 }
+
+/// A babbling controller (a frame at every poll) or a due time that never
+/// advances cannot spin a scenario for ever: the world stops polling after a
+/// bounded number of times in one cycle and names why.
+#[test]
+fn a_babbling_iut_ends_a_scenario_in_bounded_time() {
+    let scenario = scenarios()
+        .unwrap()
+        .into_iter()
+        .find(|s| s.file.ends_with("tx-handshake.feature"))
+        .unwrap();
+    for mode in ["babble", "stuck-time"] {
+        let target = Target {
+            iut: IutKind::Exec {
+                command: format!(
+                    "python3 {}/../tests/iuts/misbehave.py {mode}",
+                    env!("CARGO_MANIFEST_DIR")
+                ),
+                timeout_ms: 2_000,
+            },
+            profile: "el6751-mdp".into(),
+            caps: canif_model::config::Capabilities::everything(),
+        };
+        let started = std::time::Instant::now();
+        let outcome = run_scenario(&scenario.file, scenario.line, target);
+        assert!(
+            started.elapsed() < std::time::Duration::from_secs(60),
+            "{mode}: took {:?}",
+            started.elapsed()
+        );
+        match outcome {
+            ScenarioOutcome::Error(report) => {
+                assert!(
+                    report.contains("polled 10000 times in one cycle"),
+                    "{mode}: {report}"
+                )
+            }
+            other => panic!("{mode}: expected an error, got {other:?}"),
+        }
+    }
+}

@@ -4,8 +4,6 @@
 //! [`crate::plc::PlcSide`]; swapping which side is the IUT swaps which of the
 //! two the harness plays.
 
-use std::convert::Infallible;
-
 use canif_model::config::{Capabilities, ConfigError, InterfaceConfig};
 use canif_model::device::Device;
 use canif_model::frame::Frame;
@@ -15,6 +13,7 @@ use canif_model::Nanos;
 
 use crate::bus::sim::{Controller, SimBus};
 use crate::bus::Bus;
+use crate::error::BusError;
 
 /// A frame that ended on the bus.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -41,14 +40,14 @@ struct ModelController {
 }
 
 impl Controller for ModelController {
-    type Error = Infallible;
+    type Error = BusError;
     fn now(&mut self) -> &mut Nanos {
         &mut self.now
     }
     fn pending(&mut self) -> &mut Option<Frame> {
         &mut self.pending
     }
-    fn poll(&mut self) -> Result<(), Infallible> {
+    fn poll(&mut self) -> Result<(), BusError> {
         if self.pending.is_none() {
             self.pending = self.device.poll_transmit(self.now);
         }
@@ -57,7 +56,7 @@ impl Controller for ModelController {
     fn due(&self) -> Option<Nanos> {
         self.device.poll_timeout()
     }
-    fn ended(&mut self, frame: Frame, own: bool, end: Nanos) {
+    fn ended(&mut self, frame: Frame, own: bool, end: Nanos) -> Result<(), BusError> {
         if own {
             self.device.handle_transmit_complete();
         } else {
@@ -68,6 +67,12 @@ impl Controller for ModelController {
             end,
             from_device: own,
         });
+        Ok(())
+    }
+    fn stalled(&self, steps: usize) -> BusError {
+        BusError(format!(
+            "the model device took {steps} bus events in one cycle (a harness bug)"
+        ))
     }
 }
 
@@ -98,11 +103,9 @@ impl DeviceSide {
     }
 
     /// The bus runs to `until`; the frames that ended on it meanwhile.
-    pub fn run_until(&mut self, until: Nanos) -> Vec<Ended> {
-        match self.bus.drive(&mut self.device, until) {
-            Ok(()) => std::mem::take(&mut self.device.ended),
-            Err(never) => match never {},
-        }
+    pub fn run_until(&mut self, until: Nanos) -> Result<Vec<Ended>, BusError> {
+        self.bus.drive(&mut self.device, until)?;
+        Ok(std::mem::take(&mut self.device.ended))
     }
 
     /// The device's cycle on the client's outputs: the new input image.
@@ -143,7 +146,7 @@ mod tests {
         device.schedule(300_000, arriving);
         let (mut on_bus, mut read) = (Vec::new(), Vec::new());
         for k in 0..5u64 {
-            on_bus.extend(device.run_until(k * 1_000_000));
+            on_bus.extend(device.run_until(k * 1_000_000).unwrap());
             plc.task(k, TaskStimulus::default()).unwrap();
             let inputs = device.cycle(plc.outputs()).unwrap().to_vec();
             plc.device_cycle_done(&inputs);

@@ -39,6 +39,11 @@ pub enum RunError {
     Configuration(String),
     /// The harness or a scenario is wrong (a bug in canif).
     Harness(String),
+    /// Not run: the IUT had already broken in an earlier scenario of the
+    /// profile (fail-fast), named here.
+    Skipped(String),
+    /// The run was asked to stop (SIGINT, SIGTERM) before this scenario ended.
+    Interrupted,
 }
 
 impl fmt::Display for RunError {
@@ -47,6 +52,8 @@ impl fmt::Display for RunError {
             RunError::Iut(e) => e.fmt(f),
             RunError::Bus(e) => e.fmt(f),
             RunError::Configuration(reason) | RunError::Harness(reason) => f.write_str(reason),
+            RunError::Skipped(after) => write!(f, "skipped after {after}"),
+            RunError::Interrupted => f.write_str("interrupted (SIGINT or SIGTERM)"),
         }
     }
 }

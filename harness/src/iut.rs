@@ -17,20 +17,26 @@ pub use crate::error::IutError;
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct InvalidFrame(pub String);
 
-/// What the harness needs from an implementation under test.
+/// What the next frame of a controller is: a frame, none, or something that
+/// is no valid frame (judged as the device's non-conformance).
+pub type Transmit = Option<Result<Frame, InvalidFrame>>;
+
+/// What the harness needs from an implementation under test. Every call can
+/// fail with an [`IutError`]: the IUT itself broke (exited, hung, broke the
+/// protocol), which is an `error` verdict, never a non-conformance.
 pub trait Iut {
     /// One CAN interface cycle with this output image at `now`; the new input image.
     fn cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError>;
     /// The controller received `frame`, whose last bit ended at `end_of_reception`.
-    fn receive(&mut self, frame: &Frame, end_of_reception: Nanos);
+    fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) -> Result<(), IutError>;
     /// The next frame the controller starts sending at `now`, if any.
-    fn poll_transmit(&mut self, now: Nanos) -> Option<Result<Frame, InvalidFrame>>;
+    fn poll_transmit(&mut self, now: Nanos) -> Result<Transmit, IutError>;
     /// When a held frame (Distributed Clocks) becomes due.
     fn poll_timeout(&self) -> Option<Nanos>;
     /// The frame it started is on the bus.
-    fn transmit_complete(&mut self);
+    fn transmit_complete(&mut self) -> Result<(), IutError>;
     /// The controller's status and counters changed.
-    fn controller_status(&mut self, status: &ControllerStatus);
+    fn controller_status(&mut self, status: &ControllerStatus) -> Result<(), IutError>;
 }
 
 /// Why no IUT could be built for a configuration.
@@ -61,20 +67,23 @@ impl Iut for ModelIut {
             .map(<[u8]>::to_vec)
             .map_err(|e| IutError(e.to_string()))
     }
-    fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) {
+    fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) -> Result<(), IutError> {
         self.0.handle_received(*frame, end_of_reception);
+        Ok(())
     }
-    fn poll_transmit(&mut self, now: Nanos) -> Option<Result<Frame, InvalidFrame>> {
-        self.0.poll_transmit(now).map(Ok)
+    fn poll_transmit(&mut self, now: Nanos) -> Result<Transmit, IutError> {
+        Ok(self.0.poll_transmit(now).map(Ok))
     }
     fn poll_timeout(&self) -> Option<Nanos> {
         self.0.poll_timeout()
     }
-    fn transmit_complete(&mut self) {
+    fn transmit_complete(&mut self) -> Result<(), IutError> {
         self.0.handle_transmit_complete();
+        Ok(())
     }
-    fn controller_status(&mut self, status: &ControllerStatus) {
+    fn controller_status(&mut self, status: &ControllerStatus) -> Result<(), IutError> {
         self.0.handle_controller_status(*status);
+        Ok(())
     }
 }
 
@@ -89,19 +98,21 @@ impl Iut for SoftDeviceIut {
             .map(<[u8]>::to_vec)
             .map_err(|e| IutError(e.to_string()))
     }
-    fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) {
+    fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) -> Result<(), IutError> {
         self.0.rx_interrupt(to_soft(frame), end_of_reception);
+        Ok(())
     }
-    fn poll_transmit(&mut self, now: Nanos) -> Option<Result<Frame, InvalidFrame>> {
-        self.0.controller_idle(now).map(|f| from_soft(&f))
+    fn poll_transmit(&mut self, now: Nanos) -> Result<Transmit, IutError> {
+        Ok(self.0.controller_idle(now).map(|f| from_soft(&f)))
     }
     fn poll_timeout(&self) -> Option<Nanos> {
         self.0.next_release()
     }
-    fn transmit_complete(&mut self) {
+    fn transmit_complete(&mut self) -> Result<(), IutError> {
         self.0.tx_done_interrupt();
+        Ok(())
     }
-    fn controller_status(&mut self, status: &ControllerStatus) {
+    fn controller_status(&mut self, status: &ControllerStatus) -> Result<(), IutError> {
         use canif_softdevice::field::info;
         self.0
             .set_controller_word(info::STATUS, status.status_word());
@@ -119,6 +130,7 @@ impl Iut for SoftDeviceIut {
         ] {
             self.0.set_controller_word(index, value);
         }
+        Ok(())
     }
 }
 

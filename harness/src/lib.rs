@@ -25,6 +25,7 @@ pub mod device_side;
 pub mod diff;
 pub mod error;
 mod history;
+pub mod interrupt;
 pub mod iut;
 pub mod iut_kind;
 pub mod lockstep;

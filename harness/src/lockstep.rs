@@ -105,6 +105,9 @@ impl Lockstep<'_> {
             .max(self.bus.time_stamp_tolerance());
         for (k, step) in steps.enumerate() {
             let k = k as u64;
+            if crate::interrupt::requested() {
+                return Err((Outcome::Error(RunError::Interrupted), k));
+            }
             self.cycle(k, k * cycle_time, step, time_stamp_tolerance)
                 .map_err(|outcome| (outcome, k))?;
         }
@@ -139,7 +142,10 @@ impl Lockstep<'_> {
             }
         }
         if let Some(status) = step.status {
-            self.pair.iut.controller_status(&status);
+            self.pair
+                .iut
+                .controller_status(&status)
+                .map_err(crate::pair::iut_broke)?;
             self.pair.model.handle_controller_status(status);
         }
         if !step.plc_busy {

@@ -16,6 +16,11 @@ use crate::iut::{InvalidFrame, Iut};
 use crate::outcome::{Failure, Outcome};
 use crate::trace::TraceWriter;
 
+/// The IUT broke: the scenario ends in error, whatever the model expected.
+pub fn iut_broke(error: crate::error::IutError) -> Outcome {
+    Outcome::Error(error.into())
+}
+
 /// The two devices of one scenario and what has been seen of them.
 pub struct Pair {
     pub iut: Box<dyn Iut>,
@@ -77,7 +82,7 @@ impl Pair {
             return Ok(());
         }
         let expected = self.model.poll_transmit(self.now);
-        let actual = self.iut.poll_transmit(self.now);
+        let actual = self.iut.poll_transmit(self.now).map_err(iut_broke)?;
         match self.transmit_difference(expected, actual) {
             Ok(frame) => {
                 self.iut_pending = frame;
@@ -133,13 +138,15 @@ impl Pair {
     }
 
     /// A frame ended on the bus, and the IUT's controller learns of it.
-    pub fn complete(&mut self, frame: Frame, from_iut: bool, end: Nanos) {
-        if from_iut {
-            self.iut.transmit_complete();
+    pub fn complete(&mut self, frame: Frame, from_iut: bool, end: Nanos) -> Result<(), Outcome> {
+        let told = if from_iut {
+            self.iut.transmit_complete()
         } else {
-            self.iut.receive(&frame, end);
-        }
+            self.iut.receive(&frame, end)
+        };
+        told.map_err(iut_broke)?;
         self.observe(frame, from_iut, end);
+        Ok(())
     }
 
     /// A frame ended on the bus: the model, the trace and the history learn of it.

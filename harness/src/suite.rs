@@ -10,6 +10,7 @@ use canif_model::filter::FilterRow;
 use canif_spec::{req_ids, Catalogue, Profile, ReqId, Verification};
 
 use crate::bus::BusChoice;
+use crate::error::RunError;
 use crate::iut::BuildError;
 use crate::iut_kind::IutKind;
 use crate::lockstep::run_scenario;
@@ -32,6 +33,9 @@ pub struct Options {
     pub bus: BusChoice,
     /// Only scenarios whose name contains one of these (all when empty).
     pub only: Vec<String>,
+    /// After the IUT breaks in a profile, report the profile's remaining
+    /// scenarios as skipped instead of starting the broken IUT again.
+    pub fail_fast: bool,
 }
 
 impl Options {
@@ -44,6 +48,7 @@ impl Options {
             counter_wrap: false,
             trace_dir: None,
             bus: BusChoice::Sim,
+            fail_fast: true,
             only: Vec::new(),
         }
     }
@@ -399,6 +404,10 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
     }
 }
 
+fn first_line(text: &str) -> &str {
+    text.lines().next().unwrap_or("")
+}
+
 /// Runs every scenario of a profile against an IUT and judges each requirement.
 pub fn run_profile(
     catalogue: &Catalogue,
@@ -410,6 +419,14 @@ pub fn run_profile(
     let caps = profile.model_capabilities();
     let mut runs = vec![check_refusals(kind, &caps)];
     progress(&runs[0]);
+    let mut broken = match &runs[0].outcome {
+        Outcome::Error(RunError::Iut(error)) if options.fail_fast => Some(format!(
+            "the IUT broke in `{}`: {}",
+            runs[0].scenario,
+            first_line(&error.0)
+        )),
+        _ => None,
+    };
     for mut scenario in scenarios(&caps, options) {
         if options
             .only
@@ -435,7 +452,26 @@ pub fn run_profile(
                 .collect();
             scenario.trace = Some((dir.join(&profile.name), name));
         }
-        let run = run_scenario(kind, &caps, &scenario, scenario.steps());
+        let run = match &broken {
+            Some(after) => ScenarioRun {
+                scenario: scenario.name.clone(),
+                covers: scenario.covers.clone(),
+                outcome: Outcome::Error(RunError::Skipped(after.clone())),
+                cycles: 0,
+                frames_checked: 0,
+            },
+            None if crate::interrupt::requested() => break,
+            None => run_scenario(kind, &caps, &scenario, scenario.steps()),
+        };
+        if let Outcome::Error(RunError::Iut(error)) = &run.outcome {
+            if options.fail_fast && broken.is_none() {
+                broken = Some(format!(
+                    "the IUT broke in `{}`: {}",
+                    run.scenario,
+                    first_line(&error.0)
+                ));
+            }
+        }
         progress(&run);
         runs.push(run);
     }

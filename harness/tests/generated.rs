@@ -163,6 +163,7 @@ fn report(seed: u64) -> canif_harness::report::ReportFile {
         profiles: vec![run],
         scenarios: Vec::new(),
         wall_time_ms: 0,
+        interrupted: false,
     };
     report.json(&catalogue)
 }
@@ -422,6 +423,7 @@ fn the_html_report_renders_in_a_browser() {
         profiles: vec![run],
         scenarios: Vec::new(),
         wall_time_ms: 0,
+        interrupted: false,
     };
     let dir = std::env::temp_dir().join(format!("canif-html-{}", std::process::id()));
     report.write(&catalogue, &dir).unwrap();

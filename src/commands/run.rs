@@ -54,6 +54,10 @@ pub fn run(
     let terminal = std::io::stderr().is_terminal();
     let mut results = Vec::new();
     for (n, p) in profiles.iter().enumerate() {
+        if canif_harness::interrupt::requested() {
+            eprintln!("interrupted: the remaining profiles are not run");
+            break;
+        }
         let mut done = 0;
         let result = run_profile(catalogue, p, &kind, options, |scenario_run| {
             done += 1;
@@ -98,7 +102,21 @@ pub fn run(
         );
         results.push(result);
     }
-    let scenarios = if !options.bus.is_sim() || !options.only.is_empty() {
+    let iut_broke = results.iter().flat_map(|p| &p.runs).any(|r| {
+        matches!(
+            r.outcome,
+            Outcome::Error(canif_harness::RunError::Iut(_) | canif_harness::RunError::Skipped(_))
+        )
+    });
+    let scenarios = if canif_harness::interrupt::requested() {
+        eprintln!("Gherkin scenarios: not run (interrupted)");
+        Vec::new()
+    } else if iut_broke && options.fail_fast {
+        eprintln!(
+            "Gherkin scenarios: not run (the IUT broke above; --no-fail-fast runs them anyway)"
+        );
+        Vec::new()
+    } else if !options.bus.is_sim() || !options.only.is_empty() {
         // The Gherkin scenarios run on the simulated bus; a SocketCAN or filtered run leaves them out.
         eprintln!(
             "Gherkin scenarios: not run (they use the simulated bus; run without --bus/--scenario)"
@@ -133,6 +151,7 @@ pub fn run(
         profiles: results,
         scenarios,
         wall_time_ms: started.elapsed().as_millis(),
+        interrupted: canif_harness::interrupt::requested(),
     };
     if let Err(error) = report.write(catalogue, report_dir) {
         eprintln!(
@@ -142,6 +161,9 @@ pub fn run(
         return ExitCode::from(2);
     }
     let totals = report.totals();
+    if report.interrupted {
+        eprintln!("interrupted: the reports hold what ran before the signal");
+    }
     println!(
         "{}: {} pass, {} fail, {} error, {} not applicable, {} not testable — reports in {}",
         report.iut,

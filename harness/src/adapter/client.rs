@@ -24,10 +24,47 @@ use super::protocol::{
     Answer, Caps, Config, Hex, OwnedBus, Request, Transmitted, WireFrame, PROTOCOL_VERSION,
 };
 use crate::error::IutError;
-use crate::iut::{InvalidFrame, Iut};
+use crate::iut::{InvalidFrame, Iut, Transmit};
 
 /// How many lines of the IUT's stderr an error shows.
 const STDERR_LINES: usize = 20;
+
+/// The longest line an IUT may print: far above any answer the protocol has
+/// (an input image of 32 FD slots is about 5 KB of hex), far below what could
+/// exhaust the harness's memory.
+pub const MAX_LINE: usize = 1 << 20;
+
+/// What the reader of the IUT's stdout passes on.
+enum Line {
+    Text(String),
+    /// The IUT printed what no line of the protocol can be; reading stopped.
+    Broken(String),
+}
+
+/// Reads one line of at most `MAX_LINE` bytes; `None` at the end of the stream.
+fn read_line(reader: &mut impl BufRead) -> Option<Line> {
+    let mut bytes = Vec::new();
+    match std::io::Read::take(&mut *reader, MAX_LINE as u64 + 1).read_until(b'\n', &mut bytes) {
+        Ok(0) => None,
+        Ok(_) if bytes.last() != Some(&b'\n') && bytes.len() > MAX_LINE => Some(Line::Broken(
+            format!("printed a line longer than {MAX_LINE} bytes"),
+        )),
+        Ok(_) => {
+            if bytes.last() == Some(&b'\n') {
+                bytes.pop();
+            }
+            Some(match String::from_utf8(bytes) {
+                Ok(text) => Line::Text(text),
+                Err(e) => Line::Broken(format!(
+                    "printed a line that is not UTF-8 (byte {} of {:02X?}…)",
+                    e.utf8_error().valid_up_to(),
+                    &e.as_bytes()[..e.as_bytes().len().min(16)]
+                )),
+            })
+        }
+        Err(error) => Some(Line::Broken(format!("its stdout failed: {error}"))),
+    }
+}
 
 /// How an IUT answered a configuration.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -37,12 +74,13 @@ pub enum Configured {
     Refused(String),
 }
 
-/// A running IUT process.
+/// A running IUT process, in a process group of its own: whatever it starts
+/// ends with it.
 pub struct ExecIut {
     command: String,
     child: Child,
     stdin: Option<ChildStdin>,
-    lines: Receiver<String>,
+    lines: Receiver<Line>,
     stderr: Arc<Mutex<VecDeque<String>>>,
     timeout: Duration,
     input_size: usize,
@@ -53,23 +91,26 @@ pub struct ExecIut {
 }
 
 impl ExecIut {
-    /// Starts `command` (through `sh -c`).
+    /// Starts `command` (through `sh -c`) in a new process group.
     pub fn spawn(command: &str, timeout: Duration) -> Result<Self, IutError> {
+        use std::os::unix::process::CommandExt;
         let mut child = Command::new("sh")
             .arg("-c")
             .arg(command)
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
+            .process_group(0)
             .spawn()
             .map_err(|e| IutError(format!("cannot start `{command}`: {e}")))?;
         let stdout = child.stdout.take().ok_or(IutError("no stdout".into()))?;
         let stderr = child.stderr.take().ok_or(IutError("no stderr".into()))?;
         let (sender, lines) = mpsc::channel();
         std::thread::spawn(move || {
-            for line in BufReader::new(stdout).lines() {
-                let Ok(line) = line else { break };
-                if sender.send(line).is_err() {
+            let mut reader = BufReader::new(stdout);
+            while let Some(line) = read_line(&mut reader) {
+                let broken = matches!(line, Line::Broken(_));
+                if sender.send(line).is_err() || broken {
                     break;
                 }
             }
@@ -77,10 +118,17 @@ impl ExecIut {
         let log = Arc::new(Mutex::new(VecDeque::new()));
         let log_writer = log.clone();
         std::thread::spawn(move || {
-            for line in BufReader::new(stderr).lines() {
-                let Ok(line) = line else { break };
+            let mut reader = BufReader::new(stderr);
+            let mut line = Vec::new();
+            loop {
+                line.clear();
+                match std::io::Read::take(&mut reader, 4096).read_until(b'\n', &mut line) {
+                    Ok(0) | Err(_) => break,
+                    Ok(_) => {}
+                }
+                let text = String::from_utf8_lossy(&line).trim_end().to_string();
                 if let Ok(mut log) = log_writer.lock() {
-                    log.push_back(line);
+                    log.push_back(text);
                     if log.len() > STDERR_LINES {
                         log.pop_front();
                     }
@@ -99,6 +147,26 @@ impl ExecIut {
             next_release: None,
             failed: None,
         })
+    }
+
+    /// Ends the IUT and everything it started (its process group).
+    fn kill(&mut self) {
+        use nix::sys::signal::{killpg, Signal};
+        use nix::unistd::Pid;
+        let _ = killpg(Pid::from_raw(self.child.id() as i32), Signal::SIGKILL);
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+
+    /// The IUT's exit status, waiting a moment for it; `None` if it still runs.
+    fn exit_status(&mut self) -> Option<std::process::ExitStatus> {
+        for _ in 0..20 {
+            if let Ok(Some(status)) = self.child.try_wait() {
+                return Some(status);
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        None
     }
 
     fn stderr_tail(&self) -> String {
@@ -141,9 +209,16 @@ impl ExecIut {
             }));
         }
         let line = match self.lines.recv_timeout(self.timeout) {
-            Ok(line) => line,
+            Ok(Line::Text(line)) => line,
+            Ok(Line::Broken(what)) => {
+                self.kill();
+                return Err(self.fail(format!(
+                    "{what} instead of answering `{}` (killed)",
+                    request.name()
+                )));
+            }
             Err(RecvTimeoutError::Timeout) => {
-                let _ = self.child.kill();
+                self.kill();
                 return Err(self.fail(format!(
                     "no answer to `{}` within {} ms (hung; killed)",
                     request.name(),
@@ -151,15 +226,12 @@ impl ExecIut {
                 )));
             }
             Err(RecvTimeoutError::Disconnected) => {
-                let status = self
-                    .child
-                    .wait()
-                    .map(|s| s.to_string())
-                    .unwrap_or_else(|e| e.to_string());
-                return Err(self.fail(format!(
-                    "exited ({status}) instead of answering `{}`",
-                    request.name()
-                )));
+                let what = match self.exit_status() {
+                    Some(status) => format!("exited ({status})"),
+                    None => "closed its stdout (still running; killed)".to_string(),
+                };
+                self.kill();
+                return Err(self.fail(format!("{what} instead of answering `{}`", request.name())));
             }
         };
         let answer = match serde_json::from_str::<serde_json::Value>(&line) {
@@ -222,6 +294,8 @@ impl ExecIut {
 }
 
 impl Drop for ExecIut {
+    /// `bye` and end of input tell a well-behaved IUT to leave; then its
+    /// whole process group ends, whatever it started.
     fn drop(&mut self) {
         if self.failed.is_none() {
             if let Some(stdin) = self.stdin.as_mut() {
@@ -229,15 +303,9 @@ impl Drop for ExecIut {
                 let _ = writeln!(stdin, "{bye}");
             }
         }
-        self.stdin = None; // EOF tells a well-behaved IUT to leave
-        for _ in 0..20 {
-            if matches!(self.child.try_wait(), Ok(Some(_))) {
-                return;
-            }
-            std::thread::sleep(Duration::from_millis(5));
-        }
-        let _ = self.child.kill();
-        let _ = self.child.wait();
+        self.stdin = None;
+        let _ = self.exit_status();
+        self.kill();
     }
 }
 
@@ -271,25 +339,29 @@ impl Iut for ExecIut {
         Ok(inputs)
     }
 
-    fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) {
+    fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) -> Result<(), IutError> {
         let request = Request::Receive {
             frame: WireFrame::from(frame),
             end_ns: end_of_reception,
         };
-        let _ = self.exchange(&request, "ok");
+        self.exchange(&request, "ok").map(|_| ())
     }
 
-    fn poll_transmit(&mut self, now: Nanos) -> Option<Result<Frame, InvalidFrame>> {
-        let answer = self
-            .exchange(&Request::PollTransmit { now_ns: now }, "transmit")
-            .ok()?;
+    fn poll_transmit(&mut self, now: Nanos) -> Result<Transmit, IutError> {
+        let answer = self.exchange(&Request::PollTransmit { now_ns: now }, "transmit")?;
         let Answer::Transmit { frame, next_ns } = answer else {
             unreachable!("exchange returns the expected type");
         };
         self.next_release = next_ns;
-        match frame? {
-            Transmitted::Frame(wire) => Some(Frame::try_from(&wire).map_err(InvalidFrame)),
-            Transmitted::Invalid { invalid } => Some(Err(InvalidFrame(invalid))),
+        match frame {
+            None => Ok(None),
+            Some(Transmitted::Invalid(frame)) => Ok(Some(Err(InvalidFrame(frame.invalid)))),
+            Some(Transmitted::Frame(wire)) => match wire.check() {
+                Ok(()) => Ok(Some(Frame::try_from(&wire).map_err(InvalidFrame))),
+                Err(lie) => Err(self.fail(format!(
+                    "answered `poll_transmit` with a broken frame: {lie}"
+                ))),
+            },
         }
     }
 
@@ -297,14 +369,14 @@ impl Iut for ExecIut {
         self.next_release
     }
 
-    fn transmit_complete(&mut self) {
-        let _ = self.exchange(&Request::TransmitComplete, "ok");
+    fn transmit_complete(&mut self) -> Result<(), IutError> {
+        self.exchange(&Request::TransmitComplete, "ok").map(|_| ())
     }
 
-    fn controller_status(&mut self, status: &ControllerStatus) {
+    fn controller_status(&mut self, status: &ControllerStatus) -> Result<(), IutError> {
         let request = Request::ControllerStatus {
             status: status.into(),
         };
-        let _ = self.exchange(&request, "ok");
+        self.exchange(&request, "ok").map(|_| ())
     }
 }

@@ -50,11 +50,13 @@ impl DeviceBus {
                     frame,
                     at,
                     own: false,
-                } => iut.receive(&frame, at.saturating_sub(self.epoch)),
+                } => iut
+                    .receive(&frame, at.saturating_sub(self.epoch))
+                    .map_err(device_broke)?,
                 Received::Frame { own: true, .. } => {
                     self.sending = None;
                     self.written = false;
-                    iut.transmit_complete();
+                    iut.transmit_complete().map_err(device_broke)?;
                 }
                 Received::Error { .. } => {}
             }
@@ -63,7 +65,7 @@ impl DeviceBus {
             let frame = match (self.sending, self.written) {
                 (Some(_), true) => return Ok(()),
                 (Some(frame), false) => frame,
-                (None, _) => match iut.poll_transmit(self.now()) {
+                (None, _) => match iut.poll_transmit(self.now()).map_err(device_broke)? {
                     None => return Ok(()),
                     Some(Err(invalid)) => {
                         eprintln!(
@@ -87,6 +89,10 @@ impl DeviceBus {
             }
         }
     }
+}
+
+fn device_broke(error: crate::error::IutError) -> BusError {
+    BusError(format!("the device broke: {error}"))
 }
 
 /// Serves an in-process IUT over the adapter protocol on stdin/stdout with its

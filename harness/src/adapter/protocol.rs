@@ -16,7 +16,7 @@ pub const PROTOCOL_VERSION: u64 = 1;
 
 /// What the harness asks.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case")]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Request {
     Configure {
         protocol: u64,
@@ -68,7 +68,7 @@ impl Request {
 
 /// What the IUT answers.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case")]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Answer {
     Configured {
         protocol: u64,
@@ -115,7 +115,15 @@ impl Answer {
 #[serde(untagged)]
 pub enum Transmitted {
     Frame(WireFrame),
-    Invalid { invalid: String },
+    Invalid(InvalidWireFrame),
+}
+
+/// `{"invalid": "why"}`: the device's controller started something that is no
+/// CAN frame (the harness judges it against LAY-GEN-008, FD-LEN-00x).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InvalidWireFrame {
+    pub invalid: String,
 }
 
 /// Bytes as a lower-case hex string.
@@ -152,6 +160,7 @@ fn shorten(text: &str) -> String {
 
 /// A CAN frame on the protocol.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct WireFrame {
     pub id: u32,
     #[serde(default)]
@@ -188,9 +197,45 @@ impl From<&Frame> for WireFrame {
     }
 }
 
+impl WireFrame {
+    /// Whether the message is consistent in itself: `len` and `data` agree,
+    /// a remote frame has no data, BRS/ESI only with FD, the identifier fits
+    /// its format. A message that is not is a broken protocol, not a frame.
+    pub fn check(&self) -> Result<(), String> {
+        let limit = if self.extended { 0x1FFF_FFFF } else { 0x7FF };
+        if self.id > limit {
+            return Err(format!(
+                "identifier 0x{:X} does not fit a {} identifier",
+                self.id,
+                if self.extended { "29-bit" } else { "11-bit" }
+            ));
+        }
+        let data = self.data.0.len();
+        if self.rtr && (data != 0 || self.fd) {
+            return Err(format!(
+                "a remote frame carries no data (and CAN FD has none): {data} data bytes{}",
+                if self.fd { ", FD" } else { "" }
+            ));
+        }
+        if !self.rtr && usize::from(self.len) != data {
+            return Err(format!(
+                "\"len\" is {} but \"data\" has {data} bytes",
+                self.len
+            ));
+        }
+        if !self.fd && (self.brs || self.esi) {
+            return Err("BRS and ESI exist only in CAN FD frames".into());
+        }
+        Ok(())
+    }
+}
+
 impl TryFrom<&WireFrame> for Frame {
     type Error = String;
+    /// The CAN frame a consistent message describes; `Err` for one that no
+    /// controller can send (9 classic bytes, 36 FD bytes, a remote frame above 8).
     fn try_from(wire: &WireFrame) -> Result<Frame, String> {
+        wire.check()?;
         let id = if wire.extended {
             CanId::extended(wire.id)
         } else {
@@ -210,6 +255,7 @@ impl TryFrom<&WireFrame> for Frame {
 
 /// `configure.config`: the interface as the PLC configured it.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Config {
     pub format: Format,
     pub queue: Queue,
@@ -250,11 +296,19 @@ pub enum Queue {
 }
 
 /// One row of the filter table.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-pub struct Filter {
-    pub action: Action,
-    #[serde(flatten)]
-    pub matches: Match,
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Filter {
+    Range {
+        action: Action,
+        from: u32,
+        to: u32,
+    },
+    Mask {
+        action: Action,
+        code: u32,
+        mask: u32,
+    },
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -264,15 +318,9 @@ pub enum Action {
     Reject,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-pub enum Match {
-    Range { from: u32, to: u32 },
-    Mask { code: u32, mask: u32 },
-}
-
 /// `configure.capabilities`: what the profile offers.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Caps {
     #[serde(default)]
     pub base11: bool,
@@ -304,6 +352,7 @@ pub struct Caps {
 /// `configure.bus`: a SocketCAN interface an external IUT opens itself; its
 /// time stamps count from `epoch_ns` of CLOCK_REALTIME.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct OwnedBus {
     pub epoch_ns: u64,
     #[serde(rename = "socketcan")]
@@ -312,7 +361,7 @@ pub struct OwnedBus {
 
 /// `controller_status.status`.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct Status {
     pub bus_off: bool,
     pub error_passive: bool,
@@ -395,15 +444,15 @@ impl Config {
             filters: config
                 .filters
                 .iter()
-                .map(|row| Filter {
-                    action: match row.action {
+                .map(|row| {
+                    let action = match row.action {
                         FilterAction::Accept => Action::Accept,
                         FilterAction::Reject => Action::Reject,
-                    },
-                    matches: match row.matches {
-                        FilterMatch::Range { from, to } => Match::Range { from, to },
-                        FilterMatch::CodeMask { code, mask } => Match::Mask { code, mask },
-                    },
+                    };
+                    match row.matches {
+                        FilterMatch::Range { from, to } => Filter::Range { action, from, to },
+                        FilterMatch::CodeMask { code, mask } => Filter::Mask { action, code, mask },
+                    }
                 })
                 .collect(),
             sync1_shift_ns: match config.synchronization {
@@ -442,15 +491,20 @@ impl Config {
         interface.filters = self
             .filters
             .iter()
-            .map(|row| FilterRow {
-                action: match row.action {
-                    Action::Accept => FilterAction::Accept,
-                    Action::Reject => FilterAction::Reject,
-                },
-                matches: match row.matches {
-                    Match::Range { from, to } => FilterMatch::Range { from, to },
-                    Match::Mask { code, mask } => FilterMatch::CodeMask { code, mask },
-                },
+            .map(|row| {
+                let (action, matches) = match *row {
+                    Filter::Range { action, from, to } => (action, FilterMatch::Range { from, to }),
+                    Filter::Mask { action, code, mask } => {
+                        (action, FilterMatch::CodeMask { code, mask })
+                    }
+                };
+                FilterRow {
+                    action: match action {
+                        Action::Accept => FilterAction::Accept,
+                        Action::Reject => FilterAction::Reject,
+                    },
+                    matches,
+                }
             })
             .collect();
         interface
@@ -526,10 +580,23 @@ mod tests {
         let wire: WireFrame = serde_json::from_str(r#"{"id":2048,"len":0,"data":""}"#).unwrap();
         assert_eq!(
             Frame::try_from(&wire).unwrap_err(),
-            "identifier 0x800 out of range"
+            "identifier 0x800 does not fit a 11-bit identifier"
         );
         assert!(serde_json::from_str::<WireFrame>(r#"{"id":1,"data":"abc"}"#).is_err());
         assert!(serde_json::from_str::<WireFrame>(r#"{"id":4294967297,"data":""}"#).is_err());
+        assert!(serde_json::from_str::<WireFrame>(r#"{"id":1,"data":"+0"}"#).is_err());
+        assert!(serde_json::from_str::<WireFrame>(r#"{"id":1,"data":"","color":1}"#).is_err());
+        let lie: WireFrame =
+            serde_json::from_str(r#"{"id":1,"len":15,"data":"0102030405060708"}"#).unwrap();
+        assert_eq!(
+            Frame::try_from(&lie).unwrap_err(),
+            "\"len\" is 15 but \"data\" has 8 bytes"
+        );
+        let config = r#"{"type":"configure","protocol":1,"config":{"format":"11-bit","queue":"standard","transaction_number":false,"time_stamp":false,"tx_slots":257,"rx_slots":4},"capabilities":{"max_slots":32,"rx_queue_depth":64,"tx_queue_depth":64}}"#;
+        let error = serde_json::from_str::<Request>(config)
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("257"), "{error}");
     }
 
     #[test]

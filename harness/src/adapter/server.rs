@@ -5,7 +5,9 @@ use std::io::{BufRead, Write};
 
 use canif_model::config::{Capabilities, InterfaceConfig};
 
-use super::protocol::{Answer, Hex, Request, Transmitted, WireFrame, PROTOCOL_VERSION};
+use super::protocol::{
+    Answer, Hex, InvalidWireFrame, Request, Transmitted, WireFrame, PROTOCOL_VERSION,
+};
 use crate::iut::{BuildError, Iut};
 
 /// Builds the IUT a `configure` asks for.
@@ -69,30 +71,25 @@ impl<'a> Server<'a> {
             },
             Request::Receive { frame, end_ns } => {
                 match canif_model::frame::Frame::try_from(frame) {
-                    Ok(frame) => {
-                        iut.receive(&frame, *end_ns);
-                        Answer::Ok
-                    }
+                    Ok(frame) => ok_or_error(iut.receive(&frame, *end_ns)),
                     Err(error) => Answer::error(error),
                 }
             }
-            Request::PollTransmit { now_ns } => {
-                let frame = iut.poll_transmit(*now_ns).map(|frame| match frame {
-                    Ok(frame) => Transmitted::Frame(WireFrame::from(&frame)),
-                    Err(invalid) => Transmitted::Invalid { invalid: invalid.0 },
-                });
-                Answer::Transmit {
-                    frame,
+            Request::PollTransmit { now_ns } => match iut.poll_transmit(*now_ns) {
+                Ok(frame) => Answer::Transmit {
+                    frame: frame.map(|frame| match frame {
+                        Ok(frame) => Transmitted::Frame(WireFrame::from(&frame)),
+                        Err(invalid) => {
+                            Transmitted::Invalid(InvalidWireFrame { invalid: invalid.0 })
+                        }
+                    }),
                     next_ns: iut.poll_timeout(),
-                }
-            }
-            Request::TransmitComplete => {
-                iut.transmit_complete();
-                Answer::Ok
-            }
+                },
+                Err(error) => Answer::error(error.0),
+            },
+            Request::TransmitComplete => ok_or_error(iut.transmit_complete()),
             Request::ControllerStatus { status } => {
-                iut.controller_status(&status.into());
-                Answer::Ok
+                ok_or_error(iut.controller_status(&status.into()))
             }
             Request::Configure { .. } | Request::Bye => unreachable!("answered above"),
         })
@@ -117,6 +114,13 @@ impl<'a> Server<'a> {
                 }
             }
         }
+    }
+}
+
+fn ok_or_error(result: Result<(), crate::error::IutError>) -> Answer {
+    match result {
+        Ok(()) => Answer::Ok,
+        Err(error) => Answer::error(error.0),
     }
 }
 

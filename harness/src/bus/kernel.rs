@@ -495,7 +495,7 @@ impl KernelBus {
                         return Err(self.mismatch(frame, expected, "the IUT's socket (echo)"));
                     }
                     self.iut_in_flight = None;
-                    pair.complete(frame, true, at);
+                    pair.complete(frame, true, at)?;
                 }
                 // Attached: another node's frame reached the IUT.
                 (false, true, false) => {
@@ -503,7 +503,7 @@ impl KernelBus {
                         let expected = self.tester_in_flight.front();
                         return Err(self.mismatch(frame, expected, "the IUT's socket"));
                     }
-                    pair.complete(frame, false, at);
+                    pair.complete(frame, false, at)?;
                 }
                 // Attached: the IUT's frame reached the other nodes.
                 (false, false, _) => {

@@ -105,8 +105,15 @@ pub trait Controller {
     /// When a held frame becomes due (Distributed Clocks).
     fn due(&self) -> Option<Nanos>;
     /// A frame ended on the bus; `own`: the controller sent it.
-    fn ended(&mut self, frame: Frame, own: bool, end: Nanos);
+    fn ended(&mut self, frame: Frame, own: bool, end: Nanos) -> Result<(), Self::Error>;
+    /// The bus took `steps` events without reaching the end of the cycle: the
+    /// device keeps asking to be polled again (time does not advance).
+    fn stalled(&self, steps: usize) -> Self::Error;
 }
+
+/// How many bus events one cycle may take: a 1 ms cycle at 1 Mbit/s carries
+/// about 20 frames, so only a device whose due times do not advance reaches it.
+pub const MOST_EVENTS_PER_CYCLE: usize = 10_000;
 
 /// The simulated bus of one scenario: the other nodes, and the frame on the wire.
 #[derive(Debug)]
@@ -128,7 +135,7 @@ impl SimBus {
 
     /// Completes frames and starts the next winner of arbitration, until `until`.
     pub fn drive<C: Controller>(&mut self, node: &mut C, until: Nanos) -> Result<(), C::Error> {
-        loop {
+        for _ in 0..MOST_EVENTS_PER_CYCLE {
             node.poll()?;
             let now = *node.now();
             if self.on_bus.is_none() {
@@ -158,7 +165,7 @@ impl SimBus {
                     *node.now() = t;
                     if let Some((end, frame, own)) = self.on_bus.take() {
                         if end == t {
-                            node.ended(frame, own, end);
+                            node.ended(frame, own, end)?;
                         } else {
                             self.on_bus = Some((end, frame, own));
                         }
@@ -170,6 +177,7 @@ impl SimBus {
                 }
             }
         }
+        Err(node.stalled(MOST_EVENTS_PER_CYCLE))
     }
 }
 
@@ -197,7 +205,18 @@ impl Controller for Pair {
     fn due(&self) -> Option<Nanos> {
         self.iut.poll_timeout()
     }
-    fn ended(&mut self, frame: Frame, own: bool, end: Nanos) {
-        self.complete(frame, own, end);
+    fn ended(&mut self, frame: Frame, own: bool, end: Nanos) -> Result<(), Outcome> {
+        self.complete(frame, own, end)
+    }
+    fn stalled(&self, steps: usize) -> Outcome {
+        Outcome::Error(
+            crate::error::IutError(format!(
+                "the IUT asked to be polled {steps} times within one cycle: its due time \
+                 (next_ns {:?}) does not advance past {} ns",
+                self.iut.poll_timeout(),
+                self.now
+            ))
+            .into(),
+        )
     }
 }

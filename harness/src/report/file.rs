@@ -18,6 +18,9 @@ pub struct ReportFile {
     pub bus: String,
     #[serde(default)]
     pub harness_version: String,
+    /// Present only when the run was asked to stop before it ended.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub interrupted: bool,
     #[serde(default)]
     pub iut: String,
     pub profiles: Vec<ProfileEntry>,
@@ -189,6 +192,7 @@ impl ReportFile {
         ReportFile {
             bus: report.bus.clone(),
             harness_version: env!("CARGO_PKG_VERSION").into(),
+            interrupted: report.interrupted,
             iut: report.iut.clone(),
             profiles: report
                 .profiles

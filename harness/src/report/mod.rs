@@ -41,6 +41,8 @@ pub struct RunReport {
     pub profiles: Vec<ProfileRun>,
     pub scenarios: Vec<ScenarioResult>,
     pub wall_time_ms: u128,
+    /// The run was asked to stop (SIGINT, SIGTERM): it reports what ran.
+    pub interrupted: bool,
 }
 
 /// Counts of verdicts over every requirement × profile.
@@ -79,10 +81,13 @@ impl RunReport {
         self.scenarios.iter().filter(|s| s.error).count()
     }
 
-    /// 0 when everything conforms, 1 on any failure, 2 on any error.
+    /// 0 when everything conforms, 1 on any failure, 2 on any error, 130
+    /// when interrupted.
     pub fn exit_code(&self) -> u8 {
         let totals = self.totals();
-        if totals.error > 0 || self.scenario_errors() > 0 {
+        if self.interrupted {
+            130
+        } else if totals.error > 0 || self.scenario_errors() > 0 {
             2
         } else if totals.fail > 0 || self.failed_scenarios() > 0 {
             1

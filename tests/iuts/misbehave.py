@@ -1,0 +1,52 @@
+"""A deliberately broken IUT for tests/iut_boundary.rs: it speaks the adapter
+protocol correctly (a device that accepts every configuration, answers every
+cycle with an empty input image) except for one misbehaviour, chosen by argv[1]:
+
+  babble       every poll_transmit answers a frame (a babbling controller)
+  stuck-time   every poll_transmit answers next_ns = now_ns + 1
+  lie-len      every poll_transmit answers a frame whose len says 15, data 8
+  fork-hang    starts a child that sleeps, records both pids, then hangs
+"""
+import json
+import os
+import subprocess
+import sys
+
+mode = sys.argv[1]
+pids = os.environ.get("CANIF_TEST_PIDS")
+if pids:
+    with open(pids, "a") as f:
+        f.write(f"{os.getpid()}\n")
+if mode == "fork-hang":
+    child = subprocess.Popen(["sleep", "3600"])
+    if pids:
+        with open(pids, "a") as f:
+            f.write(f"{child.pid}\n")
+input_size = 0
+for line in sys.stdin:
+    request = json.loads(line)
+    kind = request["type"]
+    if kind == "configure":
+        input_size = request["config"]["input_size"]
+        answer = {"type": "configured", "protocol": 1, "accepted": True}
+    elif kind == "cycle":
+        if mode == "fork-hang":
+            continue  # never answers: the harness's timeout must end both processes
+        answer = {"type": "inputs", "inputs": "00" * input_size}
+    elif kind == "poll_transmit":
+        frame = {"id": 0x123, "extended": False, "rtr": False, "fd": False, "brs": False,
+                 "esi": False, "len": 8, "data": "0102030405060708"}
+        if mode == "babble":
+            answer = {"type": "transmit", "frame": frame}
+        elif mode == "stuck-time":
+            answer = {"type": "transmit", "frame": None, "next_ns": request["now_ns"] + 1}
+        elif mode == "lie-len":
+            answer = {"type": "transmit", "frame": dict(frame, len=15)}
+        else:
+            answer = {"type": "transmit", "frame": None}
+    elif kind == "bye":
+        break
+    else:
+        answer = {"type": "ok"}
+    sys.stdout.write(json.dumps(answer) + "\n")
+    sys.stdout.flush()
