@@ -132,26 +132,27 @@ pub fn write_answer(output: &mut impl Write, answer: &Answer) -> std::io::Result
 }
 
 /// Serves an in-process IUT over the adapter protocol. Returns when the
-/// harness says `bye` or closes the input.
-pub fn serve(
-    build: &Build<'_>,
-    input: impl BufRead,
-    mut output: impl Write,
-) -> std::io::Result<()> {
+/// harness says `bye` or closes the input. Whatever a line holds — not JSON,
+/// not UTF-8, fields the protocol does not name — it gets an `error` answer.
+pub fn serve(build: &Build<'_>, mut input: impl BufRead, mut output: impl Write) -> std::io::Result<()> {
     let mut server = Server::new(build, true);
-    for line in input.lines() {
-        let line = line?;
-        if line.trim().is_empty() {
-            continue;
+    let mut bytes = Vec::new();
+    loop {
+        bytes.clear();
+        if input.read_until(b'\n', &mut bytes)? == 0 {
+            return Ok(());
         }
-        let answer = match Server::parse(&line) {
-            Ok(request) => match server.answer(&request) {
-                Some(answer) => answer,
-                None => return Ok(()),
+        let answer = match std::str::from_utf8(&bytes) {
+            Err(error) => Answer::error(format!("not UTF-8: {error}")),
+            Ok(line) if line.trim().is_empty() => continue,
+            Ok(line) => match Server::parse(line) {
+                Ok(request) => match server.answer(&request) {
+                    Some(answer) => answer,
+                    None => return Ok(()),
+                },
+                Err(answer) => answer,
             },
-            Err(answer) => answer,
         };
         write_answer(&mut output, &answer)?;
     }
-    Ok(())
 }
