@@ -31,12 +31,18 @@ impl Rng {
 }
 
 fn hex(rng: &mut Rng, bytes: usize) -> String {
-    (0..bytes).map(|_| format!("{:02x}", rng.below(256))).collect()
+    (0..bytes)
+        .map(|_| format!("{:02x}", rng.below(256)))
+        .collect()
 }
 
 fn frame(rng: &mut Rng) -> Value {
     let fd = rng.below(3) == 0;
-    let len = if fd { *rng.pick(&[0, 8, 12, 20, 64]) } else { rng.below(9) as usize };
+    let len = if fd {
+        *rng.pick(&[0, 8, 12, 20, 64])
+    } else {
+        rng.below(9) as usize
+    };
     json!({"id": rng.below(0x800), "extended": false, "rtr": false, "fd": fd,
            "brs": fd && rng.below(2) == 0, "esi": false, "len": len, "data": hex(rng, len)})
 }
@@ -153,7 +159,10 @@ fn request_line(rng: &mut Rng, session: &mut Session) -> Vec<u8> {
             value.to_string().into_bytes()
         }
         _ => match rng.below(3) {
-            0 => (0..rng.below(40)).map(|_| rng.below(256) as u8).filter(|b| *b != b'\n').collect(),
+            0 => (0..rng.below(40))
+                .map(|_| rng.below(256) as u8)
+                .filter(|b| *b != b'\n')
+                .collect(),
             1 => json!([1, {"type": "cycle"}]).to_string().into_bytes(),
             _ => b"{\"type\": \"no-such-request\"}".to_vec(),
         },
@@ -222,7 +231,10 @@ fn batch(seed: u64, count: usize, schema: &jsonschema::Validator) -> (usize, usi
     }
     drop(stdin);
     let status = device.wait().unwrap();
-    assert!(status.success(), "seed {seed}: the device ended with {status}");
+    assert!(
+        status.success(),
+        "seed {seed}: the device ended with {status}"
+    );
     (count, errors)
 }
 

@@ -130,11 +130,105 @@ pub struct Catalogue {
 
 /// The 1-based line of the first line containing `needle` at or after `from`.
 pub(crate) fn line_of(text: &str, needle: &str, from: usize) -> Option<usize> {
-    text.lines()
-        .enumerate()
-        .skip(from.saturating_sub(1))
-        .find(|(_, line)| line.contains(needle))
-        .map(|(i, _)| i + 1)
+    LineIndex::new(text).find(needle, from)
+}
+
+/// Where each line of a text starts, so that a search from line N starts at
+/// its byte offset: looking up every requirement of a file stays linear.
+pub(crate) struct LineIndex<'a> {
+    text: &'a str,
+    starts: Vec<usize>,
+}
+
+impl<'a> LineIndex<'a> {
+    pub(crate) fn new(text: &'a str) -> Self {
+        let starts = std::iter::once(0)
+            .chain(text.match_indices('\n').map(|(at, _)| at + 1))
+            .collect();
+        LineIndex { text, starts }
+    }
+
+    /// The 1-based line of the first occurrence of `needle` at or after line `from`.
+    pub(crate) fn find(&self, needle: &str, from: usize) -> Option<usize> {
+        let start = *self.starts.get(from.saturating_sub(1))?;
+        let at = start + self.text[start..].find(needle)?;
+        Some(self.starts.partition_point(|&s| s <= at))
+    }
+}
+
+/// The most a catalogue file may hold: far above any real one (the embedded
+/// catalogue's largest file is under 30 KB), far below what exhausts memory.
+pub const MAX_FILE_BYTES: u64 = 16 << 20;
+
+/// How deeply flow collections (`[…]`, `{…}`) may nest.
+const MAX_FLOW_DEPTH: usize = 64;
+
+/// Checks a file's text before the YAML parser sees it: nesting the parser
+/// would take quadratic time over, and anchors, whose aliases multiply text.
+fn precheck(text: &str) -> Result<(), (usize, String)> {
+    let (mut depth, mut line) = (0usize, 1usize);
+    let mut quote: Option<char> = None;
+    // Where a node may begin: after `: `, a `- ` item, `[`, `{` or `,`; an
+    // `&` or `*` there is an anchor or an alias, anywhere else it is text.
+    let (mut node_start, mut line_start, mut previous) = (true, true, '\n');
+    for c in text.chars() {
+        if c == '\n' {
+            line += 1;
+            (node_start, line_start, previous) = (true, true, c);
+            if quote == Some('#') {
+                quote = None;
+            }
+            continue;
+        }
+        if let Some(q) = quote {
+            if q != '#' && c == q {
+                quote = None;
+                node_start = false;
+            }
+            previous = c;
+            continue;
+        }
+        match c {
+            ' ' | '\t' => {
+                if previous == ':' || (previous == '-' && line_start) {
+                    node_start = true;
+                }
+                previous = c;
+                continue;
+            }
+            '#' if previous.is_whitespace() => quote = Some('#'),
+            '"' | '\'' if node_start => quote = Some(c),
+            '[' | '{' => {
+                depth += 1;
+                if depth > MAX_FLOW_DEPTH {
+                    return Err((line, format!("collections nest deeper than {MAX_FLOW_DEPTH} levels")));
+                }
+                (node_start, previous) = (true, c);
+                continue;
+            }
+            ']' | '}' => depth = depth.saturating_sub(1),
+            ',' if depth > 0 => {
+                (node_start, previous) = (true, c);
+                continue;
+            }
+            '&' | '*' if node_start => {
+                return Err((
+                    line,
+                    "anchors and aliases (& and *) are not allowed in the catalogue: an alias repeats text without bound"
+                        .into(),
+                ))
+            }
+            '-' if line_start => {
+                previous = c;
+                continue;
+            }
+            _ => {}
+        }
+        node_start = false;
+        line_start = false;
+        previous = c;
+    }
+    Ok(())
 }
 
 fn parse<T: for<'de> Deserialize<'de>>(
@@ -142,6 +236,15 @@ fn parse<T: for<'de> Deserialize<'de>>(
     text: &str,
     errors: &mut Vec<SpecError>,
 ) -> Option<T> {
+    if let Err((line, message)) = precheck(text) {
+        errors.push(SpecError {
+            file: file.to_string(),
+            line: Some(line),
+            field: String::new(),
+            message,
+        });
+        return None;
+    }
     match serde_yaml::from_str(text) {
         Ok(value) => Some(value),
         Err(error) => {
@@ -175,6 +278,29 @@ fn parse<T: for<'de> Deserialize<'de>>(
     }
 }
 
+/// A catalogue file's text: a regular file (not a FIFO or a device, which
+/// could block for ever) of at most [`MAX_FILE_BYTES`], UTF-8, a leading BOM
+/// dropped.
+fn read_file(path: &Path) -> Result<String, String> {
+    let metadata = std::fs::metadata(path).map_err(|e| format!("cannot read: {e}"))?;
+    if !metadata.is_file() {
+        return Err("not a regular file (a FIFO, device or folder is not read)".into());
+    }
+    if metadata.len() > MAX_FILE_BYTES {
+        return Err(format!(
+            "{} bytes: a catalogue file holds at most {MAX_FILE_BYTES}",
+            metadata.len()
+        ));
+    }
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read: {e}"))?;
+    let text = String::from_utf8(bytes)
+        .map_err(|e| format!("not UTF-8 (at byte {})", e.utf8_error().valid_up_to()))?;
+    Ok(match text.strip_prefix('\u{FEFF}') {
+        Some(rest) => rest.to_string(),
+        None => text,
+    })
+}
+
 impl Catalogue {
     /// The catalogue built into this binary.
     pub fn embedded() -> Result<Self, SpecErrors> {
@@ -190,16 +316,15 @@ impl Catalogue {
     pub fn load_dir(dir: &Path) -> Result<Self, SpecErrors> {
         let mut files = Vec::new();
         let mut errors = Vec::new();
-        let mut read =
-            |path: &Path, files: &mut Vec<(String, String)>| match std::fs::read_to_string(path) {
-                Ok(text) => files.push((path.display().to_string(), text)),
-                Err(error) => errors.push(SpecError {
-                    file: path.display().to_string(),
-                    line: None,
-                    field: String::new(),
-                    message: format!("cannot read: {error}"),
-                }),
-            };
+        let mut read = |path: &Path, files: &mut Vec<(String, String)>| match read_file(path) {
+            Ok(text) => files.push((path.display().to_string(), text)),
+            Err(message) => errors.push(SpecError {
+                file: path.display().to_string(),
+                line: None,
+                field: String::new(),
+                message,
+            }),
+        };
         for name in ["sources.yaml", "capabilities.yaml", "rulings.yaml"] {
             read(&dir.join(name), &mut files);
         }
@@ -252,11 +377,13 @@ impl Catalogue {
             } else if unix.contains("requirements/") {
                 if let Some(mut area) = parse::<Area>(path, text, &mut errors) {
                     area.file = path.clone();
+                    let lines = LineIndex::new(text);
                     let mut from = 1;
                     for requirement in &mut area.requirements {
                         requirement.file = path.clone();
-                        requirement.line =
-                            line_of(text, &format!("id: {}", requirement.id), from).unwrap_or(0);
+                        requirement.line = lines
+                            .find(&format!("id: {}", requirement.id), from)
+                            .unwrap_or(0);
                         from = requirement.line.max(1) + 1;
                     }
                     areas.push(area);
@@ -297,14 +424,17 @@ impl Catalogue {
         let known_rulings: BTreeSet<&str> = self.rulings.iter().map(|r| r.id.as_str()).collect();
         let all_ids: BTreeSet<&str> = self.requirements().map(|r| r.id.as_str()).collect();
         let mut first_seen: BTreeMap<&str, &Requirement> = BTreeMap::new();
+        let lines: BTreeMap<&str, LineIndex> = texts
+            .iter()
+            .map(|(file, text)| (file.as_str(), LineIndex::new(text)))
+            .collect();
+        let nowhere = LineIndex::new("");
 
         for requirement in self.requirements() {
-            let text = texts
-                .get(&requirement.file)
-                .map(String::as_str)
-                .unwrap_or("");
+            let index = lines.get(requirement.file.as_str()).unwrap_or(&nowhere);
             let mut error = |field: &str, needle: &str, message: String| {
-                let line = line_of(text, needle, requirement.line)
+                let line = index
+                    .find(needle, requirement.line)
                     .or(Some(requirement.line).filter(|&l| l > 0));
                 errors.push(SpecError {
                     file: requirement.file.clone(),

@@ -158,3 +158,90 @@ fn a_missing_folder_is_named() {
         "{error}"
     );
 }
+
+/// A folder on disk holding the minimal catalogue, with `overrides` as raw bytes.
+fn folder(name: &str, overrides: &[(&str, Vec<u8>)]) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("canif-spec-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    for (path, text) in files(&[]) {
+        let target = dir.join(path.strip_prefix("spec/").unwrap());
+        std::fs::create_dir_all(target.parent().unwrap()).unwrap();
+        let bytes = overrides
+            .iter()
+            .find(|(p, _)| *p == path)
+            .map_or(text.into_bytes(), |(_, b)| b.clone());
+        std::fs::write(target, bytes).unwrap();
+    }
+    dir
+}
+
+#[test]
+fn a_file_that_starts_with_a_byte_order_mark_loads() {
+    let mut bytes = "\u{FEFF}".as_bytes().to_vec();
+    bytes.extend_from_slice(files(&[])[3].1.as_bytes());
+    let dir = folder("bom", &[("spec/requirements/x.yaml", bytes)]);
+    let catalogue = Catalogue::load_dir(&dir).unwrap();
+    assert_eq!(catalogue.requirement("X-001").unwrap().line, 4);
+}
+
+#[test]
+fn a_fifo_named_yaml_is_refused_not_waited_for() {
+    let dir = folder("fifo", &[]);
+    let fifo = dir.join("requirements/stuck.yaml");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let errors = Catalogue::load_dir(&dir).unwrap_err().to_string();
+    assert!(
+        errors.contains("stuck.yaml") && errors.contains("not a regular file"),
+        "{errors}"
+    );
+}
+
+#[test]
+fn deep_nesting_and_aliases_are_refused_with_their_line() {
+    let deep = format!("area: X\ntitle: X\nrequirements: {}\n", "[".repeat(100_000));
+    let found = errors(&[("spec/requirements/x.yaml", &deep)]);
+    assert!(
+        found
+            .iter()
+            .any(|e| e.contains("x.yaml:3") && e.contains("nest deeper than 64")),
+        "{found:?}"
+    );
+    let aliases = "area: X\ntitle: &t X\nrequirements:\n  - id: X-001\n    statement: *t\n    source: {file: a.txt, section: '1'}\n    status: normative\n";
+    let found = errors(&[("spec/requirements/x.yaml", aliases)]);
+    assert!(
+        found
+            .iter()
+            .any(|e| e.contains("x.yaml:2") && e.contains("anchors and aliases")),
+        "{found:?}"
+    );
+    // '&' and '*' inside text are text.
+    let text = "area: X\ntitle: R&D * 2\nrequirements:\n  - id: X-001\n    statement: 'a & b, *c'\n    source: {file: a.txt, section: '1'}\n    status: normative\n";
+    assert_eq!(
+        errors(&[("spec/requirements/x.yaml", text)]),
+        Vec::<String>::new()
+    );
+}
+
+/// 40,000 requirements in one file: each gets its own line (the lookup that
+/// assigns them runs once over the file; `cargo bench` is where speed is measured).
+#[test]
+fn a_large_area_gets_every_line_right() {
+    let mut text = String::from("area: X\ntitle: X\nrequirements:\n");
+    for n in 0..40_000 {
+        text.push_str(&format!(
+            "  - id: X-{n:05}\n    statement: s\n    source: {{file: a.txt, section: '1'}}\n    status: assumption\n    notes: generated\n"
+        ));
+    }
+    let mut all = files(&[]);
+    all[3].1 = text;
+    let catalogue = Catalogue::from_files(&all).unwrap();
+    assert_eq!(catalogue.requirements().count(), 40_000);
+    assert_eq!(
+        catalogue.requirement("X-39999").unwrap().line,
+        4 + 5 * 39_999
+    );
+}

@@ -134,7 +134,11 @@ pub fn write_answer(output: &mut impl Write, answer: &Answer) -> std::io::Result
 /// Serves an in-process IUT over the adapter protocol. Returns when the
 /// harness says `bye` or closes the input. Whatever a line holds — not JSON,
 /// not UTF-8, fields the protocol does not name — it gets an `error` answer.
-pub fn serve(build: &Build<'_>, mut input: impl BufRead, mut output: impl Write) -> std::io::Result<()> {
+pub fn serve(
+    build: &Build<'_>,
+    mut input: impl BufRead,
+    mut output: impl Write,
+) -> std::io::Result<()> {
     let mut server = Server::new(build, true);
     let mut bytes = Vec::new();
     loop {
