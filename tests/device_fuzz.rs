@@ -103,7 +103,7 @@ fn valid(rng: &mut Rng, session: &mut Session) -> Value {
         }
         4 | 5 => json!({"type": "receive", "frame": frame(rng), "end_ns": now}),
         6 => json!({"type": "poll_transmit", "now_ns": now}),
-        5 => json!({"type": "transmit_complete"}),
+        7 => json!({"type": "transmit_complete"}),
         _ => json!({"type": "controller_status", "status": {"bus_off": rng.below(2) == 0,
             "crc_errors": rng.below(1 << 32), "transceiver_delay": rng.below(1000)}}),
     }
