@@ -90,6 +90,11 @@ pub struct IutOptions {
     /// Switch on a soft-device fault (repeatable; see `canif faults`).
     #[arg(long)]
     pub fault: Vec<String>,
+    /// Let an external IUT run on any CPU. By default it shares the harness's:
+    /// the exchange strictly alternates, and on virtual machines a wake-up
+    /// across CPUs costs about ten times one on the same CPU.
+    #[arg(long)]
+    pub iut_cpu_free: bool,
 }
 
 /// How a SocketCAN bus is run (ignored on the simulated bus).
@@ -219,6 +224,10 @@ pub enum Command {
         /// Switch on a fault (repeatable).
         #[arg(long)]
         fault: Vec<String>,
+        /// The highest adapter-protocol version to agree on (2 batches a cycle's
+        /// bus events into one exchange; 1 is one request per event).
+        #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u64).range(1..=2))]
+        protocol: u64,
         /// Put the device's CAN side on a SocketCAN interface (`socketcan:IFACE`):
         /// it sends and receives real frames there, and the adapter protocol
         /// carries only configure, cycle and controller_status.

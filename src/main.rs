@@ -113,7 +113,12 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                 &dir,
             ),
         },
-        Command::Device { stdio, fault, bus } => device::device(stdio, &fault, bus.as_deref()),
+        Command::Device {
+            stdio,
+            fault,
+            protocol,
+            bus,
+        } => device::device(stdio, &fault, protocol, bus.as_deref()),
         Command::Faults => {
             for fault in Fault::ALL {
                 outln!(out, "{:<36} {}", fault.name(), fault.description());

@@ -21,6 +21,7 @@ fn exec(command: &str, timeout_ms: u64) -> IutKind {
     IutKind::Exec {
         command: command.to_string(),
         timeout_ms,
+        same_cpu: false,
     }
 }
 
@@ -143,8 +144,8 @@ fn an_iut_that_prints_garbage_is_an_error() {
 #[test]
 fn another_protocol_version_is_an_error() {
     broken(
-        r#"read l; echo '{"type":"configured","protocol":2,"accepted":true}'; cat >/dev/null"#,
-        &["protocol version 2", "speaks 1"],
+        r#"read l; echo '{"type":"configured","protocol":3,"accepted":true}'; cat >/dev/null"#,
+        &["protocol version 3", "offered 1 to 2"],
     );
 }
 
@@ -221,53 +222,85 @@ fn check_lines(schema: &jsonschema::Validator, what: &str, lines: &[&str]) -> us
     lines.len()
 }
 
-/// Every message of a real session (harness requests, soft-device answers) and
-/// every line of the document's example session fit the JSON Schema.
+/// Every message of a real session (harness requests, soft-device answers),
+/// in protocol 1 and in protocol 2, and every line of the document's example
+/// session fit the JSON Schema.
 #[test]
 fn real_traffic_and_the_documented_session_fit_the_schema() {
     let schema = schema();
-    let dir = std::env::temp_dir().join(format!("canif-traffic-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let (requests, answers) = (dir.join("requests.log"), dir.join("answers.log"));
-    let command = format!(
-        "tee {} | {} device --stdio | tee {}",
-        requests.display(),
-        env!("CARGO_BIN_EXE_canif"),
-        answers.display()
-    );
-    let mut config = InterfaceConfig::new(FrameFormat::Fd, 4);
-    config.transaction_number = true;
-    config.time_stamp = true;
-    let scenario = scenario::info_data(&config);
-    let run = run_scenario(
-        &exec(&command, 5_000),
-        &Capabilities::everything(),
-        &scenario,
-        scenario.steps(),
-    );
-    assert_eq!(run.outcome, Outcome::Pass);
-    drop(run);
-    std::thread::sleep(Duration::from_millis(100));
-    let requests = std::fs::read_to_string(requests).unwrap();
-    let answers = std::fs::read_to_string(answers).unwrap();
-    let sent = check_lines(&schema, "request", &requests.lines().collect::<Vec<_>>());
-    let answered = check_lines(&schema, "answer", &answers.lines().collect::<Vec<_>>());
-    assert!(
-        sent > 100 && answered + 1 >= sent,
-        "{sent} requests, {answered} answers"
-    );
-    for kind in [
-        "configure",
-        "cycle",
-        "receive",
-        "poll_transmit",
-        "transmit_complete",
-        "controller_status",
+    for (version, kinds) in [
+        (
+            1,
+            &[
+                "configure",
+                "cycle",
+                "receive",
+                "poll_transmit",
+                "transmit_complete",
+                "controller_status",
+            ][..],
+        ),
+        (
+            2,
+            &[
+                "configure",
+                "step",
+                "received",
+                "started",
+                "completed",
+                "status",
+            ][..],
+        ),
     ] {
-        assert!(
-            requests.contains(&format!("\"type\":\"{kind}\"")),
-            "the session has no {kind}"
+        let dir =
+            std::env::temp_dir().join(format!("canif-traffic-{version}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (requests, answers) = (dir.join("requests.log"), dir.join("answers.log"));
+        let command = format!(
+            "tee {} | {} device --stdio --protocol {version} | tee {}",
+            requests.display(),
+            env!("CARGO_BIN_EXE_canif"),
+            answers.display()
         );
+        let mut config = InterfaceConfig::new(FrameFormat::Fd, 4);
+        config.transaction_number = true;
+        config.time_stamp = true;
+        let scenario = scenario::info_data(&config);
+        let run = run_scenario(
+            &exec(&command, 5_000),
+            &Capabilities::everything(),
+            &scenario,
+            scenario.steps(),
+        );
+        assert_eq!(run.outcome, Outcome::Pass, "protocol {version}");
+        drop(run);
+        std::thread::sleep(Duration::from_millis(100));
+        let requests = std::fs::read_to_string(requests).unwrap();
+        let answers = std::fs::read_to_string(answers).unwrap();
+        let sent = check_lines(&schema, "request", &requests.lines().collect::<Vec<_>>());
+        let answered = check_lines(&schema, "answer", &answers.lines().collect::<Vec<_>>());
+        assert!(
+            sent > 20 && answered + 1 >= sent,
+            "protocol {version}: {sent} requests, {answered} answers"
+        );
+        for kind in kinds {
+            assert!(
+                requests.contains(&format!("\"type\":\"{kind}\""))
+                    || requests.contains(&format!("\"event\":\"{kind}\"")),
+                "protocol {version}: the session has no {kind}"
+            );
+        }
+        if version == 2 {
+            assert!(
+                answers.contains("\"type\":\"stepped\""),
+                "no stepped answer"
+            );
+            assert!(
+                !requests.contains("\"type\":\"poll_transmit\""),
+                "protocol 2 polls per frame"
+            );
+        }
+        let _ = std::fs::remove_dir_all(dir);
     }
     let doc = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -282,8 +315,7 @@ fn real_traffic_and_the_documented_session_fit_the_schema() {
     // The schema says no to what the protocol forbids.
     assert!(!schema.is_valid(&serde_json::json!({"type": "inputs", "inputs": "0g"})));
     assert!(!schema
-        .is_valid(&serde_json::json!({"type": "configured", "protocol": 2, "accepted": true})));
-    let _ = std::fs::remove_dir_all(dir);
+        .is_valid(&serde_json::json!({"type": "configured", "protocol": 3, "accepted": true})));
 }
 
 /// On a SocketCAN bus `configure` names the interface and the epoch: the
@@ -299,7 +331,8 @@ fn the_configure_of_a_socketcan_bus_fits_the_schema() {
         env!("CARGO_BIN_EXE_canif")
     );
     let mut iut =
-        canif_harness::adapter::client::ExecIut::spawn(&command, Duration::from_secs(5)).unwrap();
+        canif_harness::adapter::client::ExecIut::spawn(&command, Duration::from_secs(5), false)
+            .unwrap();
     let bus = canif_harness::adapter::protocol::OwnedBus {
         interface: "vcan0".into(),
         epoch_ns: 1_700_000_000_000_000_000,

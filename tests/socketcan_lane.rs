@@ -378,6 +378,7 @@ fn quick_start_over(interface: &str) -> Result<(), Failed> {
         let mut iut = ExecIut::spawn(
             &device_command(interface, None)["exec:".len()..],
             Duration::from_secs(5),
+            false,
         )?;
         let epoch = canif_kernel::realtime_ns();
         let bus = OwnedBus {

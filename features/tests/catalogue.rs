@@ -85,6 +85,7 @@ fn a_broken_iut_makes_a_scenario_an_error() {
         iut: IutKind::Exec {
             command: "echo stuck >&2; sleep 30".into(),
             timeout_ms: 200,
+            same_cpu: false,
         },
         profile: "el6751-mdp".into(),
         caps: canif_model::config::Capabilities::everything(),
@@ -116,6 +117,7 @@ fn a_babbling_iut_ends_a_scenario_in_bounded_time() {
                     env!("CARGO_MANIFEST_DIR")
                 ),
                 timeout_ms: 2_000,
+                same_cpu: false,
             },
             profile: "el6751-mdp".into(),
             caps: canif_model::config::Capabilities::everything(),

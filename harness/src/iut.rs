@@ -37,6 +37,48 @@ pub trait Iut {
     fn transmit_complete(&mut self) -> Result<(), IutError>;
     /// The controller's status and counters changed.
     fn controller_status(&mut self, status: &ControllerStatus) -> Result<(), IutError>;
+    /// The frames the controller would start from `now` on, in order, if the
+    /// bus let it and nothing else happened, each with the earliest time it may
+    /// start; the frame on the wire, if any, is not among them. Adapter
+    /// protocol 2 asks for this once per cycle. `None`: the IUT cannot tell.
+    fn transmit_plan(&self, now: Nanos) -> Option<Vec<Planned>> {
+        let _ = now;
+        None
+    }
+}
+
+/// One frame of a [`Iut::transmit_plan`]: the frame (or what is no frame) and
+/// the earliest time it may start.
+pub type Planned = (Result<Frame, InvalidFrame>, Nanos);
+
+/// How many frames a plan lists at most: more than a controller's queue holds.
+const MOST_PLANNED: usize = 4_096;
+
+/// The plan of a device that can be cloned: a copy of it is let send
+/// everything, as the real one would if the bus took each frame at once.
+fn plan_by_rehearsal<D: Clone>(
+    device: &D,
+    now: Nanos,
+    mut poll: impl FnMut(&mut D, Nanos) -> Option<Result<Frame, InvalidFrame>>,
+    mut done: impl FnMut(&mut D),
+    due: impl Fn(&D) -> Option<Nanos>,
+) -> Vec<Planned> {
+    let mut rehearsal = device.clone();
+    done(&mut rehearsal); // the frame on the wire, if any, is not planned
+    let (mut plan, mut t) = (Vec::new(), now);
+    while plan.len() < MOST_PLANNED {
+        match poll(&mut rehearsal, t) {
+            Some(frame) => {
+                plan.push((frame, t));
+                done(&mut rehearsal);
+            }
+            None => match due(&rehearsal).filter(|due| *due > t) {
+                Some(due) => t = due,
+                None => break,
+            },
+        }
+    }
+    plan
 }
 
 /// Why no IUT could be built for a configuration.
@@ -85,6 +127,15 @@ impl Iut for ModelIut {
         self.0.handle_controller_status(*status);
         Ok(())
     }
+    fn transmit_plan(&self, now: Nanos) -> Option<Vec<Planned>> {
+        Some(plan_by_rehearsal(
+            &self.0,
+            now,
+            |d, t| d.poll_transmit(t).map(Ok),
+            Device::handle_transmit_complete,
+            Device::poll_timeout,
+        ))
+    }
 }
 
 /// The soft device behind the IUT interface; frames are translated here, so the
@@ -131,6 +182,15 @@ impl Iut for SoftDeviceIut {
             self.0.set_controller_word(index, value);
         }
         Ok(())
+    }
+    fn transmit_plan(&self, now: Nanos) -> Option<Vec<Planned>> {
+        Some(plan_by_rehearsal(
+            &self.0,
+            now,
+            |d, t| d.controller_idle(t).map(|f| from_soft(&f)),
+            SoftDevice::tx_done_interrupt,
+            SoftDevice::next_release,
+        ))
     }
 }
 

@@ -23,6 +23,10 @@ pub enum IutKind {
     Exec {
         command: String,
         timeout_ms: u64,
+        /// Run the IUT on the CPU of the harness's thread: the exchange strictly
+        /// alternates, and a wake-up across CPUs costs ten times one on the same
+        /// CPU on a virtual machine (measured in benches/external_iut.rs).
+        same_cpu: bool,
     },
 }
 
@@ -63,9 +67,11 @@ impl IutKind {
             IutKind::Exec {
                 command,
                 timeout_ms,
+                same_cpu,
             } => {
-                let mut iut = ExecIut::spawn(command, Duration::from_millis(*timeout_ms))
-                    .map_err(|e| BuildError::Failed(e.0))?;
+                let mut iut =
+                    ExecIut::spawn(command, Duration::from_millis(*timeout_ms), *same_cpu)
+                        .map_err(|e| BuildError::Failed(e.0))?;
                 match iut
                     .configure(caps, config, bus)
                     .map_err(|e| BuildError::Failed(e.0))?
@@ -84,14 +90,16 @@ impl IutKind {
             IutKind::Exec {
                 command,
                 timeout_ms,
+                same_cpu,
             } => {
                 let (command, timeout) = (command.clone(), Duration::from_millis(*timeout_ms));
+                let same_cpu = *same_cpu;
                 let mut process: Option<ExecIut> = None;
                 Box::new(move |caps, config| {
                     let iut = match process.as_mut() {
                         Some(iut) => iut,
                         None => process.insert(
-                            ExecIut::spawn(&command, timeout)
+                            ExecIut::spawn(&command, timeout, same_cpu)
                                 .map_err(|e| BuildError::Failed(e.0))?,
                         ),
                     };

@@ -12,7 +12,7 @@ use super::soft_device_faults;
 
 /// `canif device --stdio [--bus socketcan:IFACE]`: the soft device behind the
 /// adapter protocol.
-pub fn device(stdio: bool, faults: &[String], bus: Option<&str>) -> ExitCode {
+pub fn device(stdio: bool, faults: &[String], protocol: u64, bus: Option<&str>) -> ExitCode {
     if !stdio {
         eprintln!("canif device needs --stdio: its process image is served over the adapter protocol (docs/adapter-protocol.md)");
         return ExitCode::from(2);
@@ -23,7 +23,7 @@ pub fn device(stdio: bool, faults: &[String], bus: Option<&str>) -> ExitCode {
     };
     let build: &Build<'_> = &|caps, config| kind.build(caps, config);
     let served = match bus {
-        None => server::serve(build, std::io::stdin().lock(), std::io::stdout())
+        None => server::serve(build, protocol, std::io::stdin().lock(), std::io::stdout())
             .map_err(|e| e.to_string()),
         Some(bus) => serve_on_bus(build, bus),
     };

@@ -43,6 +43,7 @@ pub fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
             IutKind::Exec {
                 command: command.clone(),
                 timeout_ms: iut.timeout_ms,
+                same_cpu: !iut.iut_cpu_free,
             }
         }
         IutArg::SoftDevice => IutKind::SoftDevice { faults: chosen },

@@ -11,7 +11,10 @@ for line in sys.stdin:
     device.stdin.flush()
     answer = device.stdout.readline()
     message = json.loads(answer)
-    if message.get("type") == "transmit" and message.get("frame") is not None:
+    # Protocol 1 hands the frame over in `transmit`, protocol 2 lists it in the plan.
+    if (message.get("type") == "transmit" and message.get("frame") is not None) or (
+        message.get("type") == "stepped" and message.get("plan")
+    ):
         device.kill()
         print("dying with a frame due", file=sys.stderr)
         sys.exit(3)

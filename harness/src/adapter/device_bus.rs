@@ -109,7 +109,8 @@ pub fn serve_on_bus(build: &Build<'_>, interface: Option<&str>) -> Result<(), Bu
     });
     let mut output = std::io::stdout();
     let io = |e: std::io::Error| BusError(format!("stdout: {e}"));
-    let mut server = Server::new(build, false);
+    // The CAN side is the interface's own: one request per cycle is protocol 1.
+    let mut server = Server::new(build, false).at_most(1);
     let mut bus: Option<DeviceBus> = None;
     loop {
         let line = match requests.recv_timeout(Duration::from_micros(500)) {

@@ -11,8 +11,9 @@ use canif_model::info_data::{BitTiming, ControllerStatus};
 use canif_model::Nanos;
 use serde::{Deserialize, Serialize};
 
-/// The protocol version this harness speaks.
-pub const PROTOCOL_VERSION: u64 = 1;
+/// The highest protocol version this harness speaks; `configure` offers it
+/// and the IUT answers the version it will speak (1 or 2).
+pub const PROTOCOL_VERSION: u64 = 2;
 
 /// What the harness asks.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -40,7 +41,156 @@ pub enum Request {
     ControllerStatus {
         status: Status,
     },
+    /// Version 2: one exchange per cycle. What happened on the bus since the
+    /// last step, in order, then the cycle itself.
+    Step {
+        now_ns: Nanos,
+        outputs: Hex,
+        events: Vec<BusEvent>,
+    },
     Bye,
+}
+
+/// Something that happened at the IUT's controller since the last step.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "EventLine", into = "EventLine")]
+pub enum BusEvent {
+    /// The controller received `frame`; its last bit ended at `end_ns`.
+    Received { frame: WireFrame, end_ns: Nanos },
+    /// The controller started the next frame of its plan at `at_ns`.
+    Started { at_ns: Nanos },
+    /// The frame it started is on the bus.
+    Completed,
+    /// The controller's status and counters changed.
+    Status { status: Status },
+}
+
+/// A [`BusEvent`] as the line carries it: `{"event": KIND, …}`. Read as a
+/// flat struct, then checked, so the many events of a step are not buffered
+/// twice (as an internally tagged enum would be).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct EventLine {
+    event: EventKind,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    frame: Option<WireFrame>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    end_ns: Option<Nanos>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    at_ns: Option<Nanos>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    status: Option<Status>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum EventKind {
+    Received,
+    Started,
+    Completed,
+    Status,
+}
+
+impl TryFrom<EventLine> for BusEvent {
+    type Error = String;
+    fn try_from(line: EventLine) -> Result<Self, String> {
+        let event = match (line.event, line.frame, line.end_ns, line.at_ns, line.status) {
+            (EventKind::Received, Some(frame), Some(end_ns), None, None) => {
+                BusEvent::Received { frame, end_ns }
+            }
+            (EventKind::Started, None, None, Some(at_ns), None) => BusEvent::Started { at_ns },
+            (EventKind::Completed, None, None, None, None) => BusEvent::Completed,
+            (EventKind::Status, None, None, None, Some(status)) => BusEvent::Status { status },
+            (kind, ..) => {
+                return Err(format!(
+                    "a `{}` event has exactly {}",
+                    serde_json::to_value(kind)
+                        .unwrap_or_default()
+                        .as_str()
+                        .unwrap_or("?"),
+                    match kind {
+                        EventKind::Received => "\"frame\" and \"end_ns\"",
+                        EventKind::Started => "\"at_ns\"",
+                        EventKind::Completed => "no other field",
+                        EventKind::Status => "\"status\"",
+                    }
+                ))
+            }
+        };
+        Ok(event)
+    }
+}
+
+impl From<BusEvent> for EventLine {
+    fn from(event: BusEvent) -> Self {
+        let mut line = EventLine {
+            event: EventKind::Completed,
+            frame: None,
+            end_ns: None,
+            at_ns: None,
+            status: None,
+        };
+        match event {
+            BusEvent::Received { frame, end_ns } => {
+                (line.event, line.frame, line.end_ns) =
+                    (EventKind::Received, Some(frame), Some(end_ns))
+            }
+            BusEvent::Started { at_ns } => {
+                (line.event, line.at_ns) = (EventKind::Started, Some(at_ns))
+            }
+            BusEvent::Completed => {}
+            BusEvent::Status { status } => {
+                (line.event, line.status) = (EventKind::Status, Some(status))
+            }
+        }
+        line
+    }
+}
+
+/// One frame of the IUT's plan: what it will start next (`frame`, or
+/// `invalid` with why it is no frame), and from when.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlannedFrame {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame: Option<WireFrame>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub invalid: Option<String>,
+    pub not_before_ns: Nanos,
+}
+
+/// `step` and `stepped` as plain structs: protocol 2's hot path reads them
+/// without the buffering an internally tagged enum needs (the general
+/// [`Request`] / [`Answer`] read everything else, and say what is wrong).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StepLine {
+    #[serde(rename = "type")]
+    pub kind: StepTag,
+    pub now_ns: Nanos,
+    pub outputs: Hex,
+    pub events: Vec<BusEvent>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StepTag {
+    Step,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SteppedLine {
+    #[serde(rename = "type")]
+    pub kind: SteppedTag,
+    pub inputs: Hex,
+    pub plan: Vec<PlannedFrame>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SteppedTag {
+    Stepped,
 }
 
 impl Request {
@@ -53,6 +203,7 @@ impl Request {
             Request::PollTransmit { .. } => "poll_transmit",
             Request::TransmitComplete => "transmit_complete",
             Request::ControllerStatus { .. } => "controller_status",
+            Request::Step { .. } => "step",
             Request::Bye => "bye",
         }
     }
@@ -61,7 +212,10 @@ impl Request {
     pub fn is_bus_request(&self) -> bool {
         matches!(
             self,
-            Request::Receive { .. } | Request::PollTransmit { .. } | Request::TransmitComplete
+            Request::Receive { .. }
+                | Request::PollTransmit { .. }
+                | Request::TransmitComplete
+                | Request::Step { .. }
         )
     }
 }
@@ -85,6 +239,12 @@ pub enum Answer {
         #[serde(default)]
         next_ns: Option<Nanos>,
     },
+    /// Version 2: the new input image, and the frames the controller will
+    /// start, in order, with the earliest time each may start.
+    Stepped {
+        inputs: Hex,
+        plan: Vec<PlannedFrame>,
+    },
     Error {
         message: String,
     },
@@ -97,6 +257,7 @@ impl Answer {
             Answer::Inputs { .. } => "inputs",
             Answer::Ok => "ok",
             Answer::Transmit { .. } => "transmit",
+            Answer::Stepped { .. } => "stepped",
             Answer::Error { .. } => "error",
         }
     }
@@ -140,17 +301,28 @@ impl TryFrom<String> for Hex {
                 shorten(&text)
             ));
         }
-        (0..text.len())
-            .step_by(2)
-            .map(|i| u8::from_str_radix(&text[i..i + 2], 16).map_err(|e| e.to_string()))
-            .collect::<Result<_, _>>()
-            .map(Hex)
+        let digit = |b: u8| match b {
+            b'0'..=b'9' => b - b'0',
+            b'a'..=b'f' => b - b'a' + 10,
+            _ => b - b'A' + 10, // checked above: a hex digit
+        };
+        Ok(Hex(text
+            .as_bytes()
+            .chunks_exact(2)
+            .map(|pair| (digit(pair[0]) << 4) | digit(pair[1]))
+            .collect()))
     }
 }
 
 impl From<Hex> for String {
     fn from(hex: Hex) -> String {
-        hex.0.iter().map(|b| format!("{b:02x}")).collect()
+        const DIGITS: &[u8; 16] = b"0123456789abcdef";
+        let mut text = String::with_capacity(2 * hex.0.len());
+        for byte in &hex.0 {
+            text.push(char::from(DIGITS[usize::from(byte >> 4)]));
+            text.push(char::from(DIGITS[usize::from(byte & 0x0F)]));
+        }
+        text
     }
 }
 

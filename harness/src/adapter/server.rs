@@ -5,10 +5,14 @@ use std::io::{BufRead, Write};
 
 use canif_model::config::{Capabilities, InterfaceConfig};
 
+use canif_model::Nanos;
+
 use super::protocol::{
-    Answer, Hex, InvalidWireFrame, Request, Transmitted, WireFrame, PROTOCOL_VERSION,
+    Answer, BusEvent, Hex, InvalidWireFrame, PlannedFrame, Request, StepLine, SteppedLine,
+    SteppedTag, Transmitted, WireFrame, PROTOCOL_VERSION,
 };
-use crate::iut::{BuildError, Iut};
+use crate::error::IutError;
+use crate::iut::{BuildError, Iut, Planned};
 
 /// Builds the IUT a `configure` asks for.
 pub type Build<'a> =
@@ -20,6 +24,10 @@ pub struct Server<'a> {
     iut: Option<Box<dyn Iut>>,
     /// The harness drives the CAN side through the protocol (no SocketCAN bus).
     drives_bus: bool,
+    /// The highest protocol version this server answers with.
+    most: u64,
+    /// The version the last `configure` agreed.
+    version: u64,
 }
 
 impl<'a> Server<'a> {
@@ -28,7 +36,15 @@ impl<'a> Server<'a> {
             build,
             iut: None,
             drives_bus,
+            most: PROTOCOL_VERSION,
+            version: 1,
         }
+    }
+
+    /// Speaks at most `version` (1 keeps a harness to one request per event).
+    pub fn at_most(mut self, version: u64) -> Self {
+        self.most = version.clamp(1, PROTOCOL_VERSION);
+        self
     }
 
     /// The IUT built by the last accepted `configure`.
@@ -38,6 +54,14 @@ impl<'a> Server<'a> {
 
     /// Reads one request line: the request, or the error answer to give.
     pub fn parse(line: &str) -> Result<Request, Answer> {
+        // Protocol 2's one request per cycle first, as a plain struct (fast).
+        if let Ok(step) = serde_json::from_str::<StepLine>(line) {
+            return Ok(Request::Step {
+                now_ns: step.now_ns,
+                outputs: step.outputs,
+                events: step.events,
+            });
+        }
         serde_json::from_str(line).map_err(|e| Answer::error(format!("not a request: {e}")))
     }
 
@@ -47,13 +71,20 @@ impl<'a> Server<'a> {
             (Request::Bye, _) => return None,
             (
                 Request::Configure {
+                    protocol,
                     config,
                     capabilities,
                     ..
                 },
                 _,
-            ) => return Some(self.configure(&capabilities.into(), &config.interface())),
+            ) => {
+                self.version = (*protocol).min(self.most).max(1);
+                return Some(self.configure(&capabilities.into(), &config.interface()));
+            }
             (_, None) => return Some(Answer::error("configure first")),
+            (Request::Step { .. }, Some(_)) if self.version < 2 => {
+                return Some(Answer::error("`step` is protocol 2; configure agreed on 1"))
+            }
             (request, Some(_)) if request.is_bus_request() && !self.drives_bus => {
                 return Some(Answer::error(format!(
                     "`{}`: this device is on a SocketCAN bus and owns its CAN side",
@@ -91,6 +122,14 @@ impl<'a> Server<'a> {
             Request::ControllerStatus { status } => {
                 ok_or_error(iut.controller_status(&status.into()))
             }
+            Request::Step {
+                now_ns,
+                outputs,
+                events,
+            } => match step(iut.as_mut(), *now_ns, &outputs.0, events) {
+                Ok(answer) => answer,
+                Err(error) => Answer::error(error.0),
+            },
             Request::Configure { .. } | Request::Bye => unreachable!("answered above"),
         })
     }
@@ -100,7 +139,7 @@ impl<'a> Server<'a> {
             Ok(built) => {
                 self.iut = Some(built);
                 Answer::Configured {
-                    protocol: PROTOCOL_VERSION,
+                    protocol: self.version,
                     accepted: true,
                     reason: None,
                 }
@@ -108,12 +147,69 @@ impl<'a> Server<'a> {
             Err(error) => {
                 self.iut = None;
                 Answer::Configured {
-                    protocol: PROTOCOL_VERSION,
+                    protocol: self.version,
                     accepted: false,
                     reason: Some(error.to_string()),
                 }
             }
         }
+    }
+}
+
+/// Protocol 2: the step's bus events replayed in order — exactly the calls
+/// protocol 1 would have made — then the cycle, then the plan.
+fn step(
+    iut: &mut dyn Iut,
+    now: Nanos,
+    outputs: &[u8],
+    events: &[BusEvent],
+) -> Result<Answer, IutError> {
+    for event in events {
+        match event {
+            BusEvent::Received { frame, end_ns } => {
+                let frame = canif_model::frame::Frame::try_from(frame)
+                    .map_err(|e| IutError(format!("a received frame: {e}")))?;
+                iut.receive(&frame, *end_ns)?;
+            }
+            BusEvent::Started { at_ns } => {
+                if iut.poll_transmit(*at_ns)?.is_none() {
+                    return Err(IutError(format!(
+                        "the harness started a frame at {at_ns} ns that the plan did not hold"
+                    )));
+                }
+            }
+            BusEvent::Completed => iut.transmit_complete()?,
+            BusEvent::Status { status } => iut.controller_status(&status.into())?,
+        }
+    }
+    let inputs = iut.cycle(outputs, now)?;
+    let plan = iut
+        .transmit_plan(now)
+        .ok_or_else(|| IutError("this device cannot tell its plan (protocol 2)".into()))?;
+    Ok(Answer::Stepped {
+        inputs: Hex(inputs),
+        plan: plan.into_iter().map(planned).collect(),
+    })
+}
+
+/// Writes `stepped` as its plain struct (the same JSON, without a copy of the plan).
+fn stepped_line(inputs: Hex, plan: Vec<PlannedFrame>) -> SteppedLine {
+    SteppedLine {
+        kind: SteppedTag::Stepped,
+        inputs,
+        plan,
+    }
+}
+
+fn planned((frame, not_before_ns): Planned) -> PlannedFrame {
+    let (frame, invalid) = match frame {
+        Ok(frame) => (Some(WireFrame::from(&frame)), None),
+        Err(invalid) => (None, Some(invalid.0)),
+    };
+    PlannedFrame {
+        frame,
+        invalid,
+        not_before_ns,
     }
 }
 
@@ -126,8 +222,15 @@ fn ok_or_error(result: Result<(), crate::error::IutError>) -> Answer {
 
 /// Writes one answer as a line.
 pub fn write_answer(output: &mut impl Write, answer: &Answer) -> std::io::Result<()> {
-    let line = serde_json::to_string(answer).expect("answers serialize");
-    writeln!(output, "{line}")?;
+    let mut line = match answer {
+        Answer::Stepped { inputs, plan } => {
+            serde_json::to_vec(&stepped_line(inputs.clone(), plan.clone()))
+        }
+        other => serde_json::to_vec(other),
+    }
+    .expect("answers serialize");
+    line.push(b'\n');
+    output.write_all(&line)?;
     output.flush()
 }
 
@@ -136,10 +239,11 @@ pub fn write_answer(output: &mut impl Write, answer: &Answer) -> std::io::Result
 /// not UTF-8, fields the protocol does not name — it gets an `error` answer.
 pub fn serve(
     build: &Build<'_>,
+    most: u64,
     mut input: impl BufRead,
     mut output: impl Write,
 ) -> std::io::Result<()> {
-    let mut server = Server::new(build, true);
+    let mut server = Server::new(build, true).at_most(most);
     let mut bytes = Vec::new();
     loop {
         bytes.clear();

@@ -1,0 +1,87 @@
+//! An external IUT must not be the bottleneck: the soak scenario (one virtual
+//! minute of a 1 Mbit/s bus at full load, 32 slots) checked frame by frame
+//! against the soft device in process, and the same soft device behind the
+//! adapter protocol as its own process (`canif device --stdio`), protocol 2
+//! (one exchange per cycle) and protocol 1 (one per bus event), the IUT on the
+//! harness's CPU (the default) and, for protocol 2, on any CPU. Plain main:
+//! prints figures and the ratios of one run; asserts nothing.
+
+use std::time::Instant;
+
+use canif_harness::{run_scenario, scenario, IutKind, Outcome};
+use canif_model::config::{FrameFormat, InterfaceConfig};
+use canif_model::timing::BitRates;
+use canif_spec::Catalogue;
+
+fn main() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let caps = catalogue
+        .profile("el6751-mdp")
+        .unwrap()
+        .model_capabilities();
+    let config = InterfaceConfig::new(FrameFormat::Base11, 32);
+    let seconds: u64 = std::env::var("CANIF_BENCH_SECONDS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(60);
+    let mut soak = scenario::generated(&config, 42, seconds * 1000, 100);
+    soak.bit_rates = BitRates::classic(1_000_000);
+    let device = env!("CARGO_BIN_EXE_canif");
+    let iuts = [
+        (
+            "soft device in process",
+            IutKind::SoftDevice { faults: vec![] },
+        ),
+        (
+            "canif device --stdio, protocol 2",
+            IutKind::Exec {
+                command: format!("{device} device --stdio --protocol 2"),
+                timeout_ms: 10_000,
+                same_cpu: true,
+            },
+        ),
+        (
+            "the same, IUT on any CPU (--iut-cpu-free)",
+            IutKind::Exec {
+                command: format!("{device} device --stdio --protocol 2"),
+                timeout_ms: 10_000,
+                same_cpu: false,
+            },
+        ),
+        (
+            "canif device --stdio, protocol 1",
+            IutKind::Exec {
+                command: format!("{device} device --stdio --protocol 1"),
+                timeout_ms: 10_000,
+                same_cpu: true,
+            },
+        ),
+    ];
+    // CANIF_BENCH_ONLY=2: only the in-process device and protocol 2 (for profiling).
+    let only_v2 = std::env::var("CANIF_BENCH_ONLY").is_ok_and(|v| v == "2");
+    let iuts = &iuts[..if only_v2 { 3 } else { 4 }];
+    let mut rates = Vec::new();
+    for (label, kind) in iuts {
+        // A fresh thread each: a same-CPU IUT pins the thread that starts it.
+        let (run, wall) = std::thread::scope(|scope| {
+            scope
+                .spawn(|| {
+                    let started = Instant::now();
+                    let run = run_scenario(kind, &caps, &soak, soak.steps());
+                    (run, started.elapsed().as_secs_f64())
+                })
+                .join()
+                .expect("the measurement thread")
+        });
+        let rate = run.frames_checked as f64 / wall;
+        println!(
+            "soak vs {label:<33}: {} frames checked in {wall:.2} s = {rate:>10.0} checked frames/s ({})",
+            run.frames_checked,
+            if matches!(run.outcome, Outcome::Pass) { "pass" } else { "NOT PASS" }
+        );
+        rates.push(rate);
+    }
+    for ((label, _), rate) in iuts.iter().zip(&rates).skip(1) {
+        println!("{label}: {:.3} of the in-process rate", rate / rates[0]);
+    }
+}
