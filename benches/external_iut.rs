@@ -1,9 +1,10 @@
 //! An external IUT must not be the bottleneck: the soak scenario (one virtual
 //! minute of a 1 Mbit/s bus at full load, 32 slots) checked frame by frame
-//! against the soft device in process, and the same soft device behind the
-//! adapter protocol as its own process (`canif device --stdio`), protocol 2
-//! (one exchange per cycle) and protocol 1 (one per bus event), the IUT on the
-//! harness's CPU (the default) and, for protocol 2, on any CPU. Plain main:
+//! against the soft device in process, the C example device loaded over the C
+//! ABI (`lib:`), and the soft device behind the adapter protocol as its own
+//! process (`canif device --stdio`): protocol 2 (one exchange per cycle) and
+//! protocol 1 (one per bus event), the IUT on the harness's CPU (the default)
+//! and, for protocol 2, on any CPU. Plain main:
 //! prints figures and the ratios of one run; asserts nothing.
 
 use std::time::Instant;
@@ -27,10 +28,17 @@ fn main() {
     let mut soak = scenario::generated(&config, 42, seconds * 1000, 100);
     soak.bit_rates = BitRates::classic(1_000_000);
     let device = env!("CARGO_BIN_EXE_canif");
+    let library = c_example();
     let iuts = [
         (
             "soft device in process",
             IutKind::SoftDevice { faults: vec![] },
+        ),
+        (
+            "examples/c over lib: (C ABI)",
+            IutKind::Lib {
+                path: library.clone(),
+            },
         ),
         (
             "canif device --stdio, protocol 2",
@@ -59,7 +67,7 @@ fn main() {
     ];
     // CANIF_BENCH_ONLY=2: only the in-process device and protocol 2 (for profiling).
     let only_v2 = std::env::var("CANIF_BENCH_ONLY").is_ok_and(|v| v == "2");
-    let iuts = &iuts[..if only_v2 { 3 } else { 4 }];
+    let iuts = &iuts[..if only_v2 { 4 } else { 5 }];
     let mut rates = Vec::new();
     for (label, kind) in iuts {
         // A fresh thread each: a same-CPU IUT pins the thread that starts it.
@@ -84,4 +92,20 @@ fn main() {
     for ((label, _), rate) in iuts.iter().zip(&rates).skip(1) {
         println!("{label}: {:.3} of the in-process rate", rate / rates[0]);
     }
+}
+
+/// The C example device, built with the machine's C compiler.
+fn c_example() -> std::path::PathBuf {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let library = std::env::temp_dir().join(format!("canif-bench-{}.so", std::process::id()));
+    let status = std::process::Command::new("cc")
+        .args(["-shared", "-fPIC", "-O2", "-I"])
+        .arg(format!("{root}/include"))
+        .arg("-o")
+        .arg(&library)
+        .arg(format!("{root}/examples/c/minimal_device.c"))
+        .status()
+        .expect("cc runs");
+    assert!(status.success(), "cc failed");
+    library
 }

@@ -26,16 +26,22 @@ pub enum IutArg {
     Model,
     /// `exec:COMMAND`: a process speaking the adapter protocol.
     Exec(String),
+    /// `lib:PATH`: a shared library built against include/canif.h.
+    Lib(PathBuf),
 }
 
 fn iut_arg(text: &str) -> Result<IutArg, String> {
     match text {
         "softdevice" => Ok(IutArg::SoftDevice),
         "model" => Ok(IutArg::Model),
-        _ => match text.strip_prefix("exec:") {
-            Some(command) if !command.trim().is_empty() => Ok(IutArg::Exec(command.to_string())),
-            Some(_) => Err("exec: needs a command, e.g. exec:'python3 my_iut.py'".into()),
-            None => Err("use softdevice, model or exec:'COMMAND'".into()),
+        _ => match (text.strip_prefix("exec:"), text.strip_prefix("lib:")) {
+            (Some(command), _) if !command.trim().is_empty() => {
+                Ok(IutArg::Exec(command.to_string()))
+            }
+            (Some(_), _) => Err("exec: needs a command, e.g. exec:'python3 my_iut.py'".into()),
+            (_, Some(path)) if !path.is_empty() => Ok(IutArg::Lib(PathBuf::from(path))),
+            (_, Some(_)) => Err("lib: needs a path, e.g. lib:./libdevice.so".into()),
+            _ => Err("use softdevice, model, exec:'COMMAND' or lib:PATH".into()),
         },
     }
 }
@@ -80,8 +86,9 @@ fn seconds(text: &str) -> Result<f64, String> {
 /// Which implementation, and how an external one is run.
 #[derive(Args, Debug, Clone)]
 pub struct IutOptions {
-    /// softdevice (the built-in soft EL6751), model (the reference itself), or
-    /// exec:'COMMAND' (a process speaking the adapter protocol).
+    /// softdevice (the built-in soft EL6751), model (the reference itself),
+    /// exec:'COMMAND' (a process speaking the adapter protocol), or lib:PATH (a
+    /// shared library built against include/canif.h).
     #[arg(long, default_value = "softdevice", value_parser = iut_arg)]
     pub iut: IutArg,
     /// How long an external IUT may take to answer one request, in ms.

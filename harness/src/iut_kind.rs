@@ -28,6 +28,10 @@ pub enum IutKind {
         /// CPU on a virtual machine (measured in benches/external_iut.rs).
         same_cpu: bool,
     },
+    /// A shared library built against include/canif.h (the C ABI), in process.
+    Lib {
+        path: std::path::PathBuf,
+    },
 }
 
 /// Asks an IUT, configuration after configuration, whether it accepts.
@@ -56,6 +60,7 @@ impl IutKind {
             IutKind::Model => Ok(Box::new(ModelIut(
                 Device::new(caps, config.clone()).map_err(|e| refused(&e))?,
             ))),
+            IutKind::Lib { path } => Ok(Box::new(crate::lib_iut::build(path, caps, config)?)),
             IutKind::SoftDevice { faults } => {
                 let mut device =
                     SoftDevice::new(soft_settings(caps, config)).map_err(|e| refused(&e))?;
@@ -134,6 +139,7 @@ impl IutKind {
                 )
             }
             IutKind::Exec { command, .. } => format!("exec:{command}"),
+            IutKind::Lib { path } => format!("lib:{}", path.display()),
         }
     }
 }

@@ -28,6 +28,7 @@ mod history;
 pub mod interrupt;
 pub mod iut;
 pub mod iut_kind;
+pub mod lib_iut;
 pub mod lockstep;
 pub mod outcome;
 mod pair;

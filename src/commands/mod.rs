@@ -46,6 +46,10 @@ pub fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
                 same_cpu: !iut.iut_cpu_free,
             }
         }
+        IutArg::Lib(path) => {
+            only_soft(&chosen)?;
+            IutKind::Lib { path: path.clone() }
+        }
         IutArg::SoftDevice => IutKind::SoftDevice { faults: chosen },
         IutArg::Model => {
             only_soft(&chosen)?;

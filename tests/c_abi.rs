@@ -1,0 +1,123 @@
+//! A device written in C against include/canif.h, loaded in process with
+//! `--iut lib:`: the example is built with the machine's C compiler and
+//! certified; a library of another ABI version or missing a function is an
+//! error that says so.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use canif_harness::suite::{run_profile, Options};
+use canif_harness::{IutKind, Outcome, Verdict};
+use canif_spec::Catalogue;
+
+/// Compiles `source` (plus `extra` C text) into a shared library named `name`.
+fn build(name: &str, source: &Path, extra: &str) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi");
+    std::fs::create_dir_all(&dir).unwrap();
+    let combined = dir.join(format!("{name}.c"));
+    let mut text = std::fs::read_to_string(source).unwrap();
+    text.push_str(extra);
+    std::fs::write(&combined, text).unwrap();
+    let library = dir.join(format!("lib{name}.so"));
+    let status = Command::new("cc")
+        .args(["-shared", "-fPIC", "-O2", "-Wall", "-Werror", "-I"])
+        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/include"))
+        .arg("-o")
+        .arg(&library)
+        .arg(&combined)
+        .status()
+        .expect("cc runs (the machine has gcc)");
+    assert!(status.success(), "cc failed on {}", combined.display());
+    library
+}
+
+fn example() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/c/minimal_device.c")
+}
+
+#[test]
+fn the_c_example_is_certified_in_process() {
+    let library = build("minimal", &example(), "");
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("fc510x-before-fw2.14").unwrap();
+    let run = run_profile(
+        &catalogue,
+        profile,
+        &IutKind::Lib { path: library },
+        &Options::quick(3),
+        |_| {},
+    );
+    let bad: Vec<String> = run
+        .runs
+        .iter()
+        .filter(|r| !matches!(r.outcome, Outcome::Pass))
+        .map(|r| format!("{}: {:?}", r.scenario, r.outcome))
+        .collect();
+    assert!(bad.is_empty(), "{bad:#?}");
+    assert!(
+        run.verdicts
+            .values()
+            .filter(|v| **v == Verdict::Pass)
+            .count()
+            > 30
+    );
+}
+
+#[test]
+fn canif_run_takes_a_library_from_the_command_line() {
+    let library = build("minimal-cli", &example(), "");
+    let report = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi-report");
+    let output = Command::new(env!("CARGO_BIN_EXE_canif"))
+        .args(["run", "--profile", "fc510x-before-fw2.14", "--report"])
+        .arg(&report)
+        .arg(format!("--iut=lib:{}", library.display()))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(
+        stdout.contains("lib:") && stdout.contains(" 0 fail, 0 error"),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn a_library_of_another_version_or_without_a_function_is_an_error() {
+    let source = std::fs::read_to_string(example()).unwrap().replace(
+        "uint32_t canif_abi_version(void) { return CANIF_ABI_VERSION; }",
+        "uint32_t canif_abi_version(void) { return 2; }",
+    );
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi");
+    let v2 = dir.join("v2.c");
+    std::fs::write(&v2, source).unwrap();
+    let v2 = build("v2", &v2, "");
+    let no_destroy = dir.join("no-destroy.c");
+    std::fs::write(
+        &no_destroy,
+        std::fs::read_to_string(example())
+            .unwrap()
+            .replace("void canif_destroy(void *p) { free(p); }", ""),
+    )
+    .unwrap();
+    let no_destroy = build("no-destroy", &no_destroy, "");
+    let caps = canif_model::config::Capabilities::everything();
+    let config =
+        canif_model::config::InterfaceConfig::new(canif_model::config::FrameFormat::Base11, 4);
+    for (library, words) in [
+        (v2, "speaks canif ABI version 2"),
+        (no_destroy, "has no `canif_destroy`"),
+    ] {
+        match (IutKind::Lib { path: library }).build(&caps, &config) {
+            Err(canif_harness::BuildError::Failed(reason)) => {
+                assert!(reason.contains(words), "{reason}")
+            }
+            Err(other) => panic!("{other}"),
+            Ok(_) => panic!("{words}: accepted"),
+        }
+    }
+}
