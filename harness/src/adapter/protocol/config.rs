@@ -1,0 +1,309 @@
+//! `configure`: the interface, the profile's capabilities, the bus; and the
+//! controller status.
+
+use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig, QueueMode, Synchronization};
+use canif_model::filter::{FilterAction, FilterMatch, FilterRow};
+use canif_model::image::ImageLayout;
+use canif_model::info_data::{BitTiming, ControllerStatus};
+use canif_model::Nanos;
+use serde::{Deserialize, Serialize};
+
+/// `configure.config`: the interface as the PLC configured it.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Config {
+    pub format: Format,
+    pub queue: Queue,
+    pub transaction_number: bool,
+    pub time_stamp: bool,
+    pub tx_slots: u8,
+    pub rx_slots: u8,
+    #[serde(default)]
+    pub filters: Vec<Filter>,
+    #[serde(default)]
+    pub sync1_shift_ns: Option<Nanos>,
+    #[serde(default)]
+    pub nominal_timing: u32,
+    #[serde(default)]
+    pub data_timing: u32,
+    #[serde(default)]
+    pub output_size: usize,
+    #[serde(default)]
+    pub input_size: usize,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Format {
+    #[serde(rename = "11-bit")]
+    Base11,
+    #[serde(rename = "29-bit")]
+    Extended29,
+    #[serde(rename = "fd")]
+    Fd,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Queue {
+    Standard,
+    Optimized,
+    Fast,
+}
+
+/// One row of the filter table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Filter {
+    Range {
+        action: Action,
+        from: u32,
+        to: u32,
+    },
+    Mask {
+        action: Action,
+        code: u32,
+        mask: u32,
+    },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Action {
+    Accept,
+    Reject,
+}
+
+/// `configure.capabilities`: what the profile offers.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Caps {
+    #[serde(default)]
+    pub base11: bool,
+    #[serde(default)]
+    pub ext29: bool,
+    #[serde(default)]
+    pub fd: bool,
+    #[serde(default)]
+    pub fast_queue: bool,
+    #[serde(default)]
+    pub optimized_queue: bool,
+    #[serde(default)]
+    pub transaction_number: bool,
+    #[serde(default)]
+    pub transaction_number_only_ext29: bool,
+    #[serde(default)]
+    pub timestamp: bool,
+    #[serde(default)]
+    pub filters: bool,
+    #[serde(default)]
+    pub info_data: bool,
+    #[serde(default)]
+    pub distributed_clocks: bool,
+    pub max_slots: u8,
+    pub rx_queue_depth: usize,
+    pub tx_queue_depth: usize,
+}
+
+/// `configure.bus`: a SocketCAN interface an external IUT opens itself; its
+/// time stamps count from `epoch_ns` of CLOCK_REALTIME.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OwnedBus {
+    pub epoch_ns: u64,
+    #[serde(rename = "socketcan")]
+    pub interface: String,
+}
+
+/// `controller_status.status`.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Status {
+    pub bus_off: bool,
+    pub error_passive: bool,
+    pub node_active: bool,
+    pub warning_limit: bool,
+    pub overload: bool,
+    pub bus_idle: bool,
+    pub transceiver_delay: u32,
+    pub ack_errors: u32,
+    pub bit_errors: u32,
+    pub crc_errors: u32,
+    pub form_errors: u32,
+    pub stuff_errors: u32,
+    pub receive_error_counter: u32,
+    pub transmit_error_counter: u32,
+    pub core_running: bool,
+}
+
+impl From<&ControllerStatus> for Status {
+    fn from(s: &ControllerStatus) -> Self {
+        Status {
+            bus_off: s.bus_off,
+            error_passive: s.error_passive,
+            node_active: s.node_active,
+            warning_limit: s.warning_limit,
+            overload: s.overload,
+            bus_idle: s.bus_idle,
+            transceiver_delay: s.transceiver_delay,
+            ack_errors: s.ack_errors,
+            bit_errors: s.bit_errors,
+            crc_errors: s.crc_errors,
+            form_errors: s.form_errors,
+            stuff_errors: s.stuff_errors,
+            receive_error_counter: s.receive_error_counter,
+            transmit_error_counter: s.transmit_error_counter,
+            core_running: s.core_running,
+        }
+    }
+}
+
+impl From<&Status> for ControllerStatus {
+    fn from(s: &Status) -> Self {
+        ControllerStatus {
+            bus_off: s.bus_off,
+            error_passive: s.error_passive,
+            node_active: s.node_active,
+            warning_limit: s.warning_limit,
+            overload: s.overload,
+            bus_idle: s.bus_idle,
+            transceiver_delay: s.transceiver_delay,
+            ack_errors: s.ack_errors,
+            bit_errors: s.bit_errors,
+            crc_errors: s.crc_errors,
+            form_errors: s.form_errors,
+            stuff_errors: s.stuff_errors,
+            receive_error_counter: s.receive_error_counter,
+            transmit_error_counter: s.transmit_error_counter,
+            core_running: s.core_running,
+        }
+    }
+}
+
+impl Config {
+    pub fn new(config: &InterfaceConfig, layout: &ImageLayout) -> Self {
+        Config {
+            format: match config.format {
+                FrameFormat::Base11 => Format::Base11,
+                FrameFormat::Extended29 => Format::Extended29,
+                FrameFormat::Fd => Format::Fd,
+            },
+            queue: match config.queue {
+                QueueMode::Standard => Queue::Standard,
+                QueueMode::Optimized => Queue::Optimized,
+                QueueMode::Fast => Queue::Fast,
+            },
+            transaction_number: config.transaction_number,
+            time_stamp: config.time_stamp,
+            tx_slots: config.tx_slots,
+            rx_slots: config.rx_slots,
+            filters: config
+                .filters
+                .iter()
+                .map(|row| {
+                    let action = match row.action {
+                        FilterAction::Accept => Action::Accept,
+                        FilterAction::Reject => Action::Reject,
+                    };
+                    match row.matches {
+                        FilterMatch::Range { from, to } => Filter::Range { action, from, to },
+                        FilterMatch::CodeMask { code, mask } => Filter::Mask { action, code, mask },
+                    }
+                })
+                .collect(),
+            sync1_shift_ns: match config.synchronization {
+                Synchronization::Sm2 => None,
+                Synchronization::DistributedClocks { sync1_shift } => Some(sync1_shift),
+            },
+            nominal_timing: config.nominal_timing.to_word(),
+            data_timing: config.data_timing.to_word(),
+            output_size: layout.output_size(),
+            input_size: layout.input_size(),
+        }
+    }
+
+    /// The model's configuration.
+    pub fn interface(&self) -> InterfaceConfig {
+        let format = match self.format {
+            Format::Base11 => FrameFormat::Base11,
+            Format::Extended29 => FrameFormat::Extended29,
+            Format::Fd => FrameFormat::Fd,
+        };
+        let mut interface = InterfaceConfig::new(format, self.tx_slots);
+        interface.queue = match self.queue {
+            Queue::Standard => QueueMode::Standard,
+            Queue::Optimized => QueueMode::Optimized,
+            Queue::Fast => QueueMode::Fast,
+        };
+        interface.rx_slots = self.rx_slots;
+        interface.transaction_number = self.transaction_number;
+        interface.time_stamp = self.time_stamp;
+        interface.synchronization = match self.sync1_shift_ns {
+            Some(sync1_shift) => Synchronization::DistributedClocks { sync1_shift },
+            None => Synchronization::Sm2,
+        };
+        interface.nominal_timing = BitTiming::from_word(self.nominal_timing);
+        interface.data_timing = BitTiming::from_word(self.data_timing);
+        interface.filters = self
+            .filters
+            .iter()
+            .map(|row| {
+                let (action, matches) = match *row {
+                    Filter::Range { action, from, to } => (action, FilterMatch::Range { from, to }),
+                    Filter::Mask { action, code, mask } => {
+                        (action, FilterMatch::CodeMask { code, mask })
+                    }
+                };
+                FilterRow {
+                    action: match action {
+                        Action::Accept => FilterAction::Accept,
+                        Action::Reject => FilterAction::Reject,
+                    },
+                    matches,
+                }
+            })
+            .collect();
+        interface
+    }
+}
+
+impl From<&Capabilities> for Caps {
+    fn from(c: &Capabilities) -> Self {
+        Caps {
+            base11: c.base11,
+            ext29: c.ext29,
+            fd: c.fd,
+            fast_queue: c.fast_queue,
+            optimized_queue: c.optimized_queue,
+            transaction_number: c.transaction_number,
+            transaction_number_only_ext29: c.transaction_number_only_ext29,
+            timestamp: c.time_stamp,
+            filters: c.filters,
+            info_data: c.info_data,
+            distributed_clocks: c.distributed_clocks,
+            max_slots: c.max_slots,
+            rx_queue_depth: c.rx_queue_depth,
+            tx_queue_depth: c.tx_queue_depth,
+        }
+    }
+}
+
+impl From<&Caps> for Capabilities {
+    fn from(c: &Caps) -> Self {
+        Capabilities {
+            base11: c.base11,
+            ext29: c.ext29,
+            fd: c.fd,
+            fast_queue: c.fast_queue,
+            optimized_queue: c.optimized_queue,
+            transaction_number: c.transaction_number,
+            transaction_number_only_ext29: c.transaction_number_only_ext29,
+            time_stamp: c.timestamp,
+            filters: c.filters,
+            info_data: c.info_data,
+            distributed_clocks: c.distributed_clocks,
+            max_slots: c.max_slots,
+            rx_queue_depth: c.rx_queue_depth,
+            tx_queue_depth: c.tx_queue_depth,
+        }
+    }
+}

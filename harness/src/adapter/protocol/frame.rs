@@ -1,0 +1,160 @@
+//! Frames and bytes on the protocol's lines.
+
+use canif_model::frame::{CanId, Frame, FrameKind};
+use serde::{Deserialize, Serialize};
+
+/// A frame the controller starts sending: a valid frame, or what the device
+/// produced that is none (the soft device reports such a frame rather than
+/// hiding it; the harness judges it).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Transmitted {
+    Frame(WireFrame),
+    Invalid(InvalidWireFrame),
+}
+
+/// `{"invalid": "why"}`: the device's controller started something that is no
+/// CAN frame (the harness judges it against LAY-GEN-008, FD-LEN-00x).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InvalidWireFrame {
+    pub invalid: String,
+}
+
+/// Bytes as a lower-case hex string.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(try_from = "String", into = "String")]
+pub struct Hex(pub Vec<u8>);
+
+impl TryFrom<String> for Hex {
+    type Error = String;
+    fn try_from(text: String) -> Result<Self, String> {
+        if !text.len().is_multiple_of(2) || !text.bytes().all(|b| b.is_ascii_hexdigit()) {
+            return Err(format!(
+                "not a hex string of whole bytes: {:?}",
+                shorten(&text)
+            ));
+        }
+        let digit = |b: u8| match b {
+            b'0'..=b'9' => b - b'0',
+            b'a'..=b'f' => b - b'a' + 10,
+            _ => b - b'A' + 10, // checked above: a hex digit
+        };
+        Ok(Hex(text
+            .as_bytes()
+            .chunks_exact(2)
+            .map(|pair| (digit(pair[0]) << 4) | digit(pair[1]))
+            .collect()))
+    }
+}
+
+impl From<Hex> for String {
+    fn from(hex: Hex) -> String {
+        const DIGITS: &[u8; 16] = b"0123456789abcdef";
+        let mut text = String::with_capacity(2 * hex.0.len());
+        for byte in &hex.0 {
+            text.push(char::from(DIGITS[usize::from(byte >> 4)]));
+            text.push(char::from(DIGITS[usize::from(byte & 0x0F)]));
+        }
+        text
+    }
+}
+
+fn shorten(text: &str) -> String {
+    text.chars().take(40).collect()
+}
+
+/// A CAN frame on the protocol.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WireFrame {
+    pub id: u32,
+    #[serde(default)]
+    pub extended: bool,
+    #[serde(default)]
+    pub rtr: bool,
+    #[serde(default)]
+    pub fd: bool,
+    #[serde(default)]
+    pub brs: bool,
+    #[serde(default)]
+    pub esi: bool,
+    #[serde(default)]
+    pub len: u8,
+    pub data: Hex,
+}
+
+impl From<&Frame> for WireFrame {
+    fn from(frame: &Frame) -> Self {
+        let (rtr, fd, brs, esi) = match frame.kind {
+            FrameKind::Classic { rtr } => (rtr, false, false, false),
+            FrameKind::Fd { brs, esi } => (false, true, brs, esi),
+        };
+        WireFrame {
+            id: frame.id.raw(),
+            extended: frame.id.is_extended(),
+            rtr,
+            fd,
+            brs,
+            esi,
+            len: frame.len(),
+            data: Hex(frame.data().to_vec()),
+        }
+    }
+}
+
+impl WireFrame {
+    /// Whether the message is consistent in itself: `len` and `data` agree,
+    /// a remote frame has no data, BRS/ESI only with FD, the identifier fits
+    /// its format. A message that is not is a broken protocol, not a frame.
+    pub fn check(&self) -> Result<(), String> {
+        let limit = if self.extended { 0x1FFF_FFFF } else { 0x7FF };
+        if self.id > limit {
+            return Err(format!(
+                "identifier 0x{:X} does not fit a {} identifier",
+                self.id,
+                if self.extended { "29-bit" } else { "11-bit" }
+            ));
+        }
+        let data = self.data.0.len();
+        if self.rtr && (data != 0 || self.fd) {
+            return Err(format!(
+                "a remote frame carries no data (and CAN FD has none): {data} data bytes{}",
+                if self.fd { ", FD" } else { "" }
+            ));
+        }
+        if !self.rtr && usize::from(self.len) != data {
+            return Err(format!(
+                "\"len\" is {} but \"data\" has {data} bytes",
+                self.len
+            ));
+        }
+        if !self.fd && (self.brs || self.esi) {
+            return Err("BRS and ESI exist only in CAN FD frames".into());
+        }
+        Ok(())
+    }
+}
+
+impl TryFrom<&WireFrame> for Frame {
+    type Error = String;
+    /// The CAN frame a consistent message describes; `Err` for one that no
+    /// controller can send (9 classic bytes, 36 FD bytes, a remote frame above 8).
+    fn try_from(wire: &WireFrame) -> Result<Frame, String> {
+        wire.check()?;
+        let id = if wire.extended {
+            CanId::extended(wire.id)
+        } else {
+            CanId::standard(wire.id)
+        }
+        .ok_or_else(|| format!("identifier 0x{:X} out of range", wire.id))?;
+        let frame = if wire.fd {
+            Frame::fd(id, wire.brs, wire.esi, &wire.data.0)
+        } else if wire.rtr {
+            Frame::remote(id, wire.len)
+        } else {
+            Frame::classic(id, &wire.data.0)
+        };
+        frame.map_err(|e| e.to_string())
+    }
+}

@@ -1,0 +1,200 @@
+//! The adapter protocol's messages (docs/adapter-protocol.md), written once as
+//! serde types: the harness's client and `canif device --stdio`'s server both
+//! speak through them, and `tests/adapter_protocol.rs` holds them to the JSON
+//! Schema in `docs/adapter-protocol.schema.json`.
+
+mod config;
+mod frame;
+mod step;
+
+pub use config::{Action, Caps, Config, Filter, Format, OwnedBus, Queue, Status};
+pub use frame::{Hex, InvalidWireFrame, Transmitted, WireFrame};
+pub use step::{BusEvent, PlannedFrame, StepLine, StepTag, SteppedLine, SteppedTag};
+
+use canif_model::Nanos;
+use serde::{Deserialize, Serialize};
+
+/// The highest protocol version this harness speaks; `configure` offers it
+/// and the IUT answers the version it will speak (1 or 2).
+pub const PROTOCOL_VERSION: u64 = 2;
+
+/// What the harness asks.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Request {
+    Configure {
+        protocol: u64,
+        config: Config,
+        capabilities: Caps,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        bus: Option<OwnedBus>,
+    },
+    Cycle {
+        now_ns: Nanos,
+        outputs: Hex,
+    },
+    Receive {
+        frame: WireFrame,
+        end_ns: Nanos,
+    },
+    PollTransmit {
+        now_ns: Nanos,
+    },
+    TransmitComplete,
+    ControllerStatus {
+        status: Status,
+    },
+    /// Version 2: one exchange per cycle. What happened on the bus since the
+    /// last step, in order, then the cycle itself.
+    Step {
+        now_ns: Nanos,
+        outputs: Hex,
+        events: Vec<BusEvent>,
+    },
+    Bye,
+}
+
+impl Request {
+    /// The request's `type`, for messages.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Request::Configure { .. } => "configure",
+            Request::Cycle { .. } => "cycle",
+            Request::Receive { .. } => "receive",
+            Request::PollTransmit { .. } => "poll_transmit",
+            Request::TransmitComplete => "transmit_complete",
+            Request::ControllerStatus { .. } => "controller_status",
+            Request::Step { .. } => "step",
+            Request::Bye => "bye",
+        }
+    }
+
+    /// Whether the request drives the controller side (the bus).
+    pub fn is_bus_request(&self) -> bool {
+        matches!(
+            self,
+            Request::Receive { .. }
+                | Request::PollTransmit { .. }
+                | Request::TransmitComplete
+                | Request::Step { .. }
+        )
+    }
+}
+
+/// What the IUT answers.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Answer {
+    Configured {
+        protocol: u64,
+        accepted: bool,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        reason: Option<String>,
+    },
+    Inputs {
+        inputs: Hex,
+    },
+    Ok,
+    Transmit {
+        frame: Option<Transmitted>,
+        #[serde(default)]
+        next_ns: Option<Nanos>,
+    },
+    /// Version 2: the new input image, and the frames the controller will
+    /// start, in order, with the earliest time each may start.
+    Stepped {
+        inputs: Hex,
+        plan: Vec<PlannedFrame>,
+    },
+    Error {
+        message: String,
+    },
+}
+
+impl Answer {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Answer::Configured { .. } => "configured",
+            Answer::Inputs { .. } => "inputs",
+            Answer::Ok => "ok",
+            Answer::Transmit { .. } => "transmit",
+            Answer::Stepped { .. } => "stepped",
+            Answer::Error { .. } => "error",
+        }
+    }
+
+    pub fn error(message: impl Into<String>) -> Self {
+        Answer::Error {
+            message: message.into(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use canif_model::frame::{CanId, Frame};
+
+    #[test]
+    fn requests_read_as_the_document_writes_them() {
+        let line = r#"{"type":"receive","frame":{"id":1701,"extended":false,"rtr":false,"fd":false,"brs":false,"esi":false,"len":2,"data":"0a0B"},"end_ns":10000}"#;
+        let Request::Receive { frame, end_ns } = serde_json::from_str(line).unwrap() else {
+            panic!("not a receive");
+        };
+        assert_eq!(end_ns, 10_000);
+        let frame = Frame::try_from(&frame).unwrap();
+        assert_eq!(
+            frame,
+            Frame::classic(CanId::Standard(1701), &[0x0A, 0x0B]).unwrap()
+        );
+        assert_eq!(
+            serde_json::to_string(&Request::PollTransmit { now_ns: 5 }).unwrap(),
+            r#"{"type":"poll_transmit","now_ns":5}"#
+        );
+    }
+
+    #[test]
+    fn a_frame_that_is_no_frame_is_refused_with_the_reason() {
+        let wire: WireFrame = serde_json::from_str(r#"{"id":2048,"len":0,"data":""}"#).unwrap();
+        assert_eq!(
+            Frame::try_from(&wire).unwrap_err(),
+            "identifier 0x800 does not fit a 11-bit identifier"
+        );
+        assert!(serde_json::from_str::<WireFrame>(r#"{"id":1,"data":"abc"}"#).is_err());
+        assert!(serde_json::from_str::<WireFrame>(r#"{"id":4294967297,"data":""}"#).is_err());
+        assert!(serde_json::from_str::<WireFrame>(r#"{"id":1,"data":"+0"}"#).is_err());
+        assert!(serde_json::from_str::<WireFrame>(r#"{"id":1,"data":"","color":1}"#).is_err());
+        let lie: WireFrame =
+            serde_json::from_str(r#"{"id":1,"len":15,"data":"0102030405060708"}"#).unwrap();
+        assert_eq!(
+            Frame::try_from(&lie).unwrap_err(),
+            "\"len\" is 15 but \"data\" has 8 bytes"
+        );
+        let config = r#"{"type":"configure","protocol":1,"config":{"format":"11-bit","queue":"standard","transaction_number":false,"time_stamp":false,"tx_slots":257,"rx_slots":4},"capabilities":{"max_slots":32,"rx_queue_depth":64,"tx_queue_depth":64}}"#;
+        let error = serde_json::from_str::<Request>(config)
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("257"), "{error}");
+    }
+
+    #[test]
+    fn answers_keep_the_field_order_of_the_document() {
+        let answer = Answer::Transmit {
+            frame: None,
+            next_ns: None,
+        };
+        assert_eq!(
+            serde_json::to_string(&answer).unwrap(),
+            r#"{"type":"transmit","frame":null,"next_ns":null}"#
+        );
+        let configured = Answer::Configured {
+            protocol: 1,
+            accepted: false,
+            reason: Some("no".into()),
+        };
+        assert_eq!(
+            serde_json::to_string(&configured).unwrap(),
+            r#"{"type":"configured","protocol":1,"accepted":false,"reason":"no"}"#
+        );
+    }
+}
