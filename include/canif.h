@@ -11,7 +11,9 @@
  *
  * To run the device under AddressSanitizer, build it with
  * -fsanitize=address and start canif with the sanitizer's runtime preloaded:
- *   LD_PRELOAD=$(cc -print-file-name=libasan.so) canif run --iut lib:./libdevice.so
+ *   LD_PRELOAD=$(cc -print-file-name=libasan.so) ASAN_OPTIONS=detect_leaks=0 \
+ *       canif run --iut lib:./libdevice.so
+ * (tests/c_abi.rs shows an overflow of the input image caught that way).
  */
 #ifndef CANIF_H
 #define CANIF_H

@@ -12,6 +12,10 @@ use canif_spec::Catalogue;
 
 /// Compiles `source` (plus `extra` C text) into a shared library named `name`.
 fn build(name: &str, source: &Path, extra: &str) -> PathBuf {
+    build_with(name, source, extra, &[])
+}
+
+fn build_with(name: &str, source: &Path, extra: &str, flags: &[&str]) -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi");
     std::fs::create_dir_all(&dir).unwrap();
     let combined = dir.join(format!("{name}.c"));
@@ -20,7 +24,9 @@ fn build(name: &str, source: &Path, extra: &str) -> PathBuf {
     std::fs::write(&combined, text).unwrap();
     let library = dir.join(format!("lib{name}.so"));
     let status = Command::new("cc")
-        .args(["-shared", "-fPIC", "-O2", "-Wall", "-Werror", "-I"])
+        .args(["-shared", "-fPIC", "-O2", "-Wall", "-Werror"])
+        .args(flags)
+        .arg("-I")
         .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/include"))
         .arg("-o")
         .arg(&library)
@@ -120,4 +126,63 @@ fn a_library_of_another_version_or_without_a_function_is_an_error() {
             Ok(_) => panic!("{words}: accepted"),
         }
     }
+}
+
+/// The header's promise: a device built with AddressSanitizer, driven by
+/// canif with the sanitizer preloaded, has a write past its input image
+/// reported with the line that did it.
+#[test]
+fn address_sanitizer_catches_a_device_writing_past_the_input_image() {
+    let asan = Command::new("cc")
+        .arg("-print-file-name=libasan.so")
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+        .unwrap_or_default();
+    if !Path::new(&asan).exists() {
+        // The machine's gcc ships it; in CI its absence is a failure, not a skip.
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "no libasan.so next to cc in CI ({asan:?})"
+        );
+        eprintln!("SKIPPED: no libasan.so next to cc ({asan:?}); Debian's libasan8 provides it");
+        return;
+    }
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi");
+    std::fs::create_dir_all(&dir).unwrap();
+    let faulty = dir.join("overflow.c");
+    std::fs::write(
+        &faulty,
+        std::fs::read_to_string(example()).unwrap().replace(
+            "    memcpy(inputs, d->inputs, d->input_size);",
+            "    memcpy(inputs, d->inputs, d->input_size + 16); /* one slot too many */",
+        ),
+    )
+    .unwrap();
+    let library = build_with(
+        "overflow",
+        &faulty,
+        "",
+        &["-fsanitize=address", "-g", "-Wno-error"],
+    );
+    let output = Command::new(env!("CARGO_BIN_EXE_canif"))
+        .args([
+            "run",
+            "--profile",
+            "fc510x-before-fw2.14",
+            "--scenario",
+            "tx-batches",
+            "--report",
+        ])
+        .arg(dir.join("overflow-report"))
+        .arg(format!("--iut=lib:{}", library.display()))
+        .env("LD_PRELOAD", &asan)
+        .env("ASAN_OPTIONS", "detect_leaks=0")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success());
+    assert!(
+        stderr.contains("AddressSanitizer") && stderr.contains("overflow"),
+        "{stderr}"
+    );
 }
