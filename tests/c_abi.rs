@@ -99,6 +99,7 @@ fn a_library_of_another_version_or_without_a_function_is_an_error() {
         "uint32_t canif_abi_version(void) { return 2; }",
     );
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi");
+    std::fs::create_dir_all(&dir).unwrap();
     let v2 = dir.join("v2.c");
     std::fs::write(&v2, source).unwrap();
     let v2 = build("v2", &v2, "");
