@@ -267,3 +267,110 @@ fn heartbeat() {
     assert_eq!(heartbeat::next_due(1_000, 100), Some(100_001_000));
     assert_eq!(heartbeat::next_due(1_000, 0), None);
 }
+
+/// An SDO request to the simulated coupler, answered or not.
+fn sdo(
+    coupler: &mut canif_model::canopen::coupler::Coupler,
+    request: SdoRequest,
+) -> Option<SdoResponse> {
+    let id = CanId::Standard(default_cob_id(Channel::SdoRequest, coupler.node()));
+    let frame = Frame::classic(id, &request.to_bytes()).unwrap();
+    coupler
+        .handle(&frame, 0)
+        .first()
+        .map(|answer| SdoResponse::parse(answer.data()).unwrap())
+}
+
+fn upload(index: u16) -> SdoRequest {
+    SdoRequest::Upload {
+        index,
+        sub_index: 0,
+    }
+}
+
+fn download(index: u16, value: u16) -> SdoRequest {
+    let [low, high] = value.to_le_bytes();
+    SdoRequest::Download {
+        index,
+        sub_index: 0,
+        data: [low, high, 0, 0],
+        size: None,
+    }
+}
+
+fn value(response: Option<SdoResponse>) -> u32 {
+    match response {
+        Some(SdoResponse::Upload { data, .. }) => u32::from_le_bytes(data),
+        other => panic!("no upload answer: {other:?}"),
+    }
+}
+
+/// Covers: NMT-008
+#[test]
+fn a_stopped_node_answers_no_sdo_but_still_guarding() {
+    let mut coupler = canif_model::canopen::coupler::Coupler::new(node(5), 2, 4);
+    assert!(
+        sdo(&mut coupler, upload(0x1017)).is_some(),
+        "pre-operational serves SDO"
+    );
+    coupler.handle(
+        &nmt::command_frame(NmtCommand::StopRemoteNode, Some(node(5))),
+        0,
+    );
+    assert_eq!(coupler.state(), NmtState::Stopped);
+    assert_eq!(sdo(&mut coupler, upload(0x1017)), None);
+    let guard = guarding::request(node(5));
+    assert_eq!(coupler.handle(&guard, 0).len(), 1, "error control goes on");
+    coupler.handle(&nmt::command_frame(NmtCommand::StartRemoteNode, None), 0);
+    assert!(sdo(&mut coupler, upload(0x1017)).is_some());
+}
+
+/// Covers: NMT-009, NMT-010
+#[test]
+fn resets_restore_the_power_on_values() {
+    let mut coupler = canif_model::canopen::coupler::Coupler::new(node(5), 2, 4);
+    for (index, written) in [(0x1017, 1000), (0x100C, 100), (0x6423, 1)] {
+        assert!(matches!(
+            sdo(&mut coupler, download(index, written)),
+            Some(SdoResponse::DownloadAck { .. })
+        ));
+    }
+    assert!(!coupler.poll(0).is_empty(), "heartbeats run");
+    let boot = coupler.handle(&nmt::command_frame(NmtCommand::ResetCommunication, None), 0);
+    assert_eq!(boot.len(), 1, "boot-up");
+    assert_eq!(
+        (
+            value(sdo(&mut coupler, upload(0x1017))),
+            value(sdo(&mut coupler, upload(0x100C)))
+        ),
+        (0, 0)
+    );
+    assert_eq!(
+        value(sdo(&mut coupler, upload(0x6423))),
+        1,
+        "reset communication keeps application objects"
+    );
+    assert!(
+        coupler.poll(2_000_000_000).is_empty(),
+        "no heartbeat after the reset"
+    );
+    coupler.handle(&nmt::command_frame(NmtCommand::ResetNode, Some(node(5))), 0);
+    assert_eq!(
+        value(sdo(&mut coupler, upload(0x6423))),
+        0,
+        "reset node restores them too"
+    );
+}
+
+/// Covers: HB-005
+#[test]
+fn heartbeats_keep_their_nominal_schedule() {
+    let mut coupler = canif_model::canopen::coupler::Coupler::new(node(5), 2, 4);
+    sdo(&mut coupler, download(0x1017, 100));
+    // Polled every 7 ms: each beat is late by up to 7 ms, but the schedule
+    // does not slip: 30 beats in 3 s, not 28.
+    let beats = (0..=3_000 / 7)
+        .filter(|k| !coupler.poll(k * 7_000_000).is_empty())
+        .count();
+    assert_eq!(beats, 30);
+}

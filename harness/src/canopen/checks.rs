@@ -285,5 +285,94 @@ pub fn check_node(target: &mut dyn CanNode, node: NodeId, tolerance: Nanos) -> V
             other => Err(format!("states {other:?}")),
         },
     );
+
+    // CiA 301: stopped serves NMT and error control only.
+    let answers = target.handle(&sdo_request(node, upload(0x1017)), now);
+    let response_id = CanId::Standard(default_cob_id(Channel::SdoResponse, node));
+    record(
+        "a stopped node answers no SDO (CiA 301)",
+        &["NMT-008"],
+        match answers.iter().find(|f| f.id == response_id) {
+            None => Ok(()),
+            Some(answer) => Err(format!("answered {answer}")),
+        },
+    );
+
+    // Resets restore the power-on values: communication objects for reset
+    // communication, every object for reset node; each ends with a boot-up.
+    target.handle(&command_frame(NmtCommand::StartRemoteNode, None), now);
+    let reset = |target: &mut dyn CanNode, command: NmtCommand, now: &mut Nanos| {
+        let mut writes = Vec::new();
+        for (index, value) in [
+            (GUARD_TIME_INDEX, 100u16),
+            (HEARTBEAT_INDEX, 1000),
+            (ANALOG_EVENTS_INDEX, 1),
+        ] {
+            writes.push(sdo(target, node, download_of(index, value), *now).map(|_| ()));
+        }
+        writes.into_iter().collect::<Result<(), String>>()?;
+        *now += 10_000_000;
+        let mut seen = target.handle(&command_frame(command, Some(node)), *now);
+        *now += 50_000_000;
+        seen.extend(target.poll(*now));
+        let boot = CanId::Standard(default_cob_id(Channel::ErrorControl, node));
+        if !seen.iter().any(|f| f.id == boot && f.data() == [0x00]) {
+            return Err(format!(
+                "no boot-up (0x{:03X}: 00) among {seen:?}",
+                boot.raw()
+            ));
+        }
+        let mut values = Vec::new();
+        for index in [GUARD_TIME_INDEX, HEARTBEAT_INDEX, ANALOG_EVENTS_INDEX] {
+            match sdo(target, node, upload(index), *now)? {
+                SdoResponse::Upload { data, .. } => values.push(u32::from_le_bytes(data)),
+                other => return Err(format!("0x{index:04X}: {other:?}")),
+            }
+        }
+        Ok(values)
+    };
+    record(
+        "reset communication (0x82) restores 0x100C and 0x1017, keeps 0x6423 (CiA 301)",
+        &["NMT-009"],
+        reset(target, NmtCommand::ResetCommunication, &mut now).and_then(
+            |values| match values[..] {
+                [0, 0, 1] => Ok(()),
+                _ => Err(format!(
+                    "0x100C, 0x1017, 0x6423 read {values:?}, expected [0, 0, 1]"
+                )),
+            },
+        ),
+    );
+    record(
+        "reset node (0x81) restores every object, 0x6423 too (CiA 301)",
+        &["NMT-010"],
+        reset(target, NmtCommand::ResetNode, &mut now).and_then(|values| match values[..] {
+            [0, 0, 0] => Ok(()),
+            _ => Err(format!(
+                "0x100C, 0x1017, 0x6423 read {values:?}, expected [0, 0, 0]"
+            )),
+        }),
+    );
     results
+}
+
+const GUARD_TIME_INDEX: u16 = 0x100C;
+const HEARTBEAT_INDEX: u16 = 0x1017;
+const ANALOG_EVENTS_INDEX: u16 = 0x6423;
+
+fn upload(index: u16) -> SdoRequest {
+    SdoRequest::Upload {
+        index,
+        sub_index: 0,
+    }
+}
+
+fn download_of(index: u16, value: u16) -> SdoRequest {
+    let [low, high] = value.to_le_bytes();
+    SdoRequest::Download {
+        index,
+        sub_index: 0,
+        data: [low, high, 0, 0],
+        size: None,
+    }
 }

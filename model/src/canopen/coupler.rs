@@ -59,13 +59,16 @@ impl CouplerFault {
 
 /// The coupler.
 ///
-/// Requirements: NMT-001..NMT-007, COB-001, PDO-001..PDO-003, GRD-001..GRD-005,
-/// HB-001..HB-003, SDO-001..SDO-009.
+/// Requirements: NMT-001..NMT-010, COB-001, PDO-001..PDO-003, GRD-001..GRD-005,
+/// HB-001..HB-003, HB-005, SDO-001..SDO-009.
 #[derive(Debug, Clone)]
 pub struct Coupler {
     node: NodeId,
     state: NmtState,
     objects: BTreeMap<(u16, u8), Entry>,
+    /// The object dictionary at power-on: nothing is stored, so a reset
+    /// restores these (CiA 301: reset communication 0x1000-0x1FFF, reset node all).
+    power_on: BTreeMap<(u16, u8), Entry>,
     digital_inputs: Vec<u8>,
     analog_inputs: Vec<i16>,
     guard: GuardResponder,
@@ -98,6 +101,7 @@ impl Coupler {
         Coupler {
             node,
             state: NmtState::PreOperational,
+            power_on: objects.clone(),
             objects,
             digital_inputs: vec![0; digital.clamp(1, 8)],
             analog_inputs: vec![0; analog.clamp(1, 4)],
@@ -152,13 +156,18 @@ impl Coupler {
         if let Some((command, target)) = parse_command(frame) {
             if super::nmt::addresses(target, self.node) {
                 self.state = self.state.apply(command);
-                if matches!(
-                    command,
-                    super::nmt::NmtCommand::ResetNode | super::nmt::NmtCommand::ResetCommunication
-                ) {
+                let restore = match command {
+                    super::nmt::NmtCommand::ResetNode => Some(0x0000..=0xFFFF),
+                    super::nmt::NmtCommand::ResetCommunication => Some(0x1000..=0x1FFF),
+                    _ => None,
+                };
+                if let Some(range) = restore {
+                    self.restore(range);
                     self.guard.reset();
-                    return vec![self.pdo(Channel::ErrorControl, &[NmtState::Initialising.code()])];
+                    self.last_guard_request = None;
+                    self.last_heartbeat = None;
                     // boot-up
+                    return vec![self.pdo(Channel::ErrorControl, &[NmtState::Initialising.code()])];
                 }
             }
             return Vec::new();
@@ -189,10 +198,22 @@ impl Coupler {
             Channel::DigitalOutputs | Channel::AnalogOutputs1To4 if self.state.pdo_allowed() => {
                 Vec::new()
             }
-            Channel::SdoRequest if !frame.is_remote() => {
+            // CiA 301: a stopped node serves NMT and error control only.
+            Channel::SdoRequest if !frame.is_remote() && self.state != NmtState::Stopped => {
                 self.sdo(frame.data()).into_iter().collect()
             }
             _ => Vec::new(),
+        }
+    }
+
+    /// Objects whose index is in `range` return to their power-on values.
+    ///
+    /// Requirements: NMT-009, NMT-010.
+    fn restore(&mut self, range: std::ops::RangeInclusive<u16>) {
+        for (key, entry) in &self.power_on {
+            if range.contains(&key.0) {
+                self.objects.insert(*key, entry.clone());
+            }
         }
     }
 
@@ -317,7 +338,7 @@ impl Coupler {
 
     /// Time passes: heartbeats when due; life guarding watches the master.
     ///
-    /// Requirements: HB-001, HB-003, GRD-005.
+    /// Requirements: HB-001, HB-003, HB-005, GRD-005.
     pub fn poll(&mut self, now: Nanos) -> Vec<Frame> {
         let mut out = Vec::new();
         if let (Some(limit), Some(last)) = (
@@ -336,11 +357,14 @@ impl Coupler {
         let period = self.u16_object(PRODUCER_HEARTBEAT_TIME);
         if period > 0 {
             let due = match self.last_heartbeat {
-                None => true,
-                Some(last) => super::heartbeat::next_due(last, period).is_some_and(|at| now >= at),
+                None => Some(now),
+                Some(last) => super::heartbeat::next_due(last, period).filter(|at| now >= *at),
             };
-            if due {
-                self.last_heartbeat = Some(now);
+            if let Some(due) = due {
+                // The schedule runs from the nominal time, so lateness does not add
+                // up; a node more than a period behind starts afresh.
+                let behind = now.saturating_sub(due) >= u64::from(period) * 1_000_000;
+                self.last_heartbeat = Some(if behind { now } else { due });
                 out.push(super::heartbeat::heartbeat(self.node, self.state));
             }
         }
