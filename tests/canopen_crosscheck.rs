@@ -83,3 +83,31 @@ fn pythons_canopen_notices_a_coupler_that_does_not_abort() {
         "{output}"
     );
 }
+
+/// A socketcand server keeps serving: one client leaves, the next is greeted.
+#[test]
+fn the_socketcand_coupler_serves_one_client_after_another() {
+    use std::io::Read;
+    let mut coupler = Command::new(env!("CARGO_BIN_EXE_canif"))
+        .args(["coupler", "--socketcand", "0", "--node", "5"])
+        .stdout(Stdio::piped())
+        .spawn()
+        .expect("canif coupler starts");
+    let mut port = String::new();
+    BufReader::new(coupler.stdout.take().unwrap())
+        .read_line(&mut port)
+        .unwrap();
+    for client in 0..3 {
+        let mut stream =
+            std::net::TcpStream::connect(("127.0.0.1", port.trim().parse::<u16>().unwrap()))
+                .unwrap_or_else(|e| panic!("client {client}: {e}"));
+        stream
+            .set_read_timeout(Some(std::time::Duration::from_secs(5)))
+            .unwrap();
+        let mut greeting = [0u8; 6];
+        stream.read_exact(&mut greeting).unwrap();
+        assert_eq!(&greeting, b"< hi >", "client {client}");
+    }
+    let _ = coupler.kill();
+    let _ = coupler.wait();
+}

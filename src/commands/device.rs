@@ -78,9 +78,14 @@ pub fn coupler(
                 listener.local_addr().map(|a| a.port()).unwrap_or(port)
             );
             let _ = std::io::stdout().flush();
-            match canif_harness::canopen::socketcand::serve(&listener, &mut coupler) {
-                Ok(()) => ExitCode::SUCCESS,
-                Err(_) => ExitCode::from(2),
+            // A socketcand server keeps serving: tools connect and disconnect.
+            loop {
+                if let Err(error) =
+                    canif_harness::canopen::socketcand::serve(&listener, &mut coupler)
+                {
+                    eprintln!("canif coupler --socketcand: {error}");
+                    return ExitCode::from(2);
+                }
             }
         }
         (None, Some(bus)) => coupler_on_bus(bus, &mut coupler),
