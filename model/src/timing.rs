@@ -77,7 +77,11 @@ pub fn fd_bits(extended: bool, data_len: u8, brs: bool) -> FrameBits {
     let (crc, fixed_stuff) = if data_len <= 16 { (17, 6) } else { (21, 7) };
     let data_tail = 4 + crc + fixed_stuff;
 
-    let stuff_arbitration = (arbitration_stuffed - 1) / 4;
+    // Worst case: a stuff bit after bit 5 of the stuffed region, then after
+    // every 4th bit. One that follows the BRS bit itself is sent after the
+    // switch, at the data rate (ISO 11898-1: the bit rate switches at BRS's
+    // sample point), so the arbitration phase keeps those strictly before it.
+    let stuff_arbitration = (arbitration_stuffed - 2) / 4;
     let stuff_total = (arbitration_stuffed + data_stuffed - 1) / 4;
     let arbitration = BitCount {
         nominal: arbitration_stuffed + arbitration_tail,

@@ -63,14 +63,15 @@ fn fd_bit_counts_and_the_two_bit_rates() {
         full.arbitration,
         BitCount {
             nominal: 30,
-            worst_case: 34
-        }
+            worst_case: 33
+        },
+        "the 4th worst-case stuff bit follows BRS and is sent at the data rate"
     );
     assert_eq!(
         full.data,
         BitCount {
             nominal: 549,
-            worst_case: 678
+            worst_case: 679
         }
     );
     assert_eq!(
@@ -169,4 +170,65 @@ fn sizing_falls_back_to_the_nominal_frame_time_outside_the_table() {
     // The nominal basis never gives fewer slots than the worst case.
     let worst = sizing::size(800_000, 1_000_000, 8, FrameTimeBasis::WorstCase).unwrap();
     assert!(outside.slots >= worst.slots);
+}
+
+/// An independent count: ISO 11898-1 bit stuffing run on the densest bit
+/// pattern of the dynamically stuffed region (SOF … BRS, then ESI, DLC and
+/// data), each stuff bit charged to the phase it is sent in: one inserted
+/// after the BRS bit goes out after the switch, at the data rate. For every FD
+/// size and both identifier lengths the model's worst-case split must agree.
+///
+/// Covers: TIM-003
+#[test]
+fn fd_worst_case_stuffing_agrees_with_a_bit_level_count() {
+    /// Stuff bits inserted after each raw bit, for the pattern that makes the
+    /// most: five equal bits, then runs of four that each merge with the stuff
+    /// bit before them (Davis et al.'s worst case).
+    fn stuffed_after(raw_bits: u32) -> Vec<u32> {
+        let mut after = Vec::new();
+        // Equal bits on the wire so far; each raw bit repeats the level, and a
+        // stuff bit (the other level) starts a run the next raw bits continue.
+        let mut run = 0;
+        for position in 1..=raw_bits {
+            run += 1;
+            if run == 5 {
+                after.push(position);
+                run = 1;
+            }
+        }
+        after
+    }
+    for extended in [false, true] {
+        let arbitration_bits: u32 = if extended { 36 } else { 17 };
+        for &len in canif_model::dlc::FD_DATA_SIZES.iter() {
+            let data_bits = 1 + 4 + 8 * u32::from(len); // ESI, DLC, data
+            let stuffs = stuffed_after(arbitration_bits + data_bits);
+            let in_arbitration = stuffs.iter().filter(|p| **p < arbitration_bits).count() as u32;
+            let in_data = stuffs.len() as u32 - in_arbitration;
+            let model = fd_bits(extended, len, true);
+            assert_eq!(
+                model.arbitration.worst_case - model.arbitration.nominal,
+                in_arbitration,
+                "{} id, {len} bytes: arbitration-phase stuff bits",
+                if extended { "29-bit" } else { "11-bit" }
+            );
+            assert_eq!(
+                model.data.worst_case - model.data.nominal,
+                in_data,
+                "{} id, {len} bytes: data-phase stuff bits",
+                if extended { "29-bit" } else { "11-bit" }
+            );
+        }
+    }
+    // The figures: 11-bit, 0 bytes, (arbitration nominal/worst, data nominal/worst).
+    let empty = fd_bits(false, 0, true);
+    assert_eq!(
+        (
+            empty.arbitration.nominal,
+            empty.arbitration.worst_case,
+            empty.data.nominal,
+            empty.data.worst_case
+        ),
+        (30, 33, 32, 34)
+    );
 }
