@@ -47,6 +47,16 @@ Feature: Frame timing and buffer size
       | 500  | 8     | 5000  | 20    |
       | 1000 | 0     | 1000  | 20    |
 
+  @TIM-008 @ERR-R4
+  Scenario Outline: The buffer size that cannot overflow (R4, amended)
+    Then at <rate> kbit/s with <bytes>-byte frames the advisor recommends <slots> slots for a <cycle> µs cycle
+
+    Examples:
+      | rate | bytes | cycle | slots |
+      | 500  | 8     | 1000  | 5     |
+      | 500  | 8     | 5000  | 23    |
+      | 1000 | 0     | 1000  | 22    |
+
   @TIM-003 @FD-BIT-004
   Scenario Outline: A CAN FD frame's two phases at their own bit rates
     Then a CAN FD frame of <bytes> bytes at <rates> kbit/s takes <switched> µs with BRS and <plain> µs without, not counting stuff bits

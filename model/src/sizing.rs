@@ -1,8 +1,12 @@
 //! How many message slots a cycle time needs.
 //!
-//! Source: 000/001 §4 "Buffer-Größe in Abhängigkeit der Zykluszeit", ruling R4:
-//! slots = ceil(cycle time / frame time). Acceptance cases: 500 kbit/s, 8 bytes,
-//! ≈ 260 µs → 1 ms needs 4, 5 ms needs 20; 1 Mbit/s, 0 bytes, ≈ 50 µs → 1 ms needs 20.
+//! Source: 000/001 §4 "Buffer-Größe in Abhängigkeit der Zykluszeit", ruling R4
+//! (amended): the manual's figure is ceil(cycle time / CiA frame time), and its
+//! examples are its acceptance cases (500 kbit/s, 8 bytes, ≈ 260 µs → 1 ms
+//! needs 4, 5 ms needs 20; 1 Mbit/s, 0 bytes, ≈ 50 µs → 1 ms needs 20). Frames
+//! can be shorter than the CiA times (no stuff bits), and then more of them end
+//! inside one cycle; the safe figure divides by the shortest frame time, and the
+//! advisor recommends it.
 
 use crate::cia_table;
 use crate::timing::{bits_duration, classic_bits};
@@ -63,11 +67,43 @@ pub fn size(bitrate: u32, cycle: Nanos, payload: u8, basis: FrameTimeBasis) -> O
     })
 }
 
-/// The recommendation: the manual's CiA basis where the table has the cell,
-/// otherwise the nominal frame time (assumption TIM-008).
+/// What the advisor says for one bus, cycle and payload.
 ///
 /// Requirements: TIM-007, TIM-008.
-pub fn recommend(bitrate: u32, cycle: Nanos, payload: u8) -> Option<Sizing> {
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Advice {
+    /// The manual's figure: the CiA table's frame time (where the table has the cell).
+    pub manual: Option<Sizing>,
+    /// The figure that cannot overflow: the shortest (nominal) frame time, so
+    /// the most frames that can end within one cycle.
+    pub safe: Sizing,
+}
+
+impl Advice {
+    /// The recommendation: always the safe figure.
+    pub fn recommended(&self) -> Sizing {
+        self.safe
+    }
+
+    /// Whether the manual's figure is too small: more frames can end in a cycle.
+    pub fn manual_can_overflow(&self) -> bool {
+        self.manual.is_some_and(|m| m.slots < self.safe.slots)
+    }
+}
+
+/// The manual's figure: ceil(cycle / CiA frame time); `None` outside the table.
+///
+/// Requirements: TIM-007.
+pub fn manual_figure(bitrate: u32, cycle: Nanos, payload: u8) -> Option<Sizing> {
     size(bitrate, cycle, payload, FrameTimeBasis::CiaTable)
-        .or_else(|| size(bitrate, cycle, payload, FrameTimeBasis::Nominal))
+}
+
+/// Both figures; `None` when no frame time exists (payload above 8, bit rate 0).
+///
+/// Requirements: TIM-007, TIM-008.
+pub fn advise(bitrate: u32, cycle: Nanos, payload: u8) -> Option<Advice> {
+    Some(Advice {
+        manual: manual_figure(bitrate, cycle, payload),
+        safe: size(bitrate, cycle, payload, FrameTimeBasis::Nominal)?,
+    })
 }

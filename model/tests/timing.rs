@@ -147,7 +147,7 @@ fn only_the_50_kbit_7_byte_cell_breaks_its_row() {
 #[test]
 fn the_manuals_sizing_examples() {
     let slots = |bitrate: u32, cycle_us: u64, payload: u8| {
-        sizing::recommend(bitrate, cycle_us * 1_000, payload)
+        sizing::manual_figure(bitrate, cycle_us * 1_000, payload)
             .unwrap()
             .slots
     };
@@ -158,18 +158,37 @@ fn the_manuals_sizing_examples() {
     assert_eq!(sizing::slots_needed(1_001, 1_000), 2);
 }
 
-/// Covers: TIM-008
+/// R4 amended: the shortest 11-bit frame of 8 bytes at 500 kbit/s is 222 µs,
+/// so 5 frames can end in a 1 ms cycle and the manual's 4 slots can overflow.
+/// The advisor gives both figures and recommends the safe one.
+///
+/// Covers: TIM-008, ERR-R4
 #[test]
-fn sizing_falls_back_to_the_nominal_frame_time_outside_the_table() {
-    let in_table = sizing::recommend(500_000, 1_000_000, 8).unwrap();
-    assert_eq!(in_table.basis, FrameTimeBasis::CiaTable);
-    let outside = sizing::recommend(800_000, 1_000_000, 8).unwrap();
-    assert_eq!(outside.basis, FrameTimeBasis::Nominal);
-    assert_eq!(outside.frame_time, 138_750);
-    assert_eq!(outside.slots, 8);
-    // The nominal basis never gives fewer slots than the worst case.
+fn the_advisor_recommends_the_figure_that_cannot_overflow() {
+    let advice = sizing::advise(500_000, 1_000_000, 8).unwrap();
+    assert_eq!(advice.manual.unwrap().slots, 4);
+    assert_eq!(advice.safe.frame_time, 222_000);
+    assert_eq!(advice.safe.slots, 5);
+    assert_eq!(advice.recommended(), advice.safe);
+    assert!(advice.manual_can_overflow());
+    // Where the manual's figure is already safe, both agree.
+    let roomy = sizing::advise(1_000_000, 1_000_000, 0).unwrap();
+    assert_eq!((roomy.manual.unwrap().slots, roomy.safe.slots), (20, 22));
+    // Outside the CiA table there is only the safe figure.
+    let outside = sizing::advise(800_000, 1_000_000, 8).unwrap();
+    assert_eq!(outside.manual, None);
+    assert_eq!(
+        (
+            outside.safe.basis,
+            outside.safe.frame_time,
+            outside.safe.slots
+        ),
+        (FrameTimeBasis::Nominal, 138_750, 8)
+    );
+    // The safe figure never gives fewer slots than the worst case would.
     let worst = sizing::size(800_000, 1_000_000, 8, FrameTimeBasis::WorstCase).unwrap();
-    assert!(outside.slots >= worst.slots);
+    assert!(outside.safe.slots >= worst.slots);
+    assert_eq!(sizing::advise(500_000, 1_000_000, 9), None);
 }
 
 /// An independent count: ISO 11898-1 bit stuffing run on the densest bit

@@ -6,9 +6,11 @@ use canif_model::frame::{CanId, Frame};
 use canif_model::sizing::{self, FrameTimeBasis};
 use canif_model::timing::{frame_bits, frame_duration, BitRates, Stuffing};
 
+/// `canif size`: the manual's figure and the safe figure, the safe one
+/// recommended, and why (ruling R4, amended).
 pub fn size(bitrate: u32, cycle_us: u64, payload: u8, out: &mut String) -> ExitCode {
     let cycle = cycle_us * 1_000;
-    let Some(recommended) = sizing::recommend(bitrate, cycle, payload) else {
+    let Some(advice) = sizing::advise(bitrate, cycle, payload) else {
         eprintln!("cannot size: payload must be 0..=8 and the bit rate above 0");
         return ExitCode::from(2);
     };
@@ -16,27 +18,46 @@ pub fn size(bitrate: u32, cycle_us: u64, payload: u8, out: &mut String) -> ExitC
         out,
         "{bitrate} bit/s, {cycle_us} µs cycle, {payload}-byte 11-bit frames at 100 % bus load:"
     );
-    for basis in [
-        FrameTimeBasis::CiaTable,
-        FrameTimeBasis::Nominal,
-        FrameTimeBasis::WorstCase,
-    ] {
-        if let Some(s) = sizing::size(bitrate, cycle, payload, basis) {
-            let mark = if s.basis == recommended.basis {
-                "  <- recommended"
-            } else {
-                ""
-            };
-            outln!(
-                out,
-                "  {:<10} frame time {:>8.1} µs -> {:>4} slots{mark}",
-                format!("{basis:?}"),
-                s.frame_time as f64 / 1000.0,
-                s.slots
-            );
-        }
+    let line = |out: &mut String, label: &str, s: &sizing::Sizing, note: &str| {
+        outln!(
+            out,
+            "  {label:<35} frame time {:>8.1} µs -> {:>4} slots{note}",
+            s.frame_time as f64 / 1000.0,
+            s.slots
+        );
+    };
+    match &advice.manual {
+        Some(manual) => line(out, "the manual's figure (CiA table)", manual, ""),
+        None => outln!(
+            out,
+            "  the manual's figure (CiA table)     none: the table has no cell for this bit rate"
+        ),
     }
-    if recommended.slots > 32 {
+    line(
+        out,
+        "safe (shortest frame, no stuffing)",
+        &advice.safe,
+        "  <- recommended",
+    );
+    if let Some(worst) = sizing::size(bitrate, cycle, payload, FrameTimeBasis::WorstCase) {
+        line(out, "longest frame (all stuff bits)", &worst, "");
+    }
+    let safe = advice.recommended();
+    if advice.manual_can_overflow() {
+        outln!(
+            out,
+            "  why: frames without stuff bits are shorter than the CiA times, so {} can end in one cycle; {} slots can overflow (ruling R4)",
+            safe.slots,
+            advice.manual.map_or(0, |m| m.slots)
+        );
+    } else {
+        outln!(
+            out,
+            "  why: at most {} frames can end in one cycle, even without stuff bits (ruling R4)",
+            safe.slots
+        );
+    }
+    if safe.slots > 32 {
         outln!(
             out,
             "  more than 32 slots cannot be configured: shorten the cycle time (000 §4)"

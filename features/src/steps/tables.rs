@@ -64,11 +64,31 @@ fn sizing_example(
     cycle_us: u64,
     slots: u64,
 ) -> StepResult {
-    let sizing = sizing::recommend(kbit * 1000, cycle_us * 1000, payload).ok_or("no sizing")?;
+    let sizing = sizing::manual_figure(kbit * 1000, cycle_us * 1000, payload).ok_or("no sizing")?;
     check(sizing.slots == slots, || {
         format!(
             "{} slots ({:?}, frame time {} ns)",
             sizing.slots, sizing.basis, sizing.frame_time
+        )
+    })
+}
+
+#[then(
+    regex = r"^at (\d+) kbit/s with (\d+)-byte frames the advisor recommends (\d+) slots for a (\d+) µs cycle$"
+)]
+fn safe_sizing(
+    _world: &mut CanWorld,
+    kbit: u32,
+    payload: u8,
+    slots: u64,
+    cycle_us: u64,
+) -> StepResult {
+    let advice = sizing::advise(kbit * 1000, cycle_us * 1000, payload).ok_or("no sizing")?;
+    let recommended = advice.recommended();
+    check(recommended.slots == slots, || {
+        format!(
+            "{} slots ({:?}, frame time {} ns)",
+            recommended.slots, recommended.basis, recommended.frame_time
         )
     })
 }
