@@ -38,6 +38,36 @@ Feature: The CANopen quick start through the CAN interface
     And 3 cycles pass
     Then the PLC has received 0x285 with data 34 12 FE FF 00 00 00 00
 
+  @PDO-004 @PDO-005
+  Scenario: A delta (0x6426) thins out analog events
+    When the PLC sends the NMT command start to all nodes
+    And 2 cycles pass
+    And the PLC writes 0x6423:0 = 1 to the coupler by SDO
+    And 3 cycles pass
+    And the PLC writes 0x6426:1 = 100 to the coupler by SDO
+    And 3 cycles pass
+    And analog input 0 of the coupler becomes 50
+    And 3 cycles pass
+    Then the PLC has received 0x585, 0x585
+    When analog input 0 of the coupler becomes 150
+    And 3 cycles pass
+    Then the PLC has received 0x585, 0x585, 0x285
+
+  @PDO-004 @PDO-005
+  Scenario: Limits (0x6424, 0x6425) pass only values outside them
+    When the PLC sends the NMT command start to all nodes
+    And 2 cycles pass
+    And the PLC writes 0x6423:0 = 1 to the coupler by SDO
+    And the PLC writes 0x6424:1 = 1000 to the coupler by SDO
+    And 3 cycles pass
+    And analog input 0 of the coupler becomes 500
+    And 3 cycles pass
+    Then the PLC has received 0x585, 0x585
+    When analog input 0 of the coupler becomes 1500
+    And 3 cycles pass
+    Then the PLC has received 0x585, 0x585, 0x285
+    And the PLC has received 0x285 with data DC 05 00 00 00 00 00 00
+
   @SDO-001 @SDO-005 @SDO-009 @SDO-007 @ERR-R8
   Scenario: SDO upload and abort through the interface
     When the PLC reads 0x1001:0 from the coupler by SDO

@@ -374,3 +374,81 @@ fn heartbeats_keep_their_nominal_schedule() {
         .count();
     assert_eq!(beats, 30);
 }
+
+/// Covers: PDO-004, PDO-005
+#[test]
+fn analog_events_are_thinned_out_by_delta_limits_and_inhibit_time() {
+    use canif_model::canopen::coupler::Coupler;
+    let started = || {
+        let mut coupler = Coupler::new(node(5), 2, 4);
+        coupler.handle(&nmt::command_frame(NmtCommand::StartRemoteNode, None), 0);
+        sdo(&mut coupler, download(0x6423, 1));
+        coupler
+    };
+    let write = |coupler: &mut Coupler, index: u16, sub: u8, value: u16| {
+        let [low, high] = value.to_le_bytes();
+        let request = SdoRequest::Download {
+            index,
+            sub_index: sub,
+            data: [low, high, 0, 0],
+            size: None,
+        };
+        assert!(
+            matches!(sdo(coupler, request), Some(SdoResponse::DownloadAck { .. })),
+            "0x{index:04X}:{sub}"
+        );
+    };
+    // No thinning: every change is an event.
+    let mut plain = started();
+    assert_eq!(plain.set_analog_input(0, 1).len(), 1);
+    // Delta 100 on channel 0: changes below it are not events.
+    let mut delta = started();
+    write(&mut delta, 0x6426, 1, 100);
+    assert!(delta.set_analog_input(0, 50).is_empty());
+    assert!(delta.set_analog_input(0, 99).is_empty());
+    assert_eq!(
+        delta.set_analog_input(0, 100).len(),
+        1,
+        "moved 100 from the last sent 0"
+    );
+    assert!(
+        delta.set_analog_input(0, 150).is_empty(),
+        "50 from the last sent 100"
+    );
+    assert_eq!(
+        delta.set_analog_input(1, 1).len(),
+        1,
+        "channel 1 has no delta"
+    );
+    // Limits: only values outside [lower, upper] are events.
+    let mut limits = started();
+    write(&mut limits, 0x6424, 1, 1000);
+    write(&mut limits, 0x6425, 1, 200);
+    assert!(limits.set_analog_input(0, 500).is_empty());
+    assert_eq!(limits.set_analog_input(0, 1500).len(), 1);
+    assert_eq!(limits.set_analog_input(0, 100).len(), 1);
+    // Inhibit time 10 ms (100 x 100 us): a second event waits, then the latest values go.
+    let mut inhibit = started();
+    write(&mut inhibit, 0x1801, 3, 100);
+    inhibit.poll(1_000_000);
+    assert_eq!(inhibit.set_analog_input(0, 1).len(), 1);
+    assert!(inhibit.set_analog_input(0, 2).is_empty());
+    assert!(inhibit.set_analog_input(0, 3).is_empty());
+    assert!(inhibit.poll(5_000_000).is_empty(), "still inhibited");
+    let late = inhibit.poll(11_000_000);
+    assert_eq!(late.len(), 1);
+    assert_eq!(&late[0].data()[..2], &[3, 0], "the latest value");
+    // The objects 002 names exist (no abort 0x06020000).
+    for (index, sub) in [(0x6424, 1), (0x6425, 1), (0x6426, 1), (0x1801, 3)] {
+        assert!(matches!(
+            sdo(
+                &mut inhibit,
+                SdoRequest::Upload {
+                    index,
+                    sub_index: sub
+                }
+            ),
+            Some(SdoResponse::Upload { .. })
+        ));
+    }
+}

@@ -271,6 +271,25 @@ pub fn check_node(target: &mut dyn CanNode, node: NodeId, tolerance: Nanos) -> V
         record(name, &["SDO-007", "ERR-R8"], outcome);
     }
 
+    let missing: Vec<String> = [(0x6424u16, 1u8), (0x6425, 1), (0x6426, 1), (0x1801, 3)]
+        .into_iter()
+        .filter_map(|(index, sub_index)| {
+            match sdo(target, node, SdoRequest::Upload { index, sub_index }, now) {
+                Ok(SdoResponse::Upload { .. }) => None,
+                other => Some(format!("0x{index:04X}:{sub_index} {other:?}")),
+            }
+        })
+        .collect();
+    record(
+        "the analog event objects 002 names answer: 0x6424, 0x6425, 0x6426, 0x1801",
+        &["PDO-004"],
+        if missing.is_empty() {
+            Ok(())
+        } else {
+            Err(missing.join("; "))
+        },
+    );
+
     target.handle(&command_frame(NmtCommand::EnterPreOperational, None), now);
     let pre_operational = guard_state(target, node, &mut guard, now);
     target.handle(&command_frame(NmtCommand::StopRemoteNode, Some(node)), now);

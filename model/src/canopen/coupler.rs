@@ -12,7 +12,10 @@ use super::cob_id::{classify, default_cob_id, Channel};
 use super::guarding::{life_time, GuardResponder, GUARD_TIME, LIFE_TIME_FACTOR};
 use super::heartbeat::PRODUCER_HEARTBEAT_TIME;
 use super::nmt::{parse_command, NmtState};
-use super::pdo::ANALOG_INPUT_INTERRUPT_ENABLE;
+use super::pdo::{
+    ANALOG_INPUT_DELTA, ANALOG_INPUT_INTERRUPT_ENABLE, ANALOG_INPUT_LOWER_LIMIT,
+    ANALOG_INPUT_UPPER_LIMIT, TPDO2_PARAMETER,
+};
 use super::sdo::{abort_code, SdoRequest, SdoResponse};
 use super::NodeId;
 use crate::frame::{CanId, Frame};
@@ -76,6 +79,13 @@ pub struct Coupler {
     life_guarding_lost: bool,
     last_heartbeat: Option<Nanos>,
     faults: Vec<CouplerFault>,
+    /// The latest time the coupler has seen (a frame or a poll).
+    clock: Nanos,
+    /// The analog values last sent, and when.
+    analog_sent: Vec<i16>,
+    analog_sent_at: Option<Nanos>,
+    /// An analog event waits for the inhibit time to pass.
+    analog_pending: bool,
 }
 
 impl Coupler {
@@ -98,6 +108,29 @@ impl Coupler {
         put(LIFE_TIME_FACTOR, 0, &[0], true);
         put(PRODUCER_HEARTBEAT_TIME, 0, &0u16.to_le_bytes(), true);
         put(ANALOG_INPUT_INTERRUPT_ENABLE, 0, &[0], true);
+        let channels = analog.clamp(1, 4);
+        for index in [
+            ANALOG_INPUT_UPPER_LIMIT,
+            ANALOG_INPUT_LOWER_LIMIT,
+            ANALOG_INPUT_DELTA,
+        ] {
+            put(index, 0, &[channels as u8], false);
+            for sub in 1..=channels as u8 {
+                put(index, sub, &0u32.to_le_bytes(), true);
+            }
+        }
+        // TPDO2 (the analog inputs): COB ID, transmission type, inhibit time
+        // (100 µs units), event timer (ms).
+        put(TPDO2_PARAMETER, 0, &[5], false);
+        put(
+            TPDO2_PARAMETER,
+            1,
+            &(0x280 + u32::from(node.get())).to_le_bytes(),
+            false,
+        );
+        put(TPDO2_PARAMETER, 2, &[255], false);
+        put(TPDO2_PARAMETER, 3, &0u16.to_le_bytes(), true);
+        put(TPDO2_PARAMETER, 5, &0u16.to_le_bytes(), true);
         Coupler {
             node,
             state: NmtState::PreOperational,
@@ -110,6 +143,10 @@ impl Coupler {
             life_guarding_lost: false,
             last_heartbeat: None,
             faults: Vec::new(),
+            clock: 0,
+            analog_sent: vec![0; analog.clamp(1, 4)],
+            analog_sent_at: None,
+            analog_pending: false,
         }
     }
 
@@ -153,6 +190,7 @@ impl Coupler {
 
     /// A frame from the bus arrives at `now`; the frames the coupler answers with.
     pub fn handle(&mut self, frame: &Frame, now: Nanos) -> Vec<Frame> {
+        self.clock = self.clock.max(now);
         if let Some((command, target)) = parse_command(frame) {
             if super::nmt::addresses(target, self.node) {
                 self.state = self.state.apply(command);
@@ -163,6 +201,8 @@ impl Coupler {
                 };
                 if let Some(range) = restore {
                     self.restore(range);
+                    self.analog_pending = false;
+                    self.analog_sent_at = None;
                     self.guard.reset();
                     self.last_guard_request = None;
                     self.last_heartbeat = None;
@@ -316,21 +356,66 @@ impl Coupler {
         }
     }
 
-    /// Sets an analog input; only with 0x6423 > 0 a change goes out by itself.
+    fn object_u32(&self, index: u16, sub: u8) -> u32 {
+        self.objects.get(&(index, sub)).map_or(0, |e| {
+            let mut bytes = [0u8; 4];
+            bytes[..e.value.len().min(4)].copy_from_slice(&e.value[..e.value.len().min(4)]);
+            u32::from_le_bytes(bytes)
+        })
+    }
+
+    fn analog_events_enabled(&self) -> bool {
+        self.object_u32(ANALOG_INPUT_INTERRUPT_ENABLE, 0) > 0 && self.state.pdo_allowed()
+    }
+
+    /// Whether the new value of `channel` is an event: it moved at least the
+    /// delta (0x6426) from the value last sent, and, where limits are set
+    /// (0x6424, 0x6425), it lies outside them.
     ///
-    /// Requirements: PDO-003.
+    /// Requirements: PDO-004, PDO-005.
+    fn analog_event(&self, channel: usize, value: i16) -> bool {
+        let sub = channel as u8 + 1;
+        let delta = self.object_u32(ANALOG_INPUT_DELTA, sub);
+        let moved = (i32::from(value) - i32::from(self.analog_sent[channel])).unsigned_abs();
+        let upper = self.object_u32(ANALOG_INPUT_UPPER_LIMIT, sub) as i32;
+        let lower = self.object_u32(ANALOG_INPUT_LOWER_LIMIT, sub) as i32;
+        let outside =
+            (upper, lower) == (0, 0) || i32::from(value) > upper || i32::from(value) < lower;
+        moved >= delta.max(1) && outside
+    }
+
+    /// The inhibit time of the analog PDO (0x1801:3, in 100 µs).
+    fn inhibit(&self) -> Nanos {
+        Nanos::from(self.object_u32(TPDO2_PARAMETER, 3)) * 100_000
+    }
+
+    /// Sends the analog PDO now, or marks it pending until the inhibit time ends.
+    fn send_analog(&mut self, now: Nanos) -> Vec<Frame> {
+        let inhibited = self
+            .analog_sent_at
+            .is_some_and(|at| now < at + self.inhibit());
+        if inhibited {
+            self.analog_pending = true;
+            return Vec::new();
+        }
+        self.analog_pending = false;
+        self.analog_sent = self.analog_inputs.clone();
+        self.analog_sent_at = Some(now);
+        vec![self.analog_frame()]
+    }
+
+    /// Sets an analog input; only with 0x6423 > 0 a change goes out by itself,
+    /// thinned out by delta, limits and inhibit time.
+    ///
+    /// Requirements: PDO-003, PDO-004, PDO-005.
     pub fn set_analog_input(&mut self, channel: usize, value: i16) -> Vec<Frame> {
         let Some(slot) = self.analog_inputs.get_mut(channel) else {
             return Vec::new();
         };
         let changed = *slot != value;
         *slot = value;
-        let events = self
-            .objects
-            .get(&(ANALOG_INPUT_INTERRUPT_ENABLE, 0))
-            .is_some_and(|e| e.value[0] > 0);
-        if changed && events && self.state.pdo_allowed() {
-            vec![self.analog_frame()]
+        if changed && self.analog_events_enabled() && self.analog_event(channel, value) {
+            self.send_analog(self.clock)
         } else {
             Vec::new()
         }
@@ -340,7 +425,17 @@ impl Coupler {
     ///
     /// Requirements: HB-001, HB-003, HB-005, GRD-005.
     pub fn poll(&mut self, now: Nanos) -> Vec<Frame> {
+        self.clock = self.clock.max(now);
         let mut out = Vec::new();
+        // An event held back by the inhibit time goes out with the latest values;
+        // the event timer (0x1801:5, ms) sends them periodically.
+        if self.analog_events_enabled() {
+            let timer = Nanos::from(self.object_u32(TPDO2_PARAMETER, 5)) * 1_000_000;
+            let timer_due = timer > 0 && self.analog_sent_at.is_none_or(|at| now >= at + timer);
+            if self.analog_pending || timer_due {
+                out.extend(self.send_analog(now));
+            }
+        }
         if let (Some(limit), Some(last)) = (
             life_time(
                 self.u16_object(GUARD_TIME),
