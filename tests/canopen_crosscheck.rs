@@ -59,14 +59,15 @@ fn crosscheck(fault: Option<&str>) -> Option<(bool, String)> {
     ))
 }
 
-/// Covers: SDO-001, SDO-002, SDO-003, SDO-005, SDO-007, SDO-008, HB-001, HB-002, NMT-003, NMT-004
+/// Covers: SDO-001, SDO-002, SDO-003, SDO-005, SDO-007, SDO-008, HB-001, HB-002, NMT-003, NMT-004, NMT-008, NMT-009
 #[test]
 fn pythons_canopen_agrees_with_the_simulated_coupler() {
     let Some((ok, output)) = crosscheck(None) else {
         return;
     };
     assert!(ok, "the canopen package disagrees:\n{output}");
-    assert_eq!(output.matches("\"ok\": true").count(), 8, "{output}");
+    // 8 checks of 002/004, and a stopped node and reset communication (CiA 301).
+    assert_eq!(output.matches("\"ok\": true").count(), 10, "{output}");
 }
 
 #[test]

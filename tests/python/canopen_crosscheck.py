@@ -3,7 +3,7 @@
 simulated coupler over python-can's socketcand interface (a TCP port), or over
 a SocketCAN interface (python-can's `socketcan` interface, in the kernel lane).
 Prints one JSON object with every check; exits 1 if any disagrees with the
-quick start (002) or the SDO page (004).
+quick start (002), the SDO page (004) or CiA 301 (stopped nodes, resets).
 
 Usage: canopen_crosscheck.py PORT NODE
        canopen_crosscheck.py socketcan:IFACE NODE
@@ -93,6 +93,28 @@ def read_back_heartbeat_time():
     return value
 
 
+def stopped_node_answers_no_sdo():
+    node.nmt.state = "STOPPED"  # NMT 0x02
+    node.nmt.wait_for_heartbeat(timeout=2)
+    state = node.nmt.wait_for_heartbeat(timeout=2)
+    assert state == "STOPPED", state
+    try:
+        node.sdo.upload(0x1017, 0)
+    except canopen.SdoCommunicationError as error:
+        return f"no answer ({error})"  # CiA 301: stopped serves NMT and error control only
+    finally:
+        node.nmt.state = "PRE-OPERATIONAL"
+    raise AssertionError("a stopped node answered an SDO upload")
+
+
+def reset_communication_restores_defaults():
+    node.nmt.state = "RESET COMMUNICATION"  # NMT 0x82
+    node.nmt.wait_for_bootup(timeout=2)
+    value = int.from_bytes(node.sdo.upload(0x1017, 0), "little")
+    assert value == 0, f"0x1017 reads {value} after reset communication, not the power-on 0"
+    return value
+
+
 for name, fn in [
     ("SDO upload 0x1000 (4 bytes)", upload_device_type),
     ("SDO upload 0x1001 (Unsigned8)", upload_u8),
@@ -102,6 +124,8 @@ for name, fn in [
     ("NMT start, heartbeat says operational", start_and_heartbeat_state),
     ("NMT enter pre-operational", enter_pre_operational),
     ("SDO upload 0x1017 reads back 100", read_back_heartbeat_time),
+    ("NMT stop: SDO gets no answer (CiA 301)", stopped_node_answers_no_sdo),
+    ("NMT reset communication: 0x1017 back to 0 (CiA 301)", reset_communication_restores_defaults),
 ]:
     check(name, fn)
 
