@@ -76,7 +76,6 @@ pub struct CanWorld {
     pub iut: Option<Box<dyn Iut>>,
     pub refused: Option<String>,
     pub plc: Option<PlcSide>,
-    pub layout: Option<ImageLayout>,
     /// The input image the IUT returned last.
     pub inputs: Vec<u8>,
     pub now: Nanos,
@@ -137,7 +136,6 @@ impl CanWorld {
             iut: None,
             refused: None,
             plc: None,
-            layout: None,
             inputs: Vec::new(),
             now: 0,
             cycle: 0,
@@ -173,7 +171,6 @@ impl CanWorld {
                 let layout = ImageLayout::new(&self.config, self.target.caps.info_data);
                 self.inputs = vec![0; layout.input_size()];
                 self.plc = Some(PlcSide::new(layout, self.exchange_mode));
-                self.layout = Some(layout);
                 self.iut = Some(iut);
                 Ok(())
             }
@@ -189,7 +186,7 @@ impl CanWorld {
     }
 
     pub fn layout(&self) -> ImageLayout {
-        self.layout.expect("started")
+        self.plc.as_ref().expect("started").layout()
     }
 
     pub fn input_image(&self) -> InputImage<&[u8]> {

@@ -124,7 +124,6 @@ mod tests {
     use canif_model::frame::CanId;
     use canif_model::image::MessageRepr;
 
-    /// Covers: HS-TX-001, HS-RX-002
     #[test]
     fn the_reference_client_and_the_device_side_carry_frames_both_ways() {
         let config = InterfaceConfig::new(FrameFormat::Base11, 4);

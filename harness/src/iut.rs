@@ -288,7 +288,7 @@ pub fn soft_settings(caps: &Capabilities, config: &InterfaceConfig) -> Settings 
         },
         rx_fifo_depth: caps.rx_queue_depth,
         tx_fifo_depth: caps.tx_queue_depth,
-        nominal_timing: config.nominal_timing.to_word().to_le_bytes(),
-        data_timing: config.data_timing.to_word().to_le_bytes(),
+        nominal_timing: config.nominal_timing.to_word(),
+        data_timing: config.data_timing.to_word(),
     }
 }

@@ -42,6 +42,11 @@ pub fn run_scenario(
     let result = Lockstep {
         scenario,
         plc: PlcSide::new(pair.layout, scenario.exchange),
+        // On a real-time bus the cycle is real time, and the scenario's offsets scale with it.
+        cycle_time: bus.cycle_time().unwrap_or(scenario.cycle_time),
+        time_stamp_tolerance: scenario
+            .time_stamp_tolerance
+            .max(bus.time_stamp_tolerance()),
         pair: &mut pair,
         bus: bus.as_mut(),
     }
@@ -89,6 +94,8 @@ fn start(
 struct Lockstep<'a> {
     scenario: &'a Scenario,
     plc: PlcSide,
+    cycle_time: Nanos,
+    time_stamp_tolerance: Nanos,
     pair: &'a mut Pair,
     bus: &'a mut dyn Bus,
 }
@@ -97,31 +104,19 @@ impl Lockstep<'_> {
     /// Every step, one cycle each: the number of cycles run, or how it ended
     /// early and in which cycle.
     fn run(mut self, steps: impl Iterator<Item = Step>) -> Result<u64, (Outcome, u64)> {
-        let scenario = self.scenario;
-        // On a real-time bus the cycle is real time, and the scenario's offsets scale with it.
-        let cycle_time = self.bus.cycle_time().unwrap_or(scenario.cycle_time);
-        let time_stamp_tolerance = scenario
-            .time_stamp_tolerance
-            .max(self.bus.time_stamp_tolerance());
         for (k, step) in steps.enumerate() {
             let k = k as u64;
             if crate::interrupt::requested() {
                 return Err((Outcome::Error(RunError::Interrupted), k));
             }
-            self.cycle(k, k * cycle_time, step, time_stamp_tolerance)
-                .map_err(|outcome| (outcome, k))?;
+            self.cycle(k, step).map_err(|outcome| (outcome, k))?;
         }
         Ok(self.pair.cycle + 1)
     }
 
-    fn cycle(
-        &mut self,
-        k: u64,
-        start: Nanos,
-        mut step: Step,
-        time_stamp_tolerance: Nanos,
-    ) -> Result<(), Outcome> {
+    fn cycle(&mut self, k: u64, mut step: Step) -> Result<(), Outcome> {
         let scenario = self.scenario;
+        let start = k * self.cycle_time;
         let layout = self.pair.layout;
         self.bus.run_until(self.pair, start)?;
         let t = if self.bus.real_time() {
@@ -199,7 +194,7 @@ impl Lockstep<'_> {
         let check = InputCheck {
             layout: &layout,
             was_on_bus: &|f| history.received_lately(f),
-            time_stamp_tolerance,
+            time_stamp_tolerance: self.time_stamp_tolerance,
             rx,
         };
         if let Some(difference) = check.compare(&expected, &actual) {
@@ -208,11 +203,9 @@ impl Lockstep<'_> {
         self.plc.device_cycle_done(&actual);
         // The checker judges the images; what the PLC read is not kept (bounded memory).
         drop(self.plc.take_received());
-        let cycle_time = self.bus.cycle_time().unwrap_or(scenario.cycle_time);
         for (offset, frame) in step.bus {
-            let offset = offset * cycle_time / scenario.cycle_time.max(1);
-            self.bus
-                .schedule(k * cycle_time + offset, self.bus.adapt(frame));
+            let offset = offset * self.cycle_time / scenario.cycle_time.max(1);
+            self.bus.schedule(start + offset, self.bus.adapt(frame));
         }
         Ok(())
     }

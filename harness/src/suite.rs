@@ -404,8 +404,17 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
     }
 }
 
-fn first_line(text: &str) -> &str {
-    text.lines().next().unwrap_or("")
+/// Where and how the IUT broke in `run`, if it did: what the profile's later
+/// scenarios are skipped after (fail-fast).
+fn broke_in(run: &ScenarioRun) -> Option<String> {
+    match &run.outcome {
+        Outcome::Error(RunError::Iut(error)) => Some(format!(
+            "the IUT broke in `{}`: {}",
+            run.scenario,
+            error.0.lines().next().unwrap_or("")
+        )),
+        _ => None,
+    }
 }
 
 /// Runs every scenario of a profile against an IUT and judges each requirement.
@@ -419,14 +428,7 @@ pub fn run_profile(
     let caps = profile.model_capabilities();
     let mut runs = vec![check_refusals(kind, &caps)];
     progress(&runs[0]);
-    let mut broken = match &runs[0].outcome {
-        Outcome::Error(RunError::Iut(error)) if options.fail_fast => Some(format!(
-            "the IUT broke in `{}`: {}",
-            runs[0].scenario,
-            first_line(&error.0)
-        )),
-        _ => None,
-    };
+    let mut broken = broke_in(&runs[0]).filter(|_| options.fail_fast);
     for mut scenario in scenarios(&caps, options) {
         if options
             .only
@@ -463,14 +465,8 @@ pub fn run_profile(
             None if crate::interrupt::requested() => break,
             None => run_scenario(kind, &caps, &scenario, scenario.steps()),
         };
-        if let Outcome::Error(RunError::Iut(error)) = &run.outcome {
-            if options.fail_fast && broken.is_none() {
-                broken = Some(format!(
-                    "the IUT broke in `{}`: {}",
-                    run.scenario,
-                    first_line(&error.0)
-                ));
-            }
+        if options.fail_fast && broken.is_none() {
+            broken = broke_in(&run);
         }
         progress(&run);
         runs.push(run);

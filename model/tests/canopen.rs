@@ -288,21 +288,12 @@ fn upload(index: u16) -> SdoRequest {
     }
 }
 
-fn download(index: u16, value: u16) -> SdoRequest {
-    let [low, high] = value.to_le_bytes();
-    SdoRequest::Download {
-        index,
-        sub_index: 0,
-        data: [low, high, 0, 0],
-        size: None,
-    }
+fn download(index: u16, value: u32) -> SdoRequest {
+    SdoRequest::download(index, 0, value)
 }
 
 fn value(response: Option<SdoResponse>) -> u32 {
-    match response {
-        Some(SdoResponse::Upload { data, .. }) => u32::from_le_bytes(data),
-        other => panic!("no upload answer: {other:?}"),
-    }
+    response.and_then(|r| r.value()).expect("an upload answer")
 }
 
 /// Covers: NMT-008
@@ -385,14 +376,8 @@ fn analog_events_are_thinned_out_by_delta_limits_and_inhibit_time() {
         sdo(&mut coupler, download(0x6423, 1));
         coupler
     };
-    let write = |coupler: &mut Coupler, index: u16, sub: u8, value: u16| {
-        let [low, high] = value.to_le_bytes();
-        let request = SdoRequest::Download {
-            index,
-            sub_index: sub,
-            data: [low, high, 0, 0],
-            size: None,
-        };
+    let write = |coupler: &mut Coupler, index: u16, sub: u8, value: u32| {
+        let request = SdoRequest::download(index, sub, value);
         assert!(
             matches!(sdo(coupler, request), Some(SdoResponse::DownloadAck { .. })),
             "0x{index:04X}:{sub}"

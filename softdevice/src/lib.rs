@@ -279,9 +279,8 @@ impl SoftDevice {
             put16(&mut self.input, header::TRANSACTION_NUMBER, tn);
         }
         if self.settings.offer.info_data {
-            self.controller[info::NOMINAL_TIMING] =
-                u32::from_le_bytes(self.settings.nominal_timing);
-            self.controller[info::DATA_TIMING] = u32::from_le_bytes(self.settings.data_timing);
+            self.controller[info::NOMINAL_TIMING] = self.settings.nominal_timing;
+            self.controller[info::DATA_TIMING] = self.settings.data_timing;
             self.controller[info::TX_ERROR_FRAMES] = 0;
             self.controller[info::TX_FIFO_LEVEL] =
                 (self.send_fifo.len() + usize::from(self.on_wire.is_some())) as u32;

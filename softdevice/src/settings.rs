@@ -80,8 +80,9 @@ pub struct Settings {
     pub dc_sync1_shift: Option<u64>,
     pub rx_fifo_depth: usize,
     pub tx_fifo_depth: usize,
-    pub nominal_timing: [u8; 4],
-    pub data_timing: [u8; 4],
+    /// The bit timing words reported in InfoData[1] and [2].
+    pub nominal_timing: u32,
+    pub data_timing: u32,
 }
 
 /// A setting the device does not accept.

@@ -19,11 +19,6 @@ impl ReqId {
     pub fn join(ids: &[ReqId], sep: &str) -> String {
         ids.iter().map(|id| id.0).collect::<Vec<_>>().join(sep)
     }
-
-    /// Every id of `list`.
-    pub fn all(list: &[&'static str]) -> Vec<ReqId> {
-        list.iter().map(|id| ReqId(id)).collect()
-    }
 }
 
 impl std::fmt::Display for ReqId {

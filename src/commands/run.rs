@@ -314,8 +314,8 @@ fn describe_bus(bus: &BusChoice) -> String {
 }
 
 /// The bus the command line chose, with its real-time options.
+#[cfg_attr(not(feature = "socketcan"), allow(unused_variables))]
 pub fn bus_choice(bus: &BusArg, real_time: &RealTimeOptions) -> BusChoice {
-    let _ = real_time;
     match bus {
         BusArg::Sim => BusChoice::Sim,
         #[cfg(feature = "socketcan")]

@@ -137,12 +137,7 @@ fn sdo_download(
     cob: String,
     data: String,
 ) -> StepResult {
-    let request = SdoRequest::Download {
-        index: num(&index) as u16,
-        sub_index: sub,
-        data: num(&value).to_le_bytes(),
-        size: None,
-    };
+    let request = SdoRequest::download(num(&index) as u16, sub, num(&value));
     let id = default_cob_id(Channel::SdoRequest, NodeId::new(node).ok_or("node")?);
     check(
         u32::from(id) == num(&cob) && request.to_bytes().to_vec() == bytes(&data),
@@ -339,12 +334,7 @@ fn sdo_upload(
     bits: u32,
     data: String,
 ) -> StepResult {
-    let response = SdoResponse::Upload {
-        index: num(&index) as u16,
-        sub_index: sub,
-        data: value.to_le_bytes(),
-        size: (bits / 8) as u8,
-    };
+    let response = SdoResponse::upload(num(&index) as u16, sub, value, (bits / 8) as u8);
     check(response.to_bytes().to_vec() == bytes(&data), || {
         hex(&response.to_bytes())
     })
@@ -410,12 +400,7 @@ fn plc_nmt(world: &mut CanWorld, command: String, target: String) -> StepResult 
 #[when(regex = r"^the PLC writes (0x[0-9A-Fa-f]+):(\d+) = (\d+) to the coupler by SDO$")]
 fn plc_sdo_download(world: &mut CanWorld, index: String, sub: u8, value: u32) -> StepResult {
     let node = coupler_node(world)?;
-    let request = SdoRequest::Download {
-        index: num(&index) as u16,
-        sub_index: sub,
-        data: value.to_le_bytes(),
-        size: None,
-    };
+    let request = SdoRequest::download(num(&index) as u16, sub, value);
     world.plc_sends(
         Frame::classic(
             CanId::Standard(default_cob_id(Channel::SdoRequest, node)),

@@ -51,6 +51,8 @@ enum Line {
 struct LineReader {
     source: ChildStdout,
     buffer: Vec<u8>,
+    /// What one read fills, allocated once (not zeroed again per read).
+    chunk: Box<[u8]>,
     /// Bytes of `buffer` already handed out.
     used: usize,
 }
@@ -60,6 +62,7 @@ impl LineReader {
         LineReader {
             source,
             buffer: Vec::with_capacity(1 << 16),
+            chunk: vec![0; 1 << 16].into_boxed_slice(),
             used: 0,
         }
     }
@@ -108,19 +111,11 @@ impl LineReader {
                 searched -= self.used;
                 self.used = 0;
             }
-            let old = self.buffer.len();
-            self.buffer.resize(old + 65_536, 0);
-            match self.source.read(&mut self.buffer[old..]) {
-                Ok(0) => {
-                    self.buffer.truncate(old);
-                    return Line::Closed;
-                }
-                Ok(n) => self.buffer.truncate(old + n),
-                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => self.buffer.truncate(old),
-                Err(e) => {
-                    self.buffer.truncate(old);
-                    return Line::Broken(format!("its stdout failed: {e}"));
-                }
+            match self.source.read(&mut self.chunk) {
+                Ok(0) => return Line::Closed,
+                Ok(n) => self.buffer.extend_from_slice(&self.chunk[..n]),
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Line::Broken(format!("its stdout failed: {e}")),
             }
         }
     }
@@ -288,13 +283,14 @@ impl ExecIut {
             None => Err(std::io::Error::other("stdin closed")),
         };
         if let Err(error) = written {
-            let status = self.child.try_wait().ok().flatten();
-            return Err(self.fail(match status {
+            let what = match self.exit_status() {
                 Some(status) => {
                     format!("exited ({status}) before the `{}` request", request.name())
                 }
-                None => format!("cannot write to its stdin: {error}"),
-            }));
+                None => format!("cannot write to its stdin ({error}; killed)"),
+            };
+            self.kill();
+            return Err(self.fail(what));
         }
         let line = match self.lines.next(self.timeout) {
             Line::Text(line) => line,

@@ -8,8 +8,8 @@ use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_model::Nanos;
 
 use super::protocol::{
-    Answer, BusEvent, Hex, InvalidWireFrame, PlannedFrame, Request, StepLine, SteppedLine,
-    SteppedTag, Transmitted, WireFrame, PROTOCOL_VERSION,
+    Answer, BusEvent, Hex, InvalidWireFrame, PlannedFrame, Request, StepLine, Transmitted,
+    WireFrame, PROTOCOL_VERSION,
 };
 use crate::error::IutError;
 use crate::iut::{BuildError, Iut, Planned};
@@ -192,15 +192,6 @@ fn step(
     })
 }
 
-/// Writes `stepped` as its plain struct (the same JSON, without a copy of the plan).
-fn stepped_line(inputs: Hex, plan: Vec<PlannedFrame>) -> SteppedLine {
-    SteppedLine {
-        kind: SteppedTag::Stepped,
-        inputs,
-        plan,
-    }
-}
-
 fn planned((frame, not_before_ns): Planned) -> PlannedFrame {
     let (frame, invalid) = match frame {
         Ok(frame) => (Some(WireFrame::from(&frame)), None),
@@ -222,13 +213,8 @@ fn ok_or_error(result: Result<(), crate::error::IutError>) -> Answer {
 
 /// Writes one answer as a line.
 pub fn write_answer(output: &mut impl Write, answer: &Answer) -> std::io::Result<()> {
-    let mut line = match answer {
-        Answer::Stepped { inputs, plan } => {
-            serde_json::to_vec(&stepped_line(inputs.clone(), plan.clone()))
-        }
-        other => serde_json::to_vec(other),
-    }
-    .expect("answers serialize");
+    // Writing an internally tagged enum buffers nothing (only reading does).
+    let mut line = serde_json::to_vec(answer).expect("answers serialize");
     line.push(b'\n');
     output.write_all(&line)?;
     output.flush()

@@ -2,9 +2,10 @@
 //! any [`CanNode`].
 
 use canif_model::canopen::cob_id::{default_cob_id, Channel};
-use canif_model::canopen::guarding::{self, GuardChecker};
-use canif_model::canopen::heartbeat;
+use canif_model::canopen::guarding::{self, GuardChecker, GUARD_TIME};
+use canif_model::canopen::heartbeat::{self, PRODUCER_HEARTBEAT_TIME};
 use canif_model::canopen::nmt::{command_frame, NmtCommand, NmtState};
+use canif_model::canopen::pdo::ANALOG_INPUT_INTERRUPT_ENABLE as ANALOG_EVENTS;
 use canif_model::canopen::sdo::{abort_code, SdoRequest, SdoResponse};
 use canif_model::canopen::NodeId;
 use canif_model::frame::{CanId, Frame};
@@ -321,15 +322,13 @@ pub fn check_node(target: &mut dyn CanNode, node: NodeId, tolerance: Nanos) -> V
     // communication, every object for reset node; each ends with a boot-up.
     target.handle(&command_frame(NmtCommand::StartRemoteNode, None), now);
     let reset = |target: &mut dyn CanNode, command: NmtCommand, now: &mut Nanos| {
-        let mut writes = Vec::new();
         for (index, value) in [
-            (GUARD_TIME_INDEX, 100u16),
-            (HEARTBEAT_INDEX, 1000),
-            (ANALOG_EVENTS_INDEX, 1),
+            (GUARD_TIME, 100),
+            (PRODUCER_HEARTBEAT_TIME, 1000),
+            (ANALOG_EVENTS, 1),
         ] {
-            writes.push(sdo(target, node, download_of(index, value), *now).map(|_| ()));
+            sdo(target, node, SdoRequest::download(index, 0, value), *now)?;
         }
-        writes.into_iter().collect::<Result<(), String>>()?;
         *now += 10_000_000;
         let mut seen = target.handle(&command_frame(command, Some(node)), *now);
         *now += 50_000_000;
@@ -341,14 +340,15 @@ pub fn check_node(target: &mut dyn CanNode, node: NodeId, tolerance: Nanos) -> V
                 boot.raw()
             ));
         }
-        let mut values = Vec::new();
-        for index in [GUARD_TIME_INDEX, HEARTBEAT_INDEX, ANALOG_EVENTS_INDEX] {
-            match sdo(target, node, upload(index), *now)? {
-                SdoResponse::Upload { data, .. } => values.push(u32::from_le_bytes(data)),
-                other => return Err(format!("0x{index:04X}: {other:?}")),
-            }
-        }
-        Ok(values)
+        [GUARD_TIME, PRODUCER_HEARTBEAT_TIME, ANALOG_EVENTS]
+            .into_iter()
+            .map(|index| {
+                let answer = sdo(target, node, upload(index), *now)?;
+                answer
+                    .value()
+                    .ok_or_else(|| format!("0x{index:04X}: {answer:?}"))
+            })
+            .collect::<Result<Vec<u32>, String>>()
     };
     record(
         "reset communication (0x82) restores 0x100C and 0x1017, keeps 0x6423 (CiA 301)",
@@ -375,23 +375,9 @@ pub fn check_node(target: &mut dyn CanNode, node: NodeId, tolerance: Nanos) -> V
     results
 }
 
-const GUARD_TIME_INDEX: u16 = 0x100C;
-const HEARTBEAT_INDEX: u16 = 0x1017;
-const ANALOG_EVENTS_INDEX: u16 = 0x6423;
-
 fn upload(index: u16) -> SdoRequest {
     SdoRequest::Upload {
         index,
         sub_index: 0,
-    }
-}
-
-fn download_of(index: u16, value: u16) -> SdoRequest {
-    let [low, high] = value.to_le_bytes();
-    SdoRequest::Download {
-        index,
-        sub_index: 0,
-        data: [low, high, 0, 0],
-        size: None,
     }
 }

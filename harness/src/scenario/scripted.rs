@@ -61,14 +61,16 @@ pub fn tx_batches(config: &InterfaceConfig, seed: u64) -> Scenario {
 /// More to send than the bus carries: the send queue fills and acknowledges wait.
 pub fn tx_backpressure(config: &InterfaceConfig) -> Scenario {
     let slots = usize::from(config.tx_slots);
+    let mut rng = Rng::new(0x7B);
     let mut steps = Vec::new();
     let mut seq = 0u16;
     for _ in 0..30 {
         let mut step = Step::default();
         for _ in 0..slots {
             seq = seq.wrapping_add(1);
-            step.send
-                .push(message(std(seq & 0x7FF, &seq.to_le_bytes().repeat(4)), seq));
+            // A distinct identifier per message (at most 30 x 32 of them).
+            let data: Vec<u8> = (0..8).map(|_| rng.next_u64() as u8).collect();
+            step.send.push(message(std(seq & 0x7FF, &data), seq));
         }
         steps.push(step);
     }

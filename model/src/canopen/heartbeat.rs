@@ -28,13 +28,7 @@ pub fn heartbeat(node: NodeId, state: NmtState) -> Frame {
 ///
 /// Requirements: HB-002.
 pub fn set_producer_time(period_ms: u16) -> SdoRequest {
-    let [low, high] = period_ms.to_le_bytes();
-    SdoRequest::Download {
-        index: PRODUCER_HEARTBEAT_TIME,
-        sub_index: 0,
-        data: [low, high, 0, 0],
-        size: None,
-    }
+    SdoRequest::download(PRODUCER_HEARTBEAT_TIME, 0, u32::from(period_ms))
 }
 
 /// When the next heartbeat is due after one sent at `last`; `None` when off.

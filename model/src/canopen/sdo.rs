@@ -108,6 +108,18 @@ fn split(bytes: &[u8]) -> Result<(u8, u16, u8, [u8; 4]), SdoError> {
 }
 
 impl SdoRequest {
+    /// An expedited download (0x22) of `value`; the node takes the entry's length.
+    ///
+    /// Requirements: SDO-003, SDO-004.
+    pub fn download(index: u16, sub_index: u8, value: u32) -> Self {
+        SdoRequest::Download {
+            index,
+            sub_index,
+            data: value.to_le_bytes(),
+            size: None,
+        }
+    }
+
     pub fn to_bytes(self) -> [u8; 8] {
         match self {
             SdoRequest::Upload { index, sub_index } => header(UPLOAD_REQUEST, index, sub_index),
@@ -155,6 +167,26 @@ impl SdoRequest {
 }
 
 impl SdoResponse {
+    /// An expedited upload response with `value` in its first `size` bytes.
+    ///
+    /// Requirements: SDO-005.
+    pub fn upload(index: u16, sub_index: u8, value: u32, size: u8) -> Self {
+        SdoResponse::Upload {
+            index,
+            sub_index,
+            data: value.to_le_bytes(),
+            size,
+        }
+    }
+
+    /// The value an upload response carries; `None` for any other response.
+    pub fn value(&self) -> Option<u32> {
+        match self {
+            SdoResponse::Upload { data, .. } => Some(u32::from_le_bytes(*data)),
+            _ => None,
+        }
+    }
+
     pub fn to_bytes(self) -> [u8; 8] {
         match self {
             SdoResponse::Upload {
