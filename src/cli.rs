@@ -142,11 +142,13 @@ pub enum Command {
     Run {
         #[command(flatten)]
         iut: IutOptions,
-        /// A profile name (see `canif profiles`) or `all`.
+        /// A profile name (see `canif profiles`; repeatable) or `all`.
         #[arg(long, default_value = "all")]
-        profile: String,
+        profile: Vec<String>,
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        #[command(flatten)]
+        product: ProductOptions,
         /// Generated scenarios per interface.
         #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u64).range(0..=10_000))]
         cases: u64,
@@ -176,9 +178,17 @@ pub enum Command {
         /// (by default they are reported as skipped, and the Gherkin stage is left out).
         #[arg(long)]
         no_fail_fast: bool,
-        /// Only scenarios whose name contains this text (repeatable: any of them).
+        /// Only checks whose name contains this text (repeatable: any of them):
+        /// lockstep and Gherkin scenarios, as `canif list scenarios` names them.
         #[arg(long, value_name = "TEXT")]
         scenario: Vec<String>,
+        /// Only checks that exercise this requirement (repeatable).
+        #[arg(long, value_name = "ID")]
+        requirement: Vec<String>,
+        /// The time the candump log's and pcapng's first frame is stamped with,
+        /// in seconds since the Unix epoch (default: when the run started).
+        #[arg(long, value_name = "SECONDS")]
+        trace_epoch: Option<u64>,
         /// With --suite canopen: the node id to check.
         #[arg(long, default_value_t = 5)]
         node: u8,
@@ -186,24 +196,51 @@ pub enum Command {
         #[arg(long)]
         coupler_fault: Option<String>,
     },
-    /// Certify one profile: a sealed certificate (JSON + HTML) of every requirement's verdict.
+    /// Certify profiles: a certificate (canonical JSON + HTML) of every
+    /// requirement's verdict, signed with an OpenSSH Ed25519 key.
     Certify {
-        /// The profile to certify.
+        /// The profile to certify (repeatable, or `all`).
         #[arg(long, required_unless_present = "verify")]
-        profile: Option<String>,
+        profile: Vec<String>,
         #[command(flatten)]
         iut: IutOptions,
+        #[command(flatten)]
+        product: ProductOptions,
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// Where to write certificate.json and certificate.html.
+        /// Where to write certificate.json, .json.sig, .html and the run's reports.
         #[arg(long, default_value = "reports/certificate")]
         out: PathBuf,
-        /// Check the seal of an existing certificate.json instead.
-        #[arg(long, value_name = "CERTIFICATE")]
+        /// An unencrypted OpenSSH Ed25519 private key to sign with (without
+        /// it the certificate is written unsigned, and says so).
+        #[arg(long, value_name = "PRIVATE_KEY")]
+        key: Option<PathBuf>,
+        /// Check an existing certificate.json (and its .sig beside it) instead.
+        #[arg(long, value_name = "CERTIFICATE", requires = "pubkey")]
         verify: Option<PathBuf>,
+        /// With --verify: the signer's public key (an `ssh-ed25519 …` line).
+        #[arg(long, value_name = "PUBLIC_KEY")]
+        pubkey: Option<PathBuf>,
     },
-    /// What changed between two report.json files; exit 1 on a regression.
-    Compare { base: PathBuf, new: PathBuf },
+    /// What changed between two report.json files; exit 1 on a regression,
+    /// 2 when they do not describe the same run.
+    Compare {
+        base: PathBuf,
+        new: PathBuf,
+        /// A check that passed in the base and is gone now is not a regression.
+        #[arg(long)]
+        allow_removed: bool,
+        /// Compare reports of different IUTs, sides, catalogues or profile sets, saying so.
+        #[arg(long)]
+        force: bool,
+        #[arg(long, value_enum, default_value = "markdown")]
+        format: CompareFormat,
+    },
+    /// Lists what a run can select.
+    List {
+        #[command(subcommand)]
+        what: ListCommand,
+    },
     /// The soft device's deliberate faults.
     Faults,
     /// A simulated Beckhoff CANopen coupler for tools by others: behind
@@ -280,6 +317,44 @@ pub enum Command {
         /// CAN FD frame (payload rounds up to a valid size).
         #[arg(long)]
         fd: bool,
+    },
+}
+
+/// How `canif compare` writes its answer.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CompareFormat {
+    Markdown,
+    Json,
+}
+
+/// The implementation's maker's own name and version for it, for reports and certificates.
+#[derive(Args, Debug, Clone)]
+pub struct ProductOptions {
+    /// The product's name as its maker declares it.
+    #[arg(long, requires = "product_version")]
+    pub product: Option<String>,
+    /// The product's version as its maker declares it.
+    #[arg(long, requires = "product")]
+    pub product_version: Option<String>,
+}
+
+impl ProductOptions {
+    pub fn product(&self) -> Option<canif_harness::report::Product> {
+        Some(canif_harness::report::Product {
+            name: self.product.clone()?,
+            version: self.product_version.clone()?,
+        })
+    }
+}
+
+#[derive(Subcommand)]
+pub enum ListCommand {
+    /// Every check `canif run` can select with --scenario, per profile, with
+    /// the requirements each exercises (tab-separated).
+    Scenarios {
+        /// Profiles to list (repeatable, or `all`).
+        #[arg(long, default_value = "all")]
+        profile: Vec<String>,
     },
 }
 

@@ -23,7 +23,7 @@ use canif_softdevice::Fault;
 use canif_spec::Catalogue;
 use clap::Parser;
 
-use cli::{Cli, Command, Suite};
+use cli::{Cli, Command, ListCommand, Suite};
 use commands::{certify, device, run, spec, tools};
 
 fn main() -> ExitCode {
@@ -60,6 +60,7 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
             iut,
             profile,
             seed,
+            product,
             cases,
             duration,
             no_counter_wrap,
@@ -70,27 +71,75 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
             real_time,
             no_fail_fast,
             scenario,
+            requirement,
+            trace_epoch,
             node,
             coupler_fault,
         } => {
             let bus = run::bus_choice(&bus, &real_time);
+            let selection = canif_harness::Selection {
+                scenarios: scenario,
+                requirements: requirement,
+            };
             if suite == Suite::Canopen {
-                return Ok(device::canopen_suite(&bus, node, coupler_fault.as_deref()));
+                let canopen = device::CanopenRun {
+                    bus: &bus,
+                    node,
+                    fault: coupler_fault.as_deref(),
+                    seed,
+                    product: product.product(),
+                };
+                return Ok(device::canopen_suite(
+                    &catalogue, &iut, &selection, &canopen, &report,
+                ));
             }
+            let profiles = match run::profiles(&catalogue, &profile) {
+                Ok(p) => p,
+                Err(code) => return Ok(code),
+            };
+            let started = std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .unwrap_or_default();
             let options = canif_harness::Options {
                 seed,
                 cases: if duration.is_some() { 1 } else { cases },
                 generated_cycles: duration.map_or(200, |s| (s * 1000.0).max(1.0) as u64),
                 counter_wrap: !no_counter_wrap && bus.is_sim(),
                 trace_dir: trace,
+                trace_epoch: trace_epoch.map_or(started.as_nanos() as u64, |s| {
+                    s.saturating_mul(1_000_000_000)
+                }),
                 bus,
-                only: scenario,
+                selection,
                 fail_fast: !no_fail_fast,
             };
-            run::run(&catalogue, &iut, &profile, &options, &report)
+            let plan = run::Plan {
+                profiles,
+                options,
+                product: product.product(),
+            };
+            run::run(&catalogue, &iut, &plan, &report)
         }
+        Command::List {
+            what: ListCommand::Scenarios { profile },
+        } => run::list_scenarios(&catalogue, &profile, out),
         Command::SelfCheck { seed } => run::self_check(&catalogue, seed),
-        Command::Compare { base, new } => certify::compare(&base, &new),
+        Command::Compare {
+            base,
+            new,
+            allow_removed,
+            force,
+            format,
+        } => certify::compare(
+            &base,
+            &new,
+            canif_harness::compare::CompareOptions {
+                allow_removed,
+                force,
+            },
+            format,
+            out,
+        ),
         Command::Coupler {
             socketcand,
             bus,
@@ -100,17 +149,22 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
         Command::Certify {
             profile,
             iut,
+            product,
             seed,
             out: dir,
+            key,
             verify,
-        } => match verify {
-            Some(path) => certify::verify_certificate(&path),
-            None => certify::certify(
+            pubkey,
+        } => match (verify, pubkey) {
+            (Some(path), Some(pubkey)) => certify::verify_certificate(&path, &pubkey),
+            _ => certify::certify(
                 &catalogue,
-                profile.as_deref().unwrap_or_default(),
+                &profile,
                 &iut,
+                product.product(),
                 seed,
                 &dir,
+                key.as_deref(),
             ),
         },
         Command::Device {

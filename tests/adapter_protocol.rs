@@ -5,11 +5,11 @@
 
 use std::time::{Duration, Instant};
 
-use canif_harness::report::RunReport;
+use canif_harness::report::{ProfileReport, RunMeta, RunReport};
 use canif_harness::run_scenario;
 use canif_harness::scenario;
 use canif_harness::suite::{run_profile, Options};
-use canif_harness::{IutKind, Outcome, Verdict};
+use canif_harness::{IutKind, Outcome, VerdictKind};
 use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig};
 use canif_spec::Catalogue;
 
@@ -173,17 +173,22 @@ fn a_command_that_does_not_exist_is_an_error_and_the_report_says_error() {
     assert!(run
         .verdicts
         .values()
-        .any(|v| matches!(v, Verdict::Error(_))));
+        .any(|v| v.kind() == VerdictKind::Error));
     assert!(
-        !run.verdicts.values().any(|v| matches!(v, Verdict::Fail(_))),
+        !run.verdicts.values().any(|v| v.kind() == VerdictKind::Fail),
         "a broken IUT is an error, not a failure"
     );
+    let reach = canif_harness::verdict::Reach::default();
     let report = RunReport {
-        iut: "exec".into(),
-        seed: 3,
-        bus: "sim".into(),
-        profiles: vec![run],
-        scenarios: Vec::new(),
+        meta: RunMeta::new("exec".into(), "sim".into(), 3, &catalogue),
+        profiles: vec![ProfileReport::new(
+            &catalogue,
+            profile,
+            run,
+            Vec::new(),
+            Vec::new(),
+            &reach,
+        )],
         wall_time_ms: 0,
         interrupted: false,
     };

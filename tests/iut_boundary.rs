@@ -222,7 +222,7 @@ fn after_the_iut_breaks_the_rest_of_the_profile_is_skipped() {
         .contains("skipped after the IUT broke in `tx-batches [11-bit]`"));
     assert!(run
         .stderr()
-        .contains("Gherkin scenarios: not run (the IUT broke above"));
+        .contains("Gherkin scenarios not run: the IUT broke"));
 }
 
 /// SIGINT: the IUT is stopped, the reports hold what ran, marked interrupted, exit 130.

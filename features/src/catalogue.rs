@@ -20,7 +20,23 @@ pub struct ScenarioInfo {
     pub once: bool,
     /// The profile a `Given the device profile …` step names (outline values filled in).
     pub profile: Option<String>,
+    /// An Examples row's values, `column=value, …`.
+    pub example: Option<String>,
 }
+
+impl ScenarioInfo {
+    /// `feature file: scenario name [row values]`: what reports call it, stable
+    /// while lines move.
+    pub fn id(&self) -> String {
+        match &self.example {
+            Some(row) => format!("{}: {} [{row}]", self.file, self.name),
+            None => format!("{}: {}", self.file, self.name),
+        }
+    }
+}
+
+/// One runnable row: its line, its tags, the profile it names and its Examples values.
+type Row<'a> = (usize, Vec<&'a String>, Option<String>, Option<String>);
 
 /// The profile a scenario's `Given the device profile X` step names, with an
 /// outline's `<column>` taken from the row.
@@ -75,14 +91,21 @@ pub fn scenarios() -> Result<Vec<ScenarioInfo>, String> {
         for scenario in &feature.scenarios {
             let base: Vec<&String> = feature.tags.iter().chain(&scenario.tags).collect();
             // Each runnable row with the tags that apply to it (an Examples block may add its own).
-            let mut rows: Vec<(usize, Vec<&String>, Option<String>)> = Vec::new();
+            let mut rows: Vec<Row> = Vec::new();
             for examples in &scenario.examples {
                 let tags: Vec<&String> = base.iter().copied().chain(&examples.tags).collect();
                 if let Some(table) = &examples.table {
                     rows.extend((1..table.rows.len()).map(|i| {
                         let profile =
                             named_profile(scenario, table.rows.first(), table.rows.get(i));
-                        (table.position.line + i, tags.clone(), profile)
+                        let example = table.rows.first().zip(table.rows.get(i)).map(|(h, r)| {
+                            h.iter()
+                                .zip(r)
+                                .map(|(h, v)| format!("{h}={v}"))
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        });
+                        (table.position.line + i, tags.clone(), profile, example)
                     }));
                 }
             }
@@ -91,9 +114,10 @@ pub fn scenarios() -> Result<Vec<ScenarioInfo>, String> {
                     scenario.position.line,
                     base.clone(),
                     named_profile(scenario, None, None),
+                    None,
                 ));
             }
-            for (line, tags, profile) in rows {
+            for (line, tags, profile, example) in rows {
                 list.push(ScenarioInfo {
                     file: path.to_string(),
                     feature: feature.name.clone(),
@@ -112,6 +136,7 @@ pub fn scenarios() -> Result<Vec<ScenarioInfo>, String> {
                     model_only: tags.iter().any(|t| *t == "model"),
                     once: tags.iter().any(|t| *t == "once"),
                     profile,
+                    example,
                 });
             }
         }

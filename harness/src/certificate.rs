@@ -1,149 +1,236 @@
-//! A certificate of one profile's run: what was run, against which catalogue,
-//! and every requirement's verdict, sealed with a SHA-256 over the result.
-//!
-//! The seal shows that the file was not changed after it was written (an
-//! edited verdict no longer matches). It is not a signature: whoever can run
-//! canif can write a new certificate, so a customer checks the seal and, for
-//! trust in the run itself, re-runs `canif certify` with the same seed.
+//! A certificate of a run: what ran, against which catalogue, by which canif,
+//! for which product, and every requirement's verdict with its reason — as
+//! canonical JSON, signed with an OpenSSH Ed25519 key in the SSH signature
+//! format (SSHSIG), so that `ssh-keygen -Y verify` checks it without canif.
 
-use serde_json::{json, Value};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
+use ssh_key::{HashAlg, LineEnding, PrivateKey, PublicKey, SshSig};
 
-use canif_spec::Catalogue;
+use crate::report::{Product, RunReport, SuiteKind, TotalsEntry};
+use crate::verdict::VerdictKind;
 
-use crate::suite::{ProfileRun, Verdict};
+/// The namespace of canif's signatures (`ssh-keygen -Y … -n`): a signature
+/// made for anything else does not verify as a certificate.
+pub const NAMESPACE: &str = "canif-certificate";
 
-fn sha256_hex(bytes: &[u8]) -> String {
+/// SHA-256 as lower-case hex.
+pub fn sha256_hex(bytes: &[u8]) -> String {
     Sha256::digest(bytes)
         .iter()
         .map(|b| format!("{b:02x}"))
         .collect()
 }
 
-/// SHA-256 over the catalogue's files as embedded (path and text of each, in order).
-pub fn catalogue_hash(files: &[(String, String)]) -> String {
-    let mut hasher = Sha256::new();
-    for (path, text) in files {
-        hasher.update(path.as_bytes());
-        hasher.update([0]);
-        hasher.update(text.as_bytes());
-        hasher.update([0]);
-    }
-    hasher
-        .finalize()
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
+/// One requirement's verdict on one profile, as certified.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct CertifiedVerdict {
+    pub evidence: Vec<String>,
+    pub reason: Option<String>,
+    pub verdict: VerdictKind,
 }
 
-fn verdict_word(verdict: &Verdict) -> &'static str {
-    match verdict {
-        Verdict::Pass => "pass",
-        Verdict::Fail(_) => "fail",
-        Verdict::Error(_) => "error",
-        Verdict::NotApplicable(_) => "not applicable",
-        Verdict::NotTestable(_) => "not testable",
+/// What is signed. Fields are in alphabetical order, maps are sorted, and
+/// the file is written without whitespace: one run gives one byte string.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Certificate {
+    pub canif_commit: String,
+    pub canif_version: String,
+    pub catalogue_sha256: String,
+    pub certificate: String,
+    pub conforms: bool,
+    /// When the run started, RFC 3339 in UTC.
+    pub date: String,
+    /// SHA-256 of `certificate.html` written beside it.
+    pub html_sha256: String,
+    pub iut: String,
+    pub product: Option<Product>,
+    pub profiles: Vec<String>,
+    pub seed: u64,
+    pub side: String,
+    pub suite: SuiteKind,
+    pub totals: TotalsEntry,
+    /// Keyed `profile::REQ-ID`.
+    pub verdicts: BTreeMap<String, CertifiedVerdict>,
+}
+
+impl Certificate {
+    /// The certificate of `report`; `html_sha256` is filled in once the page is written.
+    pub fn of(report: &RunReport) -> Self {
+        let m = &report.meta;
+        Certificate {
+            canif_commit: m.canif_commit.clone(),
+            canif_version: m.canif_version.clone(),
+            catalogue_sha256: m.catalogue_sha256.clone(),
+            certificate: "canif conformance certificate".into(),
+            conforms: report.exit_code() == 0 && m.complete,
+            date: crate::report::utc(m.started_unix),
+            html_sha256: String::new(),
+            iut: m.iut.clone(),
+            product: m.product.clone(),
+            profiles: report.profiles.iter().map(|p| p.profile.clone()).collect(),
+            seed: m.seed,
+            side: m.side.clone(),
+            suite: m.suite,
+            totals: TotalsEntry::of(&report.totals()),
+            verdicts: report
+                .profiles
+                .iter()
+                .flat_map(|p| {
+                    p.verdicts.iter().map(move |(id, v)| {
+                        (
+                            format!("{}::{id}", p.profile),
+                            CertifiedVerdict {
+                                evidence: v.evidence().iter().map(|e| e.key()).collect(),
+                                reason: v.reason(),
+                                verdict: v.kind(),
+                            },
+                        )
+                    })
+                })
+                .collect(),
+        }
+    }
+
+    /// The canonical bytes: compact JSON with every object's keys sorted, and a newline.
+    pub fn canonical(&self) -> Vec<u8> {
+        // serde_json's Value keeps objects in a BTreeMap: sorted at every depth.
+        let value = serde_json::to_value(self).expect("a certificate is plain data");
+        let mut bytes = serde_json::to_vec(&value).expect("a certificate is plain data");
+        bytes.push(b'\n');
+        bytes
+    }
+
+    pub fn parse(bytes: &[u8]) -> Result<Self, String> {
+        serde_json::from_slice(bytes).map_err(|e| format!("not a canif certificate: {e}"))
     }
 }
 
-/// The certificate as JSON, sealed.
-pub fn certificate(
-    catalogue: &Catalogue,
-    catalogue_sha256: &str,
-    run: &ProfileRun,
-    iut: &str,
-    seed: u64,
-    scenarios: (usize, usize),
-) -> Value {
-    let verdicts: serde_json::Map<String, Value> = catalogue
-        .requirements()
-        .filter_map(|r| {
-            run.verdicts
-                .get(&r.id)
-                .map(|v| (r.id.clone(), json!(verdict_word(v))))
-        })
-        .collect();
-    let count = |word: &str| verdicts.values().filter(|v| *v == word).count();
-    let conforms = count("fail") == 0 && count("error") == 0 && scenarios.1 == 0;
-    let mut body = json!({
-        "certificate": "canif conformance certificate",
-        "harness_version": env!("CARGO_PKG_VERSION"),
-        "catalogue_sha256": catalogue_sha256,
-        "profile": run.profile,
-        "iut": iut,
-        "seed": seed,
-        "conforms": conforms,
-        "totals": {
-            "pass": count("pass"), "fail": count("fail"), "error": count("error"),
-            "not applicable": count("not applicable"), "not testable": count("not testable"),
-            "scenarios run": scenarios.0, "scenarios failed": scenarios.1,
-        },
-        "cycles": run.cycles(),
-        "frames_checked": run.frames_checked(),
-        "verdicts": verdicts,
-    });
-    let seal = sha256_hex(serde_json::to_string(&body).unwrap_or_default().as_bytes());
-    body["result_sha256"] = json!(seal);
-    body
+/// Why a certificate cannot be signed or verified.
+#[derive(Debug)]
+pub enum SignatureError {
+    Key { path: String, cause: String },
+    Encrypted(String),
+    NotEd25519(String),
+    Signature(String),
+    DoesNotVerify(String),
 }
 
-/// Does the seal match the rest of the certificate?
-pub fn verify(certificate: &Value) -> Result<(), String> {
-    let mut body = certificate.clone();
-    let claimed = body
-        .as_object_mut()
-        .and_then(|o| o.remove("result_sha256"))
-        .ok_or("no result_sha256: not a canif certificate")?;
-    let actual = sha256_hex(serde_json::to_string(&body).unwrap_or_default().as_bytes());
-    if claimed.as_str() == Some(actual.as_str()) {
-        Ok(())
-    } else {
-        Err(format!("the seal does not match: the certificate says {claimed}, its content hashes to {actual}"))
+impl std::fmt::Display for SignatureError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SignatureError::Key { path, cause } => write!(f, "{path}: not an OpenSSH key: {cause}"),
+            SignatureError::Encrypted(path) => write!(f, "{path}: the key is encrypted; canif signs with an unencrypted key (ssh-keygen -t ed25519 -N '')"),
+            SignatureError::NotEd25519(path) => write!(f, "{path}: certificates are signed with Ed25519 keys (ssh-keygen -t ed25519)"),
+            SignatureError::Signature(cause) => write!(f, "not an SSH signature: {cause}"),
+            SignatureError::DoesNotVerify(cause) => write!(f, "the signature does not verify: {cause}"),
+        }
     }
+}
+
+impl std::error::Error for SignatureError {}
+
+/// Signs `bytes` with the OpenSSH Ed25519 private key at `key`: an armored SSHSIG.
+pub fn sign(bytes: &[u8], key: &Path) -> Result<String, SignatureError> {
+    let path = key.display().to_string();
+    let key = PrivateKey::read_openssh_file(key).map_err(|e| SignatureError::Key {
+        path: path.clone(),
+        cause: e.to_string(),
+    })?;
+    if key.is_encrypted() {
+        return Err(SignatureError::Encrypted(path));
+    }
+    if key.algorithm() != ssh_key::Algorithm::Ed25519 {
+        return Err(SignatureError::NotEd25519(path));
+    }
+    key.sign(NAMESPACE, HashAlg::Sha512, bytes)
+        .and_then(|sig| sig.to_pem(LineEnding::LF))
+        .map_err(|e| SignatureError::Signature(e.to_string()))
+}
+
+/// Checks an armored SSHSIG over `bytes` against the public key at `pubkey`
+/// (an `ssh-ed25519 …` line); returns the key's SHA-256 fingerprint.
+pub fn verify(bytes: &[u8], signature: &str, pubkey: &Path) -> Result<String, SignatureError> {
+    let path = pubkey.display().to_string();
+    let key = PublicKey::read_openssh_file(pubkey).map_err(|e| SignatureError::Key {
+        path,
+        cause: e.to_string(),
+    })?;
+    let signature =
+        SshSig::from_pem(signature).map_err(|e| SignatureError::Signature(e.to_string()))?;
+    key.verify(NAMESPACE, bytes, &signature)
+        .map_err(|e| SignatureError::DoesNotVerify(e.to_string()))?;
+    Ok(key.fingerprint(HashAlg::Sha256).to_string())
 }
 
 /// The certificate for people: one self-contained page.
-pub fn html(certificate: &Value, catalogue: &Catalogue) -> String {
+pub fn html(certificate: &Certificate, catalogue: &canif_spec::Catalogue) -> String {
     let esc = |s: &str| {
         s.replace('&', "&amp;")
             .replace('<', "&lt;")
             .replace('>', "&gt;")
     };
     let mut rows = String::new();
-    for requirement in catalogue.requirements() {
-        let Some(verdict) = certificate["verdicts"][&requirement.id].as_str() else {
-            continue;
-        };
-        rows.push_str(&format!(
-            "<tr class=\"{}\"><td>{}</td><td>{}</td><td>{}</td></tr>\n",
-            verdict.replace(' ', "-"),
-            requirement.id,
-            esc(verdict),
-            esc(&requirement.statement)
-        ));
+    for profile in &certificate.profiles {
+        for requirement in catalogue.requirements() {
+            let Some(v) = certificate
+                .verdicts
+                .get(&format!("{profile}::{}", requirement.id))
+            else {
+                continue;
+            };
+            rows.push_str(&format!(
+                "<tr class=\"{}\"><td>{profile}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+                v.verdict.label().replace(' ', "-"),
+                requirement.id,
+                v.verdict.label(),
+                esc(&requirement.statement),
+                esc(v.reason.as_deref().unwrap_or("")),
+                esc(&v.evidence.join("; "))
+            ));
+        }
     }
-    let field = |name: &str| esc(certificate[name].to_string().trim_matches('"'));
+    let t = &certificate.totals;
     format!(
         r#"<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>canif certificate — {profile}</title>
-<style>body{{font-family:sans-serif;margin:2em}} table{{border-collapse:collapse}} td,th{{border:1px solid #ccc;padding:2px 6px;vertical-align:top}}
-.pass td:nth-child(2){{color:#070}} .fail td:nth-child(2),.error td:nth-child(2){{color:#b00;font-weight:bold}} .not-applicable,.not-testable{{color:#777}}</style></head>
+<html lang="en"><head><meta charset="utf-8"><title>canif certificate — {iut}</title>
+<style>body{{font-family:sans-serif;margin:2em}} table{{border-collapse:collapse}} td,th{{border:1px solid #ccc;padding:2px 6px;vertical-align:top;text-align:left}}
+.pass td:nth-child(3){{color:#070}} .fail td:nth-child(3),.error td:nth-child(3){{color:#b00;font-weight:bold}} .not-applicable,.not-testable,.not-run{{color:#777}}</style></head>
 <body><h1>canif conformance certificate</h1>
-<p><b>{verdict}</b> — profile <b>{profile}</b>, implementation <code>{iut}</code>, seed {seed}</p>
-<table><tr><th>harness version</th><td>{version}</td></tr><tr><th>catalogue SHA-256</th><td><code>{catalogue}</code></td></tr>
-<tr><th>totals</th><td>{totals}</td></tr><tr><th>result SHA-256</th><td><code>{seal}</code></td></tr></table>
-<p>Check the seal with <code>canif certify --verify certificate.json</code>.</p>
-<table><tr><th>requirement</th><th>verdict</th><th>statement</th></tr>
+<p><b>{verdict}</b> — <code>{iut}</code>{product}, {side} side, profiles {profiles}</p>
+<table><tr><th>date</th><td>{date}</td></tr><tr><th>canif</th><td>{version} ({commit})</td></tr>
+<tr><th>catalogue SHA-256</th><td><code>{catalogue}</code></td></tr><tr><th>seed</th><td>{seed}</td></tr>
+<tr><th>totals</th><td>{pass} pass, {fail} fail, {error} error, {na} not applicable, {nr} not run, {nt} not testable</td></tr></table>
+<p>certificate.json carries this page's SHA-256 and is signed in certificate.json.sig; see docs/certificates.md for checking it with <code>ssh-keygen -Y verify</code>.</p>
+<table><tr><th>profile</th><th>requirement</th><th>verdict</th><th>statement</th><th>reason</th><th>evidence</th></tr>
 {rows}</table></body></html>
 "#,
-        profile = field("profile"),
-        iut = field("iut"),
-        seed = field("seed"),
-        version = field("harness_version"),
-        catalogue = field("catalogue_sha256"),
-        totals = esc(&certificate["totals"].to_string()),
-        seal = field("result_sha256"),
-        verdict = if certificate["conforms"] == json!(true) {
+        iut = esc(&certificate.iut),
+        product = certificate
+            .product
+            .as_ref()
+            .map_or(String::new(), |p| format!(
+                " ({} {})",
+                esc(&p.name),
+                esc(&p.version)
+            )),
+        side = esc(&certificate.side),
+        profiles = esc(&certificate.profiles.join(", ")),
+        date = esc(&certificate.date),
+        version = esc(&certificate.canif_version),
+        commit = esc(&certificate.canif_commit),
+        catalogue = esc(&certificate.catalogue_sha256),
+        seed = certificate.seed,
+        pass = t.pass,
+        fail = t.fail,
+        error = t.error,
+        na = t.not_applicable,
+        nr = t.not_run,
+        nt = t.not_testable,
+        verdict = if certificate.conforms {
             "CONFORMS"
         } else {
             "DOES NOT CONFORM"

@@ -1,80 +1,186 @@
 //! What changed between two runs: `canif compare BASE.json NEW.json`.
 //!
-//! A regression is anything that passed (or did not exist) in the base and now
-//! fails or errs. Fixes and other changes are listed too; removed checks are
-//! changes, not regressions.
+//! A regression is a verdict or check that was not fail or error and now is,
+//! and — unless removals are allowed — one that passed and is now absent, not
+//! run or no longer testable: a gate must not go green because less was
+//! checked. Reports of different implementations, sides, suites, catalogues
+//! or profile sets are not compared unless forced.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write as _;
 
-use crate::report::ReportFile;
+use serde::Serialize;
 
-/// Verdicts of a report, keyed `profile :: requirement` and `suite :: file:line name`.
-pub fn verdicts(report: &ReportFile) -> BTreeMap<String, String> {
+use crate::report::ReportFile;
+use crate::verdict::VerdictKind;
+
+/// Verdicts and check outcomes of a report, keyed `profile::REQ-ID` and
+/// `profile::scenario: …` (`gherkin: …`, `canopen: …`).
+pub fn verdicts(report: &ReportFile) -> BTreeMap<String, VerdictKind> {
     let mut all = BTreeMap::new();
     for profile in &report.profiles {
         for (id, verdict) in &profile.verdicts {
+            all.insert(format!("{}::{id}", profile.profile), verdict.verdict);
+        }
+        for check in &profile.checks {
             all.insert(
-                format!("{} :: {id}", profile.profile),
-                verdict.verdict.label().to_string(),
+                format!("{}::{}", profile.profile, check.check),
+                check.outcome,
             );
         }
-    }
-    for scenario in &report.scenarios {
-        let key = format!(
-            "{} :: {}:{} {}",
-            scenario.suite, scenario.file, scenario.line, scenario.name
-        );
-        all.insert(key, scenario.outcome.label().to_string());
     }
     all
 }
 
-fn bad(verdict: &str) -> bool {
-    verdict == "fail" || verdict == "error"
+/// How the comparison is asked for.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct CompareOptions {
+    /// A check that passed and is gone is a change, not a regression.
+    pub allow_removed: bool,
+    /// Compare reports that do not describe the same thing, saying so.
+    pub force: bool,
+}
+
+/// One key whose verdict changed.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Change {
+    pub check: String,
+    /// `absent` when the report lacks it.
+    pub before: String,
+    pub now: String,
 }
 
 /// The comparison of two runs.
-#[derive(Debug, Default, Clone, PartialEq, Eq)]
+#[derive(Debug, Default, Clone, PartialEq, Eq, Serialize)]
 pub struct Comparison {
-    pub regressions: Vec<(String, String, String)>,
-    pub fixes: Vec<(String, String, String)>,
-    pub changes: Vec<(String, String, String)>,
+    pub regressions: Vec<Change>,
+    /// Passed before, absent or not run now (regressions unless allowed).
+    pub removed: Vec<Change>,
+    pub removed_allowed: bool,
+    pub fixes: Vec<Change>,
+    pub changes: Vec<Change>,
     pub unchanged: usize,
+    /// What differs between the two reports' runs, compared anyway with `--force`.
+    pub forced_despite: Vec<String>,
 }
 
-pub fn compare(base: &BTreeMap<String, String>, new: &BTreeMap<String, String>) -> Comparison {
-    let mut result = Comparison::default();
-    let keys: std::collections::BTreeSet<&String> = base.keys().chain(new.keys()).collect();
+/// Where two reports do not describe the same thing.
+pub fn mismatches(base: &ReportFile, new: &ReportFile) -> Vec<String> {
+    let mut found = Vec::new();
+    let mut differs = |what: &str, a: String, b: String| {
+        if a != b {
+            found.push(format!("{what}: `{a}` in the base, `{b}` now"));
+        }
+    };
+    differs(
+        "implementation",
+        base.meta.iut.clone(),
+        new.meta.iut.clone(),
+    );
+    differs("side", base.meta.side.clone(), new.meta.side.clone());
+    differs(
+        "suite",
+        format!("{:?}", base.meta.suite),
+        format!("{:?}", new.meta.suite),
+    );
+    differs(
+        "catalogue",
+        base.meta.catalogue_sha256.clone(),
+        new.meta.catalogue_sha256.clone(),
+    );
+    let profiles = |r: &ReportFile| {
+        r.profiles
+            .iter()
+            .map(|p| p.profile.as_str())
+            .collect::<BTreeSet<_>>()
+            .into_iter()
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    differs("profiles", profiles(base), profiles(new));
+    found
+}
+
+/// Compares two reports; `Err` lists why they are not comparable (without `force`).
+pub fn compare(
+    base: &ReportFile,
+    new: &ReportFile,
+    options: CompareOptions,
+) -> Result<Comparison, Vec<String>> {
+    let mismatched = mismatches(base, new);
+    if !mismatched.is_empty() && !options.force {
+        return Err(mismatched);
+    }
+    let (before_all, now_all) = (verdicts(base), verdicts(new));
+    let mut result = Comparison {
+        removed_allowed: options.allow_removed,
+        forced_despite: mismatched,
+        ..Comparison::default()
+    };
+    let keys: BTreeSet<&String> = before_all.keys().chain(now_all.keys()).collect();
     for key in keys {
-        let before = base.get(key).map_or("absent", String::as_str);
-        let after = new.get(key).map_or("absent", String::as_str);
-        let entry = (key.clone(), before.to_string(), after.to_string());
-        if before == after {
+        let (before, now) = (before_all.get(key).copied(), now_all.get(key).copied());
+        let label = |v: Option<VerdictKind>| v.map_or("absent", VerdictKind::label).to_string();
+        let change = Change {
+            check: key.clone(),
+            before: label(before),
+            now: label(now),
+        };
+        let bad = |v: Option<VerdictKind>| v.is_some_and(VerdictKind::is_bad);
+        if before == now {
             result.unchanged += 1;
-        } else if bad(after) && !bad(before) {
-            result.regressions.push(entry);
-        } else if bad(before) && after == "pass" {
-            result.fixes.push(entry);
+        } else if bad(now) && !bad(before) {
+            result.regressions.push(change);
+        } else if before == Some(VerdictKind::Pass) && now != Some(VerdictKind::Pass) {
+            result.removed.push(change);
+        } else if bad(before) && now == Some(VerdictKind::Pass) {
+            result.fixes.push(change);
         } else {
-            result.changes.push(entry);
+            result.changes.push(change);
         }
     }
-    result
+    Ok(result)
 }
 
 impl Comparison {
+    /// Does the gate stop?
+    pub fn regressed(&self) -> bool {
+        !self.regressions.is_empty() || (!self.removed.is_empty() && !self.removed_allowed)
+    }
+
     /// Markdown for a CI summary.
     pub fn markdown(&self) -> String {
         let mut md = format!(
-            "# canif: changes since the baseline\n\n{} regression(s), {} fix(es), {} other change(s), {} unchanged.\n",
+            "# canif: changes since the baseline\n\n**{}**: {} regression(s), {} removed check(s){}, {} fix(es), {} other change(s), {} unchanged.\n",
+            if self.regressed() { "REGRESSED" } else { "NO REGRESSION" },
             self.regressions.len(),
+            self.removed.len(),
+            if self.removed_allowed { " (allowed)" } else { "" },
             self.fixes.len(),
             self.changes.len(),
             self.unchanged
         );
+        if !self.forced_despite.is_empty() {
+            let _ = write!(
+                md,
+                "\nCompared with --force although the runs differ:\n\n{}\n",
+                self.forced_despite
+                    .iter()
+                    .map(|m| format!("- {m}"))
+                    .collect::<Vec<_>>()
+                    .join("\n")
+            );
+        }
         for (title, rows) in [
             ("Regressions", &self.regressions),
+            (
+                if self.removed_allowed {
+                    "Removed (allowed)"
+                } else {
+                    "Removed: passed before, not checked now"
+                },
+                &self.removed,
+            ),
             ("Fixes", &self.fixes),
             ("Other changes", &self.changes),
         ] {
@@ -85,8 +191,12 @@ impl Comparison {
                 md,
                 "\n## {title}\n\n| check | before | now |\n|---|---|---|\n"
             );
-            for (key, before, after) in rows {
-                let _ = writeln!(md, "| {key} | {before} | {after} |");
+            for change in rows {
+                let _ = writeln!(
+                    md,
+                    "| {} | {} | {} |",
+                    change.check, change.before, change.now
+                );
             }
         }
         md

@@ -9,6 +9,7 @@ use canif_model::Nanos;
 use canif_spec::ReqId;
 
 use crate::blame;
+use crate::outcome::FrameDiff;
 
 /// A difference found, before it becomes a [`crate::Failure`].
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -17,6 +18,8 @@ pub struct Difference {
     pub what: String,
     pub expected: String,
     pub actual: String,
+    /// The frames themselves, when a frame differs: drawn byte by byte.
+    pub frames: Option<Box<FrameDiff>>,
 }
 
 /// Bytes as `01 02 0A`.
@@ -62,6 +65,7 @@ impl InputCheck<'_> {
             InputImage::new_checked(actual, *self.layout),
         ) else {
             return Some(Difference {
+                frames: None,
                 candidates: blame::INPUT_IMAGE_SIZE,
                 what: "input image size".into(),
                 expected: format!("{} bytes", expected.len()),
@@ -78,6 +82,7 @@ impl InputCheck<'_> {
         let rx = self.rx;
         if e.tx_counter != a.tx_counter {
             return Some(Difference {
+                frames: None,
                 candidates: blame::TX_COUNTER,
                 what: "Inputs.TxCounter".into(),
                 expected: e.tx_counter.to_string(),
@@ -97,6 +102,7 @@ impl InputCheck<'_> {
                 _ => blame::RX_COUNTING,
             };
             return Some(Difference {
+                frames: None,
                 candidates,
                 what: "Inputs.RxCounter".into(),
                 expected: format!(
@@ -108,6 +114,7 @@ impl InputCheck<'_> {
         }
         if e.no_of_rx_messages != a.no_of_rx_messages {
             return Some(Difference {
+                frames: None,
                 candidates: blame::RX_SET,
                 what: "Inputs.NoOfRxMessages".into(),
                 expected: e.no_of_rx_messages.to_string(),
@@ -116,6 +123,7 @@ impl InputCheck<'_> {
         }
         if e.transaction_number != a.transaction_number {
             return Some(Difference {
+                frames: None,
                 candidates: blame::TRANSACTION_NUMBER,
                 what: "Inputs.TransactionNumber".into(),
                 expected: e.transaction_number.unwrap_or(0).to_string(),
@@ -138,6 +146,7 @@ impl InputCheck<'_> {
                 continue; // only don't-care bytes (data past the length) differ
             };
             return Some(Difference {
+                frames: None,
                 candidates,
                 what: format!("Inputs.RxMessage[{slot}]"),
                 expected: describe_slot(&es),
@@ -194,6 +203,7 @@ impl InputCheck<'_> {
         (0..field::INFO_DATA_WORDS).find_map(|index| {
             let (expected, actual) = (e.info_data(index)?, a.info_data(index)?);
             (expected != actual).then(|| Difference {
+                frames: None,
                 candidates: blame::info_data(index),
                 what: format!("InfoData[{index}]"),
                 expected: format!("0x{expected:08X}"),

@@ -37,10 +37,12 @@ pub mod report;
 pub mod scenario;
 pub mod suite;
 pub mod trace;
+pub mod verdict;
 
 pub use error::{BusError, IutError, RunError};
 pub use iut::{BuildError, Iut};
 pub use iut_kind::IutKind;
 pub use lockstep::run_scenario;
-pub use outcome::{Failure, Outcome, ScenarioRun};
-pub use suite::{run_profile, Options, ProfileRun, Verdict};
+pub use outcome::{Failure, GherkinOutcome, GherkinRun, Outcome, ScenarioRun};
+pub use suite::{run_profile, Options, ProfileRun, Selection};
+pub use verdict::{Evidence, Verdict, VerdictKind};

@@ -34,6 +34,7 @@ pub fn run_scenario(
         outcome,
         cycles,
         frames_checked: frames,
+        elapsed: std::time::Duration::ZERO,
     };
     let (mut pair, mut bus) = match start(kind, caps, scenario) {
         Ok(started) => started,
@@ -82,10 +83,9 @@ fn start(
         }
         Err(BuildError::Failed(reason)) => return Err(IutError(reason).into()),
     };
-    let trace = scenario
-        .trace
-        .as_ref()
-        .and_then(|(dir, name)| TraceWriter::create(dir, name, &bus.interface_name()).ok());
+    let trace = scenario.trace.as_ref().and_then(|(dir, name, epoch)| {
+        TraceWriter::create(dir, name, &bus.interface_name(), *epoch).ok()
+    });
     let pair = Pair::new(iut, model, (&scenario.name, &scenario.covers), trace);
     Ok((pair, bus))
 }
@@ -157,6 +157,7 @@ impl Lockstep<'_> {
             match report.confirmed_after {
                 Some(delay) if scenario.check_confirmation_delay && delay != wanted => {
                     return Err(self.pair.fail(Difference {
+                        frames: None,
                         candidates: blame::CONFIRMATION,
                         what: "cycles until the PLC sees TxCounter confirmed".into(),
                         expected: wanted.to_string(),

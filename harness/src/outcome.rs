@@ -21,6 +21,48 @@ pub struct Failure {
     pub context: Vec<String>,
     /// The same cycles as data, for the timing diagram.
     pub timeline: Vec<CycleView>,
+    /// The frames that differ, when the failure is a frame.
+    pub frames: Option<FrameDiff>,
+}
+
+/// The frame the model expected and the one the IUT gave (`None`: no frame).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FrameDiff {
+    pub expected: Option<canif_model::frame::Frame>,
+    pub actual: Option<canif_model::frame::Frame>,
+}
+
+impl Failure {
+    /// Where and what, and the requirements it breaks.
+    pub fn headline(&self) -> String {
+        format!(
+            "{} at cycle {}: {} differs ({})",
+            self.scenario,
+            self.cycle,
+            self.what,
+            ReqId::join(&self.requirements, ", ")
+        )
+    }
+
+    /// One line: what differs, expected and actual.
+    pub fn cause(&self) -> String {
+        format!(
+            "cycle {}: {} differs: expected {}, actual {}",
+            self.cycle, self.what, self.expected, self.actual
+        )
+    }
+
+    /// Expected and actual, and the cycles before.
+    pub fn details(&self) -> String {
+        format!(
+            "{}\n  expected: {}\n  actual:   {}\n  at t = {:.6} ms\ncycles before:\n  {}",
+            self.headline(),
+            self.expected,
+            self.actual,
+            self.time as f64 / 1e6,
+            self.context.join("\n  ")
+        )
+    }
 }
 
 /// A frame that ended on the bus, as a failure's history shows it.
@@ -63,4 +105,32 @@ pub struct ScenarioRun {
     pub outcome: Outcome,
     pub cycles: u64,
     pub frames_checked: u64,
+    /// Wall time the scenario took.
+    pub elapsed: std::time::Duration,
+}
+
+/// How one Gherkin scenario (or Examples row) ended.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum GherkinOutcome {
+    Pass,
+    /// `step` is the failing step's line; `report` is cucumber's whole account.
+    Fail {
+        step: String,
+        report: String,
+    },
+    /// The implementation broke: not a non-conformance.
+    Error(String),
+}
+
+/// One Gherkin scenario (or Examples row) run against one profile.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct GherkinRun {
+    /// `feature file: scenario name`, and an Examples row's values: stable
+    /// while lines move.
+    pub id: String,
+    pub file: String,
+    pub line: usize,
+    pub requirements: Vec<String>,
+    pub outcome: GherkinOutcome,
+    pub elapsed: std::time::Duration,
 }

@@ -13,7 +13,7 @@ use crate::blame;
 use crate::diff::{frame_difference, Difference};
 use crate::history::History;
 use crate::iut::{InvalidFrame, Iut};
-use crate::outcome::{Failure, Outcome};
+use crate::outcome::{Failure, FrameDiff, Outcome};
 use crate::trace::TraceWriter;
 
 /// The IUT broke: the scenario ends in error, whatever the model expected.
@@ -61,8 +61,19 @@ impl Pair {
         }
     }
 
-    /// A difference as the failure of this scenario, with its history.
-    pub fn fail(&self, difference: Difference) -> Outcome {
+    /// A difference as the failure of this scenario, with its history. The
+    /// IUT's differing frame goes into the trace, which so ends with it.
+    pub fn fail(&mut self, difference: Difference) -> Outcome {
+        if let (
+            Some(trace),
+            Some(FrameDiff {
+                actual: Some(frame),
+                ..
+            }),
+        ) = (self.trace.as_mut(), difference.frames.as_deref())
+        {
+            let _ = trace.frame(self.now, frame, true);
+        }
         Outcome::Fail(Box::new(Failure {
             requirements: blame::narrow(&self.covers, difference.candidates),
             scenario: self.scenario.clone(),
@@ -73,6 +84,7 @@ impl Pair {
             actual: difference.actual,
             context: self.history.context(),
             timeline: self.history.timeline(),
+            frames: difference.frames.map(|f| *f),
         }))
     }
 
@@ -99,13 +111,18 @@ impl Pair {
         actual: Option<Result<Frame, InvalidFrame>>,
     ) -> Result<Option<Frame>, Difference> {
         let what = "frame handed to the controller".to_string();
-        Err(match (expected, actual) {
+        let frames = FrameDiff {
+            expected,
+            actual: actual.as_ref().and_then(|a| a.as_ref().ok().copied()),
+        };
+        let mut difference = match (expected, actual) {
             (None, None) => return Ok(None),
             (Some(e), Some(Ok(a))) if e == a => return Ok(Some(a)),
             (Some(e), Some(Ok(a))) => {
                 // A frame the model still holds is a real message sent out of turn.
                 let queued_later = self.model.send_queue().any(|f| *f == a);
                 Difference {
+                    frames: None,
                     candidates: if queued_later {
                         blame::TX_OTHER_FRAME
                     } else {
@@ -117,24 +134,29 @@ impl Pair {
                 }
             }
             (e, Some(Err(invalid))) => Difference {
+                frames: None,
                 candidates: blame::TX_INVALID,
                 what,
                 expected: e.map_or("no frame".into(), |f| f.to_string()),
                 actual: format!("invalid frame: {}", invalid.0),
             },
             (Some(e), None) => Difference {
+                frames: None,
                 candidates: blame::TX_MISSING,
                 what,
                 expected: e.to_string(),
                 actual: "no frame".into(),
             },
             (None, Some(Ok(a))) => Difference {
+                frames: None,
                 candidates: blame::TX_EXTRA,
                 what,
                 expected: "no frame".into(),
                 actual: a.to_string(),
             },
-        })
+        };
+        difference.frames = Some(Box::new(frames));
+        Err(difference)
     }
 
     /// A frame ended on the bus, and the IUT's controller learns of it.

@@ -7,7 +7,8 @@ use canif_model::config::{
     Capabilities, ConfigError, FrameFormat, InterfaceConfig, QueueMode, Synchronization,
 };
 use canif_model::filter::FilterRow;
-use canif_spec::{req_ids, Catalogue, Profile, ReqId, Verification};
+use canif_model::Nanos;
+use canif_spec::{req_ids, Catalogue, Profile, ReqId};
 
 use crate::bus::BusChoice;
 use crate::error::RunError;
@@ -16,6 +17,7 @@ use crate::iut_kind::IutKind;
 use crate::lockstep::run_scenario;
 use crate::outcome::{Failure, Outcome, ScenarioRun};
 use crate::scenario::{self, Scenario};
+use crate::verdict::{self, Check, CheckResult, Evidence, Finding, Reach, Verdict, VerdictKind};
 
 /// What to run.
 #[derive(Debug, Clone)]
@@ -29,10 +31,12 @@ pub struct Options {
     pub counter_wrap: bool,
     /// Write each scenario's bus trace under this folder (`PROFILE/SCENARIO.{log,pcapng}`).
     pub trace_dir: Option<std::path::PathBuf>,
+    /// What a trace stamps scenario time 0 with, in ns since the Unix epoch.
+    pub trace_epoch: Nanos,
     /// The bus the scenarios run on.
     pub bus: BusChoice,
-    /// Only scenarios whose name contains one of these (all when empty).
-    pub only: Vec<String>,
+    /// Which scenarios run (all by default).
+    pub selection: Selection,
     /// After the IUT breaks in a profile, report the profile's remaining
     /// scenarios as skipped instead of starting the broken IUT again.
     pub fail_fast: bool,
@@ -47,9 +51,10 @@ impl Options {
             generated_cycles: 100,
             counter_wrap: false,
             trace_dir: None,
+            trace_epoch: 0,
             bus: BusChoice::Sim,
             fail_fast: true,
-            only: Vec::new(),
+            selection: Selection::default(),
         }
     }
 }
@@ -65,27 +70,42 @@ impl Default for Options {
     }
 }
 
-/// A requirement's verdict on one profile.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Verdict {
-    Pass,
-    /// Indexes into [`ProfileRun::failures`].
-    Fail(Vec<usize>),
-    Error(String),
-    /// The profile lacks a capability the requirement needs.
-    NotApplicable(String),
-    /// Nothing in a run against an IUT checks it (the model's tests do, or inspection).
-    NotTestable(String),
+/// What a run is asked to run: everything, or the checks whose name contains
+/// one of `scenarios` or that exercise one of `requirements`.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Selection {
+    pub scenarios: Vec<String>,
+    pub requirements: Vec<String>,
 }
 
-impl Verdict {
-    pub fn label(&self) -> &'static str {
-        match self {
-            Verdict::Pass => "pass",
-            Verdict::Fail(_) => "fail",
-            Verdict::Error(_) => "error",
-            Verdict::NotApplicable(_) => "not applicable",
-            Verdict::NotTestable(_) => "not testable",
+impl Selection {
+    pub fn is_everything(&self) -> bool {
+        self.scenarios.is_empty() && self.requirements.is_empty()
+    }
+
+    /// Does the selection take a check of this name that exercises `covers`?
+    pub fn admits<'a>(&self, name: &str, mut covers: impl Iterator<Item = &'a str>) -> bool {
+        self.is_everything()
+            || self.scenarios.iter().any(|s| name.contains(s.as_str()))
+            || covers.any(|id| self.requirements.iter().any(|r| r == id))
+    }
+
+    /// The command line that made it, for a `not run` verdict.
+    pub fn describe(&self) -> String {
+        let mut parts: Vec<String> = self
+            .scenarios
+            .iter()
+            .map(|s| format!("--scenario {s}"))
+            .collect();
+        parts.extend(
+            self.requirements
+                .iter()
+                .map(|r| format!("--requirement {r}")),
+        );
+        if parts.is_empty() {
+            "not selected".into()
+        } else {
+            format!("left out by the selection ({})", parts.join(" "))
         }
     }
 }
@@ -104,8 +124,38 @@ impl ProfileRun {
     pub fn failed_requirements(&self) -> Vec<String> {
         self.verdicts
             .iter()
-            .filter(|(_, v)| matches!(v, Verdict::Fail(_)))
+            .filter(|(_, v)| v.kind() == VerdictKind::Fail)
             .map(|(id, _)| id.clone())
+            .collect()
+    }
+
+    /// The lockstep scenarios as checks for [`verdict::judge`].
+    pub fn checks(&self) -> Vec<Check> {
+        let mut failures = 0;
+        self.runs
+            .iter()
+            .map(|run| Check {
+                evidence: Evidence::Scenario(run.scenario.clone()),
+                covers: run.covers.iter().map(|id| id.to_string()).collect(),
+                result: match &run.outcome {
+                    Outcome::Pass => CheckResult::Pass,
+                    Outcome::Fail(failure) => {
+                        failures += 1;
+                        CheckResult::Fail(Finding {
+                            requirements: failure
+                                .requirements
+                                .iter()
+                                .map(|id| id.to_string())
+                                .collect(),
+                            cause: failure.cause(),
+                            details: failure.details(),
+                            failure: Some(failures - 1),
+                        })
+                    }
+                    Outcome::Error(error) => CheckResult::Error(error.to_string()),
+                },
+                elapsed: run.elapsed,
+            })
             .collect()
     }
 
@@ -287,6 +337,9 @@ fn refusal_ids(error: &ConfigError) -> &'static [ReqId] {
     }
 }
 
+/// The refusal check's name.
+pub const REFUSALS: &str = "configuration refusals";
+
 /// Requirements the refusal check exercises.
 pub const REFUSAL_IDS: &[ReqId] = req_ids![
     "PROF-001",
@@ -346,13 +399,14 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
                                 Err(BuildError::Refused(reason)) => Err(reason),
                                 Err(BuildError::Failed(reason)) => {
                                     return ScenarioRun {
-                                        scenario: "configuration refusals".into(),
+                                        scenario: REFUSALS.into(),
                                         covers: REFUSAL_IDS.to_vec(),
                                         outcome: Outcome::Error(
                                             crate::error::IutError(reason).into(),
                                         ),
                                         cycles: checked,
                                         frames_checked: 0,
+                                        elapsed: std::time::Duration::ZERO,
                                     };
                                 }
                             };
@@ -363,7 +417,7 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
                                 };
                                 let failure = Failure {
                                     requirements,
-                                    scenario: "configuration refusals".into(),
+                                    scenario: REFUSALS.into(),
                                     cycle: 0,
                                     time: 0,
                                     what: format!(
@@ -380,13 +434,15 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
                                     },
                                     context: Vec::new(),
                                     timeline: Vec::new(),
+                                    frames: None,
                                 };
                                 return ScenarioRun {
-                                    scenario: "configuration refusals".into(),
+                                    scenario: REFUSALS.into(),
                                     covers: REFUSAL_IDS.to_vec(),
                                     outcome: Outcome::Fail(Box::new(failure)),
                                     cycles: checked,
                                     frames_checked: 0,
+                                    elapsed: std::time::Duration::ZERO,
                                 };
                             }
                         }
@@ -396,11 +452,12 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
         }
     }
     ScenarioRun {
-        scenario: "configuration refusals".into(),
+        scenario: REFUSALS.into(),
         covers: REFUSAL_IDS.to_vec(),
         outcome: Outcome::Pass,
         cycles: checked,
         frames_checked: 0,
+        elapsed: std::time::Duration::ZERO,
     }
 }
 
@@ -426,15 +483,25 @@ pub fn run_profile(
     mut progress: impl FnMut(&ScenarioRun),
 ) -> ProfileRun {
     let caps = profile.model_capabilities();
-    let mut runs = vec![check_refusals(kind, &caps)];
-    progress(&runs[0]);
-    let mut broken = broke_in(&runs[0]).filter(|_| options.fail_fast);
+    let mut runs = Vec::new();
+    if options
+        .selection
+        .admits(REFUSALS, REFUSAL_IDS.iter().map(ReqId::as_str))
+    {
+        let started = std::time::Instant::now();
+        let mut run = check_refusals(kind, &caps);
+        run.elapsed = started.elapsed();
+        runs.push(run);
+        progress(&runs[0]);
+    }
+    let mut broken = runs
+        .first()
+        .and_then(broke_in)
+        .filter(|_| options.fail_fast);
     for mut scenario in scenarios(&caps, options) {
-        if options
-            .only
-            .iter()
-            .all(|only| !scenario.name.contains(only.as_str()))
-            && !options.only.is_empty()
+        if !options
+            .selection
+            .admits(&scenario.name, scenario.covers.iter().map(ReqId::as_str))
         {
             continue;
         }
@@ -452,7 +519,7 @@ pub fn run_profile(
                     }
                 })
                 .collect();
-            scenario.trace = Some((dir.join(&profile.name), name));
+            scenario.trace = Some((dir.join(&profile.name), name, options.trace_epoch));
         }
         let run = match &broken {
             Some(after) => ScenarioRun {
@@ -461,9 +528,15 @@ pub fn run_profile(
                 outcome: Outcome::Error(RunError::Skipped(after.clone())),
                 cycles: 0,
                 frames_checked: 0,
+                elapsed: std::time::Duration::ZERO,
             },
             None if crate::interrupt::requested() => break,
-            None => run_scenario(kind, &caps, &scenario, scenario.steps()),
+            None => {
+                let started = std::time::Instant::now();
+                let mut run = run_scenario(kind, &caps, &scenario, scenario.steps());
+                run.elapsed = started.elapsed();
+                run
+            }
         };
         if options.fail_fast && broken.is_none() {
             broken = broke_in(&run);
@@ -471,70 +544,50 @@ pub fn run_profile(
         progress(&run);
         runs.push(run);
     }
-    judge(catalogue, profile, runs)
+    judge(catalogue, profile, runs, options)
 }
 
-/// Verdicts from scenario runs.
-pub fn judge(catalogue: &Catalogue, profile: &Profile, runs: Vec<ScenarioRun>) -> ProfileRun {
-    let mut failures = Vec::new();
-    let mut failed: BTreeMap<String, Vec<usize>> = BTreeMap::new();
-    let mut errors: BTreeMap<String, String> = BTreeMap::new();
-    for run in &runs {
-        match &run.outcome {
-            Outcome::Fail(failure) => {
-                for id in &failure.requirements {
-                    failed
-                        .entry(id.to_string())
-                        .or_default()
-                        .push(failures.len());
-                }
-                failures.push(failure.as_ref().clone());
-            }
-            Outcome::Error(message) => {
-                for id in &run.covers {
-                    errors
-                        .entry(id.to_string())
-                        .or_insert_with(|| format!("{}: {message}", run.scenario));
-                }
-            }
-            Outcome::Pass => {}
-        }
-    }
-    let mut verdicts = BTreeMap::new();
-    for requirement in catalogue.requirements() {
-        let missing = profile.lacks(&requirement.capabilities);
-        let checked = runs
-            .iter()
-            .any(|r| r.covers.iter().any(|c| *c == requirement.id));
-        let verdict = if !missing.is_empty() {
-            Verdict::NotApplicable(format!("{} lacks {}", profile.name, missing.join(", ")))
-        } else if let Some(indexes) = failed.get(&requirement.id) {
-            Verdict::Fail(indexes.clone())
-        } else if let Some(message) = errors.get(&requirement.id) {
-            Verdict::Error(message.clone())
-        } else if checked {
-            Verdict::Pass
-        } else if requirement.verification == Verification::Inspection {
-            Verdict::NotTestable(requirement.reason.clone().unwrap_or_default())
-        } else {
-            Verdict::NotTestable(
-                "checked by the model's own tests, not by a run against an IUT".into(),
-            )
-        };
-        verdicts.insert(requirement.id.clone(), verdict);
-    }
-    ProfileRun {
+/// The lockstep's own verdicts from its scenario runs (the report merges
+/// them with the Gherkin scenarios' through [`verdict::judge`] again).
+pub fn judge(
+    catalogue: &Catalogue,
+    profile: &Profile,
+    runs: Vec<ScenarioRun>,
+    options: &Options,
+) -> ProfileRun {
+    let failures = runs
+        .iter()
+        .filter_map(|run| match &run.outcome {
+            Outcome::Fail(failure) => Some(failure.as_ref().clone()),
+            _ => None,
+        })
+        .collect();
+    let mut run = ProfileRun {
         profile: profile.name.clone(),
         runs,
         failures,
-        verdicts,
-    }
+        verdicts: BTreeMap::new(),
+    };
+    let reach = Reach {
+        here: checked_ids(&profile.model_capabilities(), options)
+            .into_iter()
+            .collect(),
+        elsewhere: BTreeMap::new(),
+        left_out: options.selection.describe(),
+    };
+    run.verdicts = verdict::judge(catalogue, profile, &run.checks(), &reach);
+    run
 }
 
 /// Every requirement the scenarios and checks of a run exercise on a device
-/// with these capabilities: exactly what [`judge`] can call pass or fail.
+/// with these capabilities: exactly what [`judge`] can call pass or fail,
+/// whatever the selection.
 pub fn checked_ids(caps: &Capabilities, options: &Options) -> Vec<String> {
-    let mut ids: Vec<String> = scenarios(caps, options)
+    let everything = Options {
+        cases: options.cases.max(1),
+        ..options.clone()
+    };
+    let mut ids: Vec<String> = scenarios(caps, &everything)
         .into_iter()
         .flat_map(|s| s.covers)
         .map(|id| id.to_string())

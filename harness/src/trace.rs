@@ -31,6 +31,7 @@ mod direction {
 
 /// Writes one scenario's bus to `NAME.log` and `NAME.pcapng`.
 pub struct TraceWriter {
+    epoch: Nanos,
     interface: String,
     candump: BufWriter<File>,
     pcapng: PcapNgWriter<BufWriter<File>>,
@@ -67,8 +68,10 @@ fn socketcan_packet(frame: &Frame) -> Vec<u8> {
 }
 
 impl TraceWriter {
-    /// Starts `DIR/NAME.log` and `DIR/NAME.pcapng` for a bus called `interface`.
-    pub fn create(dir: &Path, name: &str, interface: &str) -> io::Result<Self> {
+    /// Starts `DIR/NAME.log` and `DIR/NAME.pcapng` for a bus called
+    /// `interface`; scenario time 0 is stamped `epoch` (ns since the Unix epoch),
+    /// so that tools such as `log2asc` see one real start time.
+    pub fn create(dir: &Path, name: &str, interface: &str, epoch: Nanos) -> io::Result<Self> {
         std::fs::create_dir_all(dir)?;
         let file = BufWriter::new(File::create(dir.join(format!("{name}.pcapng")))?);
         let mut pcapng = PcapNgWriter::new(file).map_err(pcap_error)?;
@@ -85,6 +88,7 @@ impl TraceWriter {
             .map_err(pcap_error)?;
         let candump = BufWriter::new(File::create(dir.join(format!("{name}.log")))?);
         Ok(TraceWriter {
+            epoch,
             interface: interface.to_string(),
             candump,
             pcapng,
@@ -93,6 +97,7 @@ impl TraceWriter {
 
     /// A frame that ended on the bus at `at`; `from_iut`: the IUT sent it.
     pub fn frame(&mut self, at: Nanos, frame: &Frame, from_iut: bool) -> io::Result<()> {
+        let at = self.epoch.saturating_add(at);
         writeln!(
             self.candump,
             "({}.{:06}) {} {frame}",

@@ -6,7 +6,6 @@
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
-use canif_harness::report::details;
 use canif_harness::suite::{checked_ids, run_profile, Options};
 use canif_harness::{IutKind, ProfileRun, Verdict};
 use canif_spec::Catalogue;
@@ -73,15 +72,18 @@ fn main() {
             trials.push(Trial::test(name, move || {
                 let run = profile_run(&catalogue, &profile_name);
                 match run.verdicts.get(&id) {
-                    Some(Verdict::Pass) => Ok(()),
-                    Some(Verdict::Fail(indexes)) => Err(Failed::from(
-                        indexes
+                    Some(Verdict::Pass(_)) => Ok(()),
+                    Some(Verdict::Fail(found)) => Err(Failed::from(
+                        found
                             .iter()
-                            .map(|i| details(&run.failures[*i]))
+                            .map(|(_, finding)| finding.details.clone())
                             .collect::<Vec<_>>()
                             .join("\n\n"),
                     )),
-                    Some(Verdict::Error(message)) => Err(Failed::from(format!("error: {message}"))),
+                    Some(verdict @ Verdict::Error(_)) => Err(Failed::from(format!(
+                        "error: {}",
+                        verdict.reason().unwrap_or_default()
+                    ))),
                     other => Err(Failed::from(format!(
                         "listed as checked on this profile, but the run says {other:?}"
                     ))),

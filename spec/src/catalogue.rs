@@ -126,6 +126,41 @@ pub struct Catalogue {
     pub rulings: Vec<Ruling>,
     pub areas: Vec<Area>,
     pub profiles: Vec<Profile>,
+    /// SHA-256 (hex) over the files this catalogue was read from, each named
+    /// as in `spec/` (`sources.yaml`, `requirements/…`): the same files give
+    /// the same hash whether embedded or read with `--spec`.
+    pub sha256: String,
+}
+
+/// A file's name as in `spec/`, wherever it was read from.
+fn spec_name(path: &str) -> String {
+    let parts: Vec<&str> = path.rsplit(['/', '\\']).take(2).collect();
+    match parts.as_slice() {
+        [name, dir] if *dir == "requirements" || *dir == "profiles" => format!("{dir}/{name}"),
+        [name, ..] => name.to_string(),
+        [] => path.to_string(),
+    }
+}
+
+fn files_sha256(files: &[(String, String)]) -> String {
+    use sha2::{Digest, Sha256};
+    let mut named: Vec<(String, &str)> = files
+        .iter()
+        .map(|(path, text)| (spec_name(path), text.as_str()))
+        .collect();
+    named.sort();
+    let mut hasher = Sha256::new();
+    for (name, text) in named {
+        hasher.update(name.as_bytes());
+        hasher.update([0]);
+        hasher.update(text.as_bytes());
+        hasher.update([0]);
+    }
+    hasher
+        .finalize()
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
 }
 
 /// The 1-based line of the first line containing `needle` at or after `from`.
@@ -408,6 +443,7 @@ impl Catalogue {
             rulings,
             areas,
             profiles,
+            sha256: files_sha256(files),
         };
         catalogue.validate(&texts, &mut errors);
         if errors.is_empty() {

@@ -3,114 +3,169 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use canif_harness::suite::{run_profile, Options};
+use canif_harness::certificate::{self, Certificate};
+use canif_harness::compare::CompareOptions;
+use canif_harness::report::{Product, ReportFile};
+use canif_harness::suite::Options;
 use canif_spec::Catalogue;
 
 use super::resolve_iut;
-use super::run::run_features;
-use crate::cli::IutOptions;
+use super::run::{check_selection, execute, finish, profiles, Plan};
+use crate::cli::{CompareFormat, IutOptions};
+
+/// How to check a certificate without canif, for the output and the docs.
+fn ssh_keygen_command(certificate: &Path) -> String {
+    format!(
+        "echo \"certifier namespaces=\\\"{ns}\\\" $(cat KEY.pub)\" > allowed_signers && ssh-keygen -Y verify -f allowed_signers -I certifier -n {ns} -s {sig} < {cert}",
+        ns = certificate::NAMESPACE,
+        sig = certificate.with_extension("json.sig").display(),
+        cert = certificate.display()
+    )
+}
 
 pub fn certify(
     catalogue: &Catalogue,
-    profile: &str,
+    profile_names: &[String],
     iut: &IutOptions,
+    product: Option<Product>,
     seed: u64,
     out: &Path,
+    key: Option<&Path>,
 ) -> ExitCode {
     let kind = match resolve_iut(iut) {
         Ok(kind) => kind,
         Err(code) => return code,
     };
-    let Some(profile) = catalogue.profile(profile) else {
-        eprintln!("unknown profile `{profile}`; `canif profiles` lists them");
-        return ExitCode::from(2);
+    let profiles = match profiles(catalogue, profile_names) {
+        Ok(p) => p,
+        Err(code) => return code,
     };
-    let options = Options {
-        seed,
-        ..Options::default()
-    };
-    let run = run_profile(catalogue, profile, &kind, &options, |r| {
-        eprintln!("  {}", r.scenario)
-    });
-    let scenarios = match run_features(&kind, &[profile]) {
-        Ok(scenarios) => scenarios,
-        Err(error) => {
-            eprintln!("the feature files do not parse: {error}");
+    if let Some(key) = key {
+        // A key that cannot sign is found out before the run, not after it.
+        if let Err(error) = certificate::sign(b"", key) {
+            eprintln!("--key {error}");
             return ExitCode::from(2);
         }
+    }
+    let plan = Plan {
+        profiles,
+        options: Options {
+            seed,
+            ..Options::default()
+        },
+        product,
     };
-    let failed = scenarios.iter().filter(|s| s.outcome.is_err()).count();
-    let files: Vec<(String, String)> = canif_spec::embedded_files()
-        .iter()
-        .map(|(p, t)| (p.to_string(), t.to_string()))
-        .collect();
-    let hash = canif_harness::certificate::catalogue_hash(&files);
-    let certificate = canif_harness::certificate::certificate(
-        catalogue,
-        &hash,
-        &run,
-        &kind.name(),
-        seed,
-        (scenarios.len(), failed),
-    );
+    if let Err(code) = check_selection(catalogue, &plan) {
+        return code;
+    }
+    let report = match execute(catalogue, &kind, &plan) {
+        Ok(report) => report,
+        Err(code) => return code,
+    };
+    let code = finish(catalogue, &report, &out.join("run"));
+    let mut cert = Certificate::of(&report);
+    let page = certificate::html(&cert, catalogue);
+    cert.html_sha256 = certificate::sha256_hex(page.as_bytes());
+    let bytes = cert.canonical();
+    let json = out.join("certificate.json");
+    let sig = out.join("certificate.json.sig");
     let written = std::fs::create_dir_all(out)
-        .and_then(|_| {
-            std::fs::write(
-                out.join("certificate.json"),
-                serde_json::to_string_pretty(&certificate).unwrap_or_default(),
-            )
-        })
-        .and_then(|_| {
-            std::fs::write(
-                out.join("certificate.html"),
-                canif_harness::certificate::html(&certificate, catalogue),
-            )
-        });
+        .and_then(|()| std::fs::write(out.join("certificate.html"), &page))
+        .and_then(|()| std::fs::write(&json, &bytes));
     if let Err(error) = written {
         eprintln!("cannot write the certificate to {}: {error}", out.display());
         return ExitCode::from(2);
     }
-    println!(
-        "{} {} on {}: {} — {}/certificate.{{json,html}}, seal {}",
-        kind.name(),
-        if certificate["conforms"] == serde_json::json!(true) {
-            "CONFORMS"
-        } else {
-            "DOES NOT CONFORM"
+    match key {
+        Some(key) => match certificate::sign(&bytes, key).map(|s| std::fs::write(&sig, s)) {
+            Ok(Ok(())) => println!(
+                "certificate: {} — signed in {}; check it without canif:\n  {}",
+                if cert.conforms {
+                    "CONFORMS"
+                } else {
+                    "DOES NOT CONFORM"
+                },
+                sig.display(),
+                ssh_keygen_command(&json)
+            ),
+            Ok(Err(error)) => {
+                eprintln!("cannot write {}: {error}", sig.display());
+                return ExitCode::from(2);
+            }
+            Err(error) => {
+                eprintln!("--key {error}");
+                return ExitCode::from(2);
+            }
         },
-        profile.name,
-        certificate["totals"],
-        out.display(),
-        certificate["result_sha256"].as_str().unwrap_or("")
-    );
-    let errors = run
-        .verdicts
-        .values()
-        .any(|v| matches!(v, canif_harness::Verdict::Error(_)));
-    ExitCode::from(if errors {
-        2
-    } else {
-        u8::from(certificate["conforms"] != serde_json::json!(true))
-    })
+        None => {
+            // A stale signature beside a new certificate would verify nothing.
+            let _ = std::fs::remove_file(&sig);
+            println!(
+                "certificate: {} — UNSIGNED (no --key): anyone could have written {}",
+                if cert.conforms {
+                    "CONFORMS"
+                } else {
+                    "DOES NOT CONFORM"
+                },
+                json.display()
+            );
+        }
+    }
+    code
 }
 
-pub fn verify_certificate(path: &Path) -> ExitCode {
-    let certificate: serde_json::Value = match std::fs::read_to_string(path)
-        .map_err(|e| e.to_string())
-        .and_then(|t| serde_json::from_str(&t).map_err(|e| e.to_string()))
-    {
-        Ok(value) => value,
+/// `certify --verify CERT --pubkey KEY.pub`: the signature, and the HTML's hash.
+pub fn verify_certificate(path: &Path, pubkey: &Path) -> ExitCode {
+    let bytes = match std::fs::read(path) {
+        Ok(bytes) => bytes,
         Err(error) => {
             eprintln!("{}: {error}", path.display());
             return ExitCode::from(2);
         }
     };
-    match canif_harness::certificate::verify(&certificate) {
-        Ok(()) => {
+    let cert = match Certificate::parse(&bytes) {
+        Ok(cert) => cert,
+        Err(error) => {
+            eprintln!("{}: {error}", path.display());
+            return ExitCode::from(2);
+        }
+    };
+    let sig_path = path.with_extension("json.sig");
+    let Ok(signature) = std::fs::read_to_string(&sig_path) else {
+        println!(
+            "{}: UNSIGNED — there is no {} beside it",
+            path.display(),
+            sig_path.display()
+        );
+        return ExitCode::from(1);
+    };
+    match certificate::verify(&bytes, &signature, pubkey) {
+        Ok(fingerprint) => {
+            let html = path.with_file_name("certificate.html");
+            let page = match std::fs::read(&html) {
+                Ok(page) if certificate::sha256_hex(&page) == cert.html_sha256 => {
+                    "the HTML beside it matches".to_string()
+                }
+                Ok(_) => {
+                    println!(
+                        "{}: the signature is good, but {} is not the page it was signed with",
+                        path.display(),
+                        html.display()
+                    );
+                    return ExitCode::from(1);
+                }
+                Err(_) => format!("no {} to check", html.display()),
+            };
             println!(
-                "{}: the seal matches ({})",
+                "{}: good signature by {fingerprint}; {}, {} on {}; {page}",
                 path.display(),
-                certificate["result_sha256"].as_str().unwrap_or("")
+                if cert.conforms {
+                    "CONFORMS"
+                } else {
+                    "DOES NOT CONFORM"
+                },
+                cert.iut,
+                cert.profiles.join(", ")
             );
             ExitCode::SUCCESS
         }
@@ -121,12 +176,16 @@ pub fn verify_certificate(path: &Path) -> ExitCode {
     }
 }
 
-pub fn compare(base: &Path, new: &Path) -> ExitCode {
-    let load = |path: &Path| -> Result<std::collections::BTreeMap<String, String>, String> {
+pub fn compare(
+    base: &Path,
+    new: &Path,
+    options: CompareOptions,
+    format: CompareFormat,
+    out: &mut String,
+) -> ExitCode {
+    let load = |path: &Path| -> Result<ReportFile, String> {
         let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let report = canif_harness::report::ReportFile::parse(&text)
-            .map_err(|e| format!("{}: {e}", path.display()))?;
-        Ok(canif_harness::compare::verdicts(&report))
+        ReportFile::parse(&text).map_err(|e| format!("{}: {e}", path.display()))
     };
     let (base, new) = match (load(base), load(new)) {
         (Ok(base), Ok(new)) => (base, new),
@@ -135,7 +194,24 @@ pub fn compare(base: &Path, new: &Path) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let comparison = canif_harness::compare::compare(&base, &new);
-    print!("{}", comparison.markdown());
-    ExitCode::from(u8::from(!comparison.regressions.is_empty()))
+    let comparison = match canif_harness::compare::compare(&base, &new, options) {
+        Ok(comparison) => comparison,
+        Err(mismatches) => {
+            eprintln!(
+                "the two reports do not describe the same run (--force compares them anyway):"
+            );
+            for mismatch in mismatches {
+                eprintln!("  {mismatch}");
+            }
+            return ExitCode::from(2);
+        }
+    };
+    match format {
+        CompareFormat::Markdown => out.push_str(&comparison.markdown()),
+        CompareFormat::Json => {
+            out.push_str(&serde_json::to_string_pretty(&comparison).unwrap_or_default());
+            out.push('\n');
+        }
+    }
+    ExitCode::from(u8::from(comparison.regressed()))
 }

@@ -122,16 +122,40 @@ fn coupler_on_bus(bus: &str, _: &mut canif_model::canopen::coupler::Coupler) -> 
     ExitCode::from(2)
 }
 
+/// What `canif run --suite canopen` checks, and how.
+pub struct CanopenRun<'a> {
+    pub bus: &'a BusChoice,
+    pub node: u8,
+    pub fault: Option<&'a str>,
+    pub seed: u64,
+    pub product: Option<canif_harness::report::Product>,
+}
+
 /// `canif run --suite canopen`: the CANopen node checks (002, 004), on the
-/// simulated coupler or on a node on a SocketCAN interface.
-pub fn canopen_suite(bus: &BusChoice, node: u8, fault: Option<&str>) -> ExitCode {
-    let node = match node_id(node) {
+/// simulated coupler or on a node on a SocketCAN interface, with the same
+/// reports as the interface suite.
+pub fn canopen_suite(
+    catalogue: &canif_spec::Catalogue,
+    iut: &crate::cli::IutOptions,
+    selection: &canif_harness::Selection,
+    run: &CanopenRun,
+    report_dir: &std::path::Path,
+) -> ExitCode {
+    if iut.iut != crate::cli::IutArg::SoftDevice || !iut.fault.is_empty() {
+        eprintln!("--suite canopen checks a CANopen node (the simulated coupler, or a node on --bus), not an interface IUT: --iut and --fault do not apply (--coupler-fault does)");
+        return ExitCode::from(2);
+    }
+    let node = match node_id(run.node) {
         Ok(node) => node,
         Err(code) => return code,
     };
-    let (results, target) = match bus {
+    let started_unix = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let started = std::time::Instant::now();
+    let (results, target) = match run.bus {
         BusChoice::Sim => {
-            let mut coupler = match coupler_fault(fault) {
+            let mut coupler = match coupler_fault(run.fault) {
                 Ok(chosen) => simulated_coupler(node, chosen),
                 Err(code) => return code,
             };
@@ -139,13 +163,13 @@ pub fn canopen_suite(bus: &BusChoice, node: u8, fault: Option<&str>) -> ExitCode
             let target = format!(
                 "simulated coupler, node {}{}",
                 node.get(),
-                fault.map_or(String::new(), |f| format!(" with {f}"))
+                run.fault.map_or(String::new(), |f| format!(" with {f}"))
             );
             (results, target)
         }
         #[cfg(feature = "socketcan")]
         BusChoice::SocketCan(options) => {
-            if fault.is_some() {
+            if run.fault.is_some() {
                 eprintln!("--coupler-fault applies to the simulated coupler; on a SocketCAN bus, start `canif coupler --bus … --fault …` instead");
                 return ExitCode::from(2);
             }
@@ -169,22 +193,81 @@ pub fn canopen_suite(bus: &BusChoice, node: u8, fault: Option<&str>) -> ExitCode
             (results, target)
         }
     };
-    let mut failed = 0;
-    for result in &results {
-        match &result.outcome {
-            Ok(()) => println!("pass  {} ({})", result.name, result.requirements.join(", ")),
-            Err(why) => {
-                failed += 1;
-                println!(
-                    "FAIL  {} ({}): {why}",
-                    result.name,
-                    result.requirements.join(", ")
-                );
-            }
+    let selected: Vec<_> = results
+        .into_iter()
+        .filter(|c| selection.admits(c.name, c.requirements.iter().copied()))
+        .collect();
+    if selected.is_empty() {
+        eprintln!(
+            "{} matches no CANopen node check; `canif run --suite canopen` runs them all",
+            selection.describe()
+        );
+        return ExitCode::from(2);
+    }
+    for check in &selected {
+        match &check.outcome {
+            Ok(()) => eprintln!("pass  {} ({})", check.name, check.requirements.join(", ")),
+            Err(why) => eprintln!(
+                "FAIL  {} ({}): {why}",
+                check.name,
+                check.requirements.join(", ")
+            ),
         }
     }
-    println!("{target}: {} checks, {failed} failed", results.len());
-    ExitCode::from(u8::from(failed > 0))
+    // The node is judged against every requirement as one "profile" with every capability.
+    let mut profile = catalogue.profiles[0].clone();
+    profile.name = format!("canopen-node-{}", node.get());
+    profile.capabilities = catalogue
+        .capabilities
+        .iter()
+        .map(|c| c.name.clone())
+        .collect();
+    let mut elsewhere = std::collections::BTreeMap::new();
+    for p in &catalogue.profiles {
+        for id in canif_harness::suite::checked_ids(
+            &p.model_capabilities(),
+            &canif_harness::Options::default(),
+        ) {
+            elsewhere.insert(
+                id,
+                "exercised by the interface suite (`canif run`)".to_string(),
+            );
+        }
+    }
+    let reach = canif_harness::verdict::Reach {
+        here: canif_harness::canopen::node_check_ids()
+            .iter()
+            .map(|s| s.to_string())
+            .collect(),
+        elsewhere,
+        left_out: selection.describe(),
+    };
+    let report = canif_harness::report::RunReport {
+        meta: canif_harness::report::RunMeta {
+            complete: selection.is_everything(),
+            product: run.product.clone(),
+            left_out: (!selection.is_everything()).then(|| selection.describe()),
+            started_unix,
+            suite: canif_harness::report::SuiteKind::Canopen,
+            ..canif_harness::report::RunMeta::new(profile.name.clone(), target, run.seed, catalogue)
+        },
+        profiles: vec![canif_harness::report::ProfileReport::new(
+            catalogue,
+            &profile,
+            canif_harness::suite::judge(
+                catalogue,
+                &profile,
+                Vec::new(),
+                &canif_harness::Options::default(),
+            ),
+            Vec::new(),
+            selected,
+            &reach,
+        )],
+        wall_time_ms: started.elapsed().as_millis(),
+        interrupted: false,
+    };
+    super::run::finish(catalogue, &report, report_dir)
 }
 
 /// The quick start's coupler (2 digital, 4 analog channels), with a fault if asked.

@@ -1,4 +1,6 @@
-//! `canif run` (the interface suite) and `canif self-check`.
+//! `canif run` (the interface suite), `canif list scenarios` and `canif
+//! self-check`. A run is planned (profiles, selection), executed (lockstep,
+//! then Gherkin), judged once per requirement × profile, and reported.
 
 use std::io::{IsTerminal, Write as _};
 use std::path::Path;
@@ -7,39 +9,142 @@ use std::process::ExitCode;
 #[cfg(feature = "socketcan")]
 use canif_harness::bus::kernel::KernelBusOptions;
 use canif_harness::bus::BusChoice;
-use canif_harness::report::{RunReport, ScenarioResult};
-use canif_harness::suite::{run_profile, Options};
-use canif_harness::{IutKind, Outcome};
-use canif_spec::Catalogue;
+use canif_harness::report::{Product, ProfileReport, RunMeta, RunReport};
+use canif_harness::suite::{checked_ids, run_profile, scenarios, Options, REFUSALS};
+use canif_harness::verdict::Reach;
+use canif_harness::{GherkinOutcome, GherkinRun, IutKind, Outcome};
+use canif_spec::{Catalogue, Profile};
 
 use super::resolve_iut;
 use crate::cli::{BusArg, IutOptions, RealTimeOptions};
 
-pub fn run(
-    catalogue: &Catalogue,
-    iut: &IutOptions,
-    profile: &str,
-    options: &Options,
-    report_dir: &Path,
-) -> ExitCode {
+/// A run, checked before anything starts.
+pub struct Plan<'c> {
+    pub profiles: Vec<&'c Profile>,
+    pub options: Options,
+    pub product: Option<Product>,
+}
+
+/// The profiles named on the command line (`all`, or names), or the exit code of a usage error.
+pub fn profiles<'c>(
+    catalogue: &'c Catalogue,
+    names: &[String],
+) -> Result<Vec<&'c Profile>, ExitCode> {
+    if names.is_empty() || names.iter().any(|n| n == "all") {
+        return Ok(catalogue.profiles.iter().collect());
+    }
+    let mut chosen = Vec::new();
+    for name in names {
+        match catalogue.profile(name) {
+            Some(p) if !chosen.iter().any(|c: &&Profile| c.name == p.name) => chosen.push(p),
+            Some(_) => {}
+            None => {
+                let known: Vec<_> = catalogue.profiles.iter().map(|p| p.name.as_str()).collect();
+                eprintln!("unknown profile `{name}`; known: {}", known.join(", "));
+                return Err(ExitCode::from(2));
+            }
+        }
+    }
+    Ok(chosen)
+}
+
+/// Every check a plan could run: (profile, name, requirements exercised).
+fn candidates(plan: &Plan) -> Result<Vec<(String, String, Vec<String>)>, String> {
+    let mut list = Vec::new();
+    for profile in &plan.profiles {
+        let caps = profile.model_capabilities();
+        list.push((
+            profile.name.clone(),
+            REFUSALS.to_string(),
+            canif_harness::suite::REFUSAL_IDS
+                .iter()
+                .map(|id| id.to_string())
+                .collect(),
+        ));
+        for scenario in scenarios(&caps, &plan.options) {
+            let covers = scenario.covers.iter().map(|id| id.to_string()).collect();
+            list.push((profile.name.clone(), scenario.name, covers));
+        }
+    }
+    for (profile, scenario) in gherkin_targets(&plan.profiles)? {
+        list.push((profile, scenario.id(), scenario.requirements.clone()));
+    }
+    Ok(list)
+}
+
+/// Checks the selection against the catalogue and the scenarios: an unknown
+/// requirement or a selection that matches nothing is a usage error.
+pub fn check_selection(catalogue: &Catalogue, plan: &Plan) -> Result<(), ExitCode> {
+    let selection = &plan.options.selection;
+    for id in &selection.requirements {
+        if catalogue.requirement(id).is_none() {
+            eprintln!("--requirement {id}: no such requirement; `canif spec list` lists them");
+            return Err(ExitCode::from(2));
+        }
+    }
+    if selection.is_everything() {
+        return Ok(());
+    }
+    let candidates = candidates(plan).map_err(|error| {
+        eprintln!("the feature files do not parse: {error}");
+        ExitCode::from(2)
+    })?;
+    let matched = candidates
+        .iter()
+        .any(|(_, name, covers)| selection.admits(name, covers.iter().map(String::as_str)));
+    if matched {
+        Ok(())
+    } else {
+        eprintln!(
+            "{} matches no check on {}; `canif list scenarios` lists them",
+            selection
+                .describe()
+                .trim_start_matches("left out by the selection "),
+            plan.profiles
+                .iter()
+                .map(|p| p.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        Err(ExitCode::from(2))
+    }
+}
+
+/// `canif list scenarios`: every check a run of these profiles can run.
+pub fn list_scenarios(catalogue: &Catalogue, names: &[String], out: &mut String) -> ExitCode {
+    let profiles = match profiles(catalogue, names) {
+        Ok(p) => p,
+        Err(code) => return code,
+    };
+    let plan = Plan {
+        profiles,
+        options: Options::default(),
+        product: None,
+    };
+    match candidates(&plan) {
+        Ok(list) => {
+            for (profile, name, covers) in list {
+                outln!(out, "{profile}\t{name}\t{}", covers.join(" "));
+            }
+            ExitCode::SUCCESS
+        }
+        Err(error) => {
+            eprintln!("the feature files do not parse: {error}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+pub fn run(catalogue: &Catalogue, iut: &IutOptions, plan: &Plan, report_dir: &Path) -> ExitCode {
     let kind = match resolve_iut(iut) {
         Ok(kind) => kind,
         Err(code) => return code,
     };
-    let profiles: Vec<_> = if profile == "all" {
-        catalogue.profiles.iter().collect()
-    } else {
-        match catalogue.profile(profile) {
-            Some(p) => vec![p],
-            None => {
-                let names: Vec<_> = catalogue.profiles.iter().map(|p| p.name.as_str()).collect();
-                eprintln!("unknown profile `{profile}`; known: {}", names.join(", "));
-                return ExitCode::from(2);
-            }
-        }
-    };
+    if let Err(code) = check_selection(catalogue, plan) {
+        return code;
+    }
     #[cfg(feature = "socketcan")]
-    if let BusChoice::SocketCan(kernel) = &options.bus {
+    if let BusChoice::SocketCan(kernel) = &plan.options.bus {
         // A bus that cannot be opened at all is one error, not one per scenario.
         let opened = canif_kernel::probe().and_then(|()| {
             canif_kernel::KernelSocket::open(&kernel.spec.iut, false)?;
@@ -50,29 +155,78 @@ pub fn run(
             return ExitCode::from(2);
         }
     }
+    let report = match execute(catalogue, &kind, plan) {
+        Ok(report) => report,
+        Err(code) => return code,
+    };
+    finish(catalogue, &report, report_dir)
+}
+
+/// Writes the reports and says the verdict: each failing requirement in one line.
+pub fn finish(catalogue: &Catalogue, report: &RunReport, report_dir: &Path) -> ExitCode {
+    if let Err(error) = report.write(catalogue, report_dir) {
+        eprintln!(
+            "cannot write the reports to {}: {error}",
+            report_dir.display()
+        );
+        return ExitCode::from(2);
+    }
+    if report.interrupted {
+        eprintln!("interrupted: the reports hold what ran before the signal");
+    }
+    let problems = report.problems();
+    for line in problems.iter().take(40) {
+        eprintln!("{line}");
+    }
+    if problems.len() > 40 {
+        eprintln!(
+            "… and {} more in {}",
+            problems.len() - 40,
+            report_dir.join("summary.md").display()
+        );
+    }
+    println!(
+        "{} {}: {} — reports in {}",
+        report.meta.iut,
+        report.headline(),
+        report.totals_line(),
+        report_dir.display()
+    );
+    ExitCode::from(report.exit_code())
+}
+
+/// Runs a plan: the lockstep on each profile, then the Gherkin scenarios, and
+/// judges every requirement once over all of them.
+pub fn execute(catalogue: &Catalogue, kind: &IutKind, plan: &Plan) -> Result<RunReport, ExitCode> {
+    let options = &plan.options;
+    let started_unix = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
     let started = std::time::Instant::now();
     let terminal = std::io::stderr().is_terminal();
-    let mut results = Vec::new();
-    for (n, p) in profiles.iter().enumerate() {
+    let count = plan.profiles.len();
+    let mut lockstep = Vec::new();
+    for (n, p) in plan.profiles.iter().enumerate() {
         if canif_harness::interrupt::requested() {
             eprintln!("interrupted: the remaining profiles are not run");
             break;
         }
         let mut done = 0;
-        let result = run_profile(catalogue, p, &kind, options, |scenario_run| {
+        let result = run_profile(catalogue, p, kind, options, |scenario_run| {
             done += 1;
             if terminal {
                 eprint!(
-                    "\r\x1b[2K[{}/{}] {}: {} ({} scenarios)",
+                    "\r\x1b[2K[{}/{count}] {}: {} ({done} scenarios)",
                     n + 1,
-                    profiles.len(),
                     p.name,
                     scenario_run.scenario,
-                    done
                 );
                 let _ = std::io::stderr().flush();
             }
         });
+        if terminal {
+            eprint!("\r\x1b[2K");
+        }
         let failed = result
             .runs
             .iter()
@@ -83,98 +237,236 @@ pub fn run(
             .iter()
             .filter(|r| matches!(r.outcome, Outcome::Error(_)))
             .count();
-        if terminal {
-            eprint!("\r\x1b[2K");
-        }
         eprintln!(
-            "[{}/{}] {:<22} {} scenarios, {} cycles, {} frames checked: {}",
+            "[{}/{count}] {:<22} {} scenarios, {} cycles, {} frames checked: {}",
             n + 1,
-            profiles.len(),
             p.name,
             result.runs.len(),
             result.cycles(),
             result.frames_checked(),
             match (failed, errors) {
-                (0, 0) => "conforms".to_string(),
-                (f, 0) => format!("{f} scenario(s) FAIL"),
+                (0, 0) => "all pass".to_string(),
+                (f, 0) => format!("{f} FAIL ({})", result.failed_requirements().join(", ")),
                 (f, e) => format!("{f} fail, {e} ERROR"),
             }
         );
-        results.push(result);
+        lockstep.push(result);
     }
-    let iut_broke = results.iter().flat_map(|p| &p.runs).any(|r| {
+    let iut_broke = lockstep.iter().flat_map(|p| &p.runs).any(|r| {
         matches!(
             r.outcome,
             Outcome::Error(canif_harness::RunError::Iut(_) | canif_harness::RunError::Skipped(_))
         )
     });
-    let scenarios = if canif_harness::interrupt::requested() {
-        eprintln!("Gherkin scenarios: not run (interrupted)");
+    let mut left_out: Vec<String> = Vec::new();
+    if !options.selection.is_everything() {
+        left_out.push(options.selection.describe());
+    }
+    let gherkin = if canif_harness::interrupt::requested() {
+        left_out.push("interrupted before the Gherkin scenarios".into());
         Vec::new()
     } else if iut_broke && options.fail_fast {
-        eprintln!(
-            "Gherkin scenarios: not run (the IUT broke above; --no-fail-fast runs them anyway)"
+        left_out.push(
+            "Gherkin scenarios not run: the IUT broke (--no-fail-fast runs them anyway)".into(),
         );
         Vec::new()
-    } else if !options.bus.is_sim() || !options.only.is_empty() {
-        // The Gherkin scenarios run on the simulated bus; a SocketCAN or filtered run leaves them out.
-        eprintln!(
-            "Gherkin scenarios: not run (they use the simulated bus; run without --bus/--scenario)"
-        );
+    } else if !options.bus.is_sim() {
+        left_out.push("Gherkin scenarios not run: they use the simulated bus".into());
         Vec::new()
     } else {
-        match run_features(&kind, &profiles) {
-            Ok(scenarios) => scenarios,
+        match run_features(kind, &plan.profiles, options) {
+            Ok(runs) => runs,
             Err(error) => {
                 eprintln!("the feature files do not parse: {error}");
-                return ExitCode::from(2);
+                return Err(ExitCode::from(2));
             }
         }
     };
-    let failed = scenarios
-        .iter()
-        .filter(|s| s.outcome.is_err() && !s.error)
-        .count();
-    let broken = scenarios.iter().filter(|s| s.error).count();
-    if !scenarios.is_empty() {
-        eprintln!(
-            "Gherkin scenarios: {} run, {} failed, {} error",
-            scenarios.len(),
-            failed,
-            broken
-        );
+    for line in &left_out {
+        eprintln!("left out: {line}");
     }
-    let report = RunReport {
-        iut: kind.name(),
-        seed: options.seed,
-        bus: describe_bus(&options.bus),
-        profiles: results,
-        scenarios,
+    let interrupted = canif_harness::interrupt::requested();
+    let targets = gherkin_targets(&plan.profiles).map_err(|_| ExitCode::from(2))?;
+    let node_ids = canif_harness::canopen::node_check_ids();
+    let profiles = lockstep
+        .into_iter()
+        .zip(&plan.profiles)
+        .map(|(run, profile)| {
+            let mut here: std::collections::BTreeSet<String> =
+                checked_ids(&profile.model_capabilities(), options)
+                    .into_iter()
+                    .collect();
+            here.extend(
+                targets
+                    .iter()
+                    .filter(|(p, _)| *p == profile.name)
+                    .flat_map(|(_, s)| s.requirements.iter().cloned()),
+            );
+            let reach = Reach {
+                elsewhere: node_ids
+                    .iter()
+                    .filter(|id| !here.contains(**id))
+                    .map(|id| {
+                        (
+                            id.to_string(),
+                            "exercised by `canif run --suite canopen` against a CANopen node"
+                                .into(),
+                        )
+                    })
+                    .collect(),
+                here,
+                left_out: if left_out.is_empty() && interrupted {
+                    "interrupted".into()
+                } else {
+                    left_out.join("; ")
+                },
+            };
+            let runs: Vec<GherkinRun> = gherkin
+                .iter()
+                .filter(|(p, _)| *p == profile.name)
+                .map(|(_, r)| r.clone())
+                .collect();
+            ProfileReport::new(catalogue, profile, run, runs, Vec::new(), &reach)
+        })
+        .collect();
+    Ok(RunReport {
+        meta: RunMeta {
+            complete: left_out.is_empty() && !interrupted,
+            product: plan.product.clone(),
+            left_out: (!left_out.is_empty()).then(|| left_out.join("; ")),
+            started_unix,
+            ..RunMeta::new(
+                kind.name(),
+                describe_bus(&options.bus),
+                options.seed,
+                catalogue,
+            )
+        },
+        profiles,
         wall_time_ms: started.elapsed().as_millis(),
-        interrupted: canif_harness::interrupt::requested(),
-    };
-    if let Err(error) = report.write(catalogue, report_dir) {
-        eprintln!(
-            "cannot write the reports to {}: {error}",
-            report_dir.display()
-        );
-        return ExitCode::from(2);
+        interrupted,
+    })
+}
+
+/// Which Gherkin scenario runs on which profile: once per profile whose
+/// capabilities it needs, a `@once` scenario on the profile it names. The
+/// manual's tables (`@model`) check the model, not an IUT: `cargo test` runs them.
+pub fn gherkin_targets(
+    profiles: &[&Profile],
+) -> Result<Vec<(String, canif_features::ScenarioInfo)>, String> {
+    let mut targets = Vec::new();
+    for scenario in canif_features::scenarios()? {
+        if scenario.model_only {
+            continue;
+        }
+        if scenario.once {
+            let named = profiles
+                .iter()
+                .find(|p| scenario.profile.as_deref().is_none_or(|n| n == p.name));
+            if let Some(profile) = named {
+                targets.push((profile.name.clone(), scenario.clone()));
+            }
+        } else {
+            for profile in profiles
+                .iter()
+                .filter(|p| scenario.capabilities.iter().all(|c| p.has(c)))
+            {
+                targets.push((profile.name.clone(), scenario.clone()));
+            }
+        }
     }
-    let totals = report.totals();
-    if report.interrupted {
-        eprintln!("interrupted: the reports hold what ran before the signal");
+    Ok(targets)
+}
+
+/// The selected Gherkin scenarios against the IUT: (profile, run).
+pub fn run_features(
+    kind: &IutKind,
+    profiles: &[&Profile],
+    options: &Options,
+) -> Result<Vec<(String, GherkinRun)>, String> {
+    let mut results = Vec::new();
+    for (profile_name, scenario) in gherkin_targets(profiles)? {
+        let id = scenario.id();
+        if !options
+            .selection
+            .admits(&id, scenario.requirements.iter().map(String::as_str))
+        {
+            continue;
+        }
+        if canif_harness::interrupt::requested() {
+            break;
+        }
+        let Some(profile) = profiles.iter().find(|p| p.name == profile_name) else {
+            continue;
+        };
+        let target = canif_features::Target {
+            iut: kind.clone(),
+            profile: profile_name.clone(),
+            caps: profile.model_capabilities(),
+        };
+        let started = std::time::Instant::now();
+        let outcome = match canif_features::run_scenario(&scenario.file, scenario.line, target) {
+            canif_features::ScenarioOutcome::Passed => GherkinOutcome::Pass,
+            canif_features::ScenarioOutcome::Failed(report) => GherkinOutcome::Fail {
+                step: failing_step(&report),
+                report,
+            },
+            canif_features::ScenarioOutcome::Error(report) => GherkinOutcome::Error(report),
+        };
+        results.push((
+            profile_name,
+            GherkinRun {
+                id,
+                file: scenario.file.clone(),
+                line: scenario.line,
+                requirements: scenario.requirements.clone(),
+                outcome,
+                elapsed: started.elapsed(),
+            },
+        ));
     }
-    println!(
-        "{}: {} pass, {} fail, {} error, {} not applicable, {} not testable — reports in {}",
-        report.iut,
-        totals.pass,
-        totals.fail,
-        totals.error,
-        totals.not_applicable,
-        totals.not_testable,
-        report_dir.display()
+    let failed = results
+        .iter()
+        .filter(|(_, r)| matches!(r.outcome, GherkinOutcome::Fail { .. }))
+        .count();
+    let broken = results
+        .iter()
+        .filter(|(_, r)| matches!(r.outcome, GherkinOutcome::Error(_)))
+        .count();
+    eprintln!(
+        "Gherkin scenarios: {} run, {failed} failed, {broken} error",
+        results.len()
     );
-    ExitCode::from(report.exit_code())
+    Ok(results)
+}
+
+/// The failing step of cucumber's report and what it said, in one line:
+/// `✘ And the bytes after the first 10 are 00: padding is not 00: FF FF`.
+fn failing_step(report: &str) -> String {
+    let mut lines = report.lines().map(str::trim).filter(|l| !l.is_empty());
+    let Some(step) = lines.find(|l| l.contains('✘')) else {
+        return report
+            .lines()
+            .next()
+            .unwrap_or("the scenario failed")
+            .trim()
+            .to_string();
+    };
+    let said = lines
+        .take_while(|l| !l.contains('✘') && !l.contains('✔') && !l.starts_with('['))
+        .find_map(|l| {
+            l.strip_prefix("Step panicked. Captured output:")
+                .or_else(|| {
+                    (!l.starts_with("Step failed")
+                        && !l.starts_with("Defined:")
+                        && !l.starts_with("Matched:"))
+                    .then_some(l)
+                })
+        });
+    match said {
+        Some(said) => format!("{step}: {}", said.trim()),
+        None => step.to_string(),
+    }
 }
 
 pub fn self_check(catalogue: &Catalogue, seed: u64) -> ExitCode {
@@ -223,72 +515,6 @@ pub fn self_check(catalogue: &Catalogue, seed: u64) -> ExitCode {
         rows.len()
     );
     ExitCode::from(u8::from(uncaught > 0))
-}
-
-/// Every Gherkin scenario against the IUT: once per profile whose capabilities
-/// it needs, the manual's tables (`@model`) and `@once` scenarios once.
-pub fn run_features(
-    kind: &IutKind,
-    profiles: &[&canif_spec::Profile],
-) -> Result<Vec<ScenarioResult>, String> {
-    let mut results = Vec::new();
-    for scenario in canif_features::scenarios()? {
-        let mut targets = Vec::new();
-        if scenario.model_only {
-            targets.push((
-                "model".to_string(),
-                IutKind::Model,
-                canif_model::config::Capabilities::everything(),
-            ));
-        } else if scenario.once {
-            // A profile scenario names its device; it runs when that profile is certified.
-            let named = profiles
-                .iter()
-                .find(|p| scenario.profile.as_deref().is_none_or(|n| n == p.name));
-            if let Some(profile) = named {
-                targets.push((
-                    profile.name.clone(),
-                    kind.clone(),
-                    profile.model_capabilities(),
-                ));
-            }
-        } else {
-            for profile in profiles
-                .iter()
-                .filter(|p| scenario.capabilities.iter().all(|c| p.has(c)))
-            {
-                targets.push((
-                    profile.name.clone(),
-                    kind.clone(),
-                    profile.model_capabilities(),
-                ));
-            }
-        }
-        for (suite, iut, caps) in targets {
-            let target = canif_features::Target {
-                iut,
-                profile: suite.clone(),
-                caps,
-            };
-            let (outcome, error) =
-                match canif_features::run_scenario(&scenario.file, scenario.line, target) {
-                    canif_features::ScenarioOutcome::Passed => (Ok(()), false),
-                    canif_features::ScenarioOutcome::Failed(report) => (Err(report), false),
-                    canif_features::ScenarioOutcome::Error(report) => (Err(report), true),
-                };
-            results.push(ScenarioResult {
-                suite,
-                name: scenario.name.clone(),
-                file: scenario.file.clone(),
-                line: scenario.line,
-                requirements: scenario.requirements.clone(),
-                outcome,
-                error,
-            });
-        }
-    }
-    results.sort_by(|a, b| (&a.suite, &a.file, a.line).cmp(&(&b.suite, &b.file, b.line)));
-    Ok(results)
 }
 
 /// The bus as the report names it.

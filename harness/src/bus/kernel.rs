@@ -545,6 +545,7 @@ impl KernelBus {
         if let Some((frame, since)) = self.model_next {
             if now.saturating_sub(since) > patience {
                 return Err(pair.fail(Difference {
+                    frames: None,
                     candidates: blame::TX_MISSING,
                     what: format!(
                         "frame on {} within {} ms",

@@ -15,10 +15,45 @@ use super::CanNode;
 
 /// One check's verdict.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct CheckResult {
+pub struct NodeCheck {
     pub name: &'static str,
     pub requirements: &'static [&'static str],
     pub outcome: Result<(), String>,
+}
+
+impl NodeCheck {
+    /// The check for [`crate::verdict::judge`]: a failure blames every requirement it exercises.
+    pub fn check(&self) -> crate::verdict::Check {
+        use crate::verdict::{Check, CheckResult, Evidence, Finding};
+        let covers: Vec<String> = self.requirements.iter().map(|s| s.to_string()).collect();
+        Check {
+            evidence: Evidence::NodeCheck(self.name.into()),
+            result: match &self.outcome {
+                Ok(()) => CheckResult::Pass,
+                Err(why) => CheckResult::Fail(Finding {
+                    requirements: covers.clone(),
+                    cause: why.lines().next().unwrap_or_default().to_string(),
+                    details: why.clone(),
+                    failure: None,
+                }),
+            },
+            covers,
+            elapsed: std::time::Duration::ZERO,
+        }
+    }
+}
+
+/// Every requirement the node checks exercise: what a run of `--suite canopen` can judge.
+pub fn node_check_ids() -> Vec<&'static str> {
+    let node = NodeId::new(5).expect("5 is a node id");
+    let mut coupler = canif_model::canopen::coupler::Coupler::new(node, 2, 4);
+    let mut ids: Vec<&str> = check_node(&mut coupler, node, 0)
+        .iter()
+        .flat_map(|c| c.requirements.iter().copied())
+        .collect();
+    ids.sort_unstable();
+    ids.dedup();
+    ids
 }
 
 pub(super) fn sdo_request(node: NodeId, request: SdoRequest) -> Frame {
@@ -70,11 +105,11 @@ fn guard_state(
 /// Runs every check against `target`, a node with id `node`, from its boot
 /// state. `tolerance`: how far a heartbeat may be from its due time (0 in
 /// virtual time; a real bus needs the poll step plus scheduling jitter).
-pub fn check_node(target: &mut dyn CanNode, node: NodeId, tolerance: Nanos) -> Vec<CheckResult> {
+pub fn check_node(target: &mut dyn CanNode, node: NodeId, tolerance: Nanos) -> Vec<NodeCheck> {
     let mut results = Vec::new();
     let mut now: Nanos = 0;
     let mut record = |name, requirements, outcome| {
-        results.push(CheckResult {
+        results.push(NodeCheck {
             name,
             requirements,
             outcome,

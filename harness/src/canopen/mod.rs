@@ -15,7 +15,7 @@ mod quick_start;
 mod socketcan;
 pub mod socketcand;
 
-pub use checks::{check_node, CheckResult};
+pub use checks::{check_node, node_check_ids, NodeCheck};
 pub use quick_start::quick_start;
 #[cfg(feature = "socketcan")]
 pub use socketcan::SocketCanNode;

@@ -9,7 +9,7 @@ use canif_model::canopen::NodeId;
 use canif_model::frame::{CanId, Frame};
 use canif_model::Nanos;
 
-use super::checks::{sdo_request, CheckResult};
+use super::checks::{sdo_request, NodeCheck};
 
 /// Sends a request (if any) and runs cycles until an answer on the given
 /// identifier arrives or the cycles are over: the last cycle's time and what came.
@@ -25,7 +25,7 @@ pub fn quick_start(
     layout: canif_model::image::ImageLayout,
     node: NodeId,
     cycle: &mut dyn FnMut() -> Nanos,
-) -> Vec<CheckResult> {
+) -> Vec<NodeCheck> {
     use crate::plc::{PlcSide, TaskStimulus};
     use canif_model::exchange::ExchangeMode;
     use canif_model::image::MessageRepr;
@@ -78,7 +78,7 @@ pub fn quick_start(
         guard.check(&answer_on(&got, guard_id)?)
     };
     let mut record = |name, requirements, outcome| {
-        results.push(CheckResult {
+        results.push(NodeCheck {
             name,
             requirements,
             outcome,

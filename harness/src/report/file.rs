@@ -1,36 +1,92 @@
 //! `report.json` as types, written and read through one definition: `canif
-//! run` writes it, `canif compare` reads it back. Fields are in alphabetical
-//! order, the order the file has always had.
+//! run` writes it, `canif compare` and `canif certify` read it back. Fields are
+//! in alphabetical order.
 
 use std::collections::BTreeMap;
 
 use canif_spec::Catalogue;
 use serde::{Deserialize, Serialize};
 
-use super::{RunReport, Totals};
-use crate::outcome::{Failure, Outcome};
-use crate::suite::Verdict;
+use super::RunReport;
+use crate::outcome::Failure;
+use crate::verdict::{CheckResult, Verdict, VerdictKind};
+
+/// The shape of `report.json` this canif writes; older ones are refused with this number.
+pub const REPORT_FORMAT: u32 = 2;
+
+/// Which suite ran.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SuiteKind {
+    /// The CAN interface of a device.
+    Interface,
+    /// A CANopen node (002, 004).
+    Canopen,
+}
+
+/// The implementation's own name and version, as its maker declares them.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Product {
+    pub name: String,
+    pub version: String,
+}
+
+/// How a run was asked for, and with what.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RunMeta {
+    pub bus: String,
+    pub canif_commit: String,
+    pub canif_version: String,
+    /// SHA-256 over the catalogue's files as this run loaded them.
+    pub catalogue_sha256: String,
+    /// Everything the suite can run here ran: no selection, no stage left out, no signal.
+    pub complete: bool,
+    pub iut: String,
+    pub product: Option<Product>,
+    pub seed: u64,
+    /// What was left out and why, when the run is not complete.
+    pub left_out: Option<String>,
+    /// `device` (the PLC side is issue 13's).
+    pub side: String,
+    /// Seconds since the Unix epoch when the run started.
+    pub started_unix: u64,
+    pub suite: SuiteKind,
+}
+
+impl RunMeta {
+    /// A complete run of the interface suite on the device side, started now,
+    /// by this canif, with `catalogue`.
+    pub fn new(iut: String, bus: String, seed: u64, catalogue: &Catalogue) -> Self {
+        RunMeta {
+            bus,
+            canif_commit: env!("CANIF_COMMIT").into(),
+            canif_version: env!("CARGO_PKG_VERSION").into(),
+            catalogue_sha256: catalogue.sha256.clone(),
+            complete: true,
+            iut,
+            product: None,
+            seed,
+            left_out: None,
+            side: "device".into(),
+            started_unix: std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_secs()),
+            suite: SuiteKind::Interface,
+        }
+    }
+}
 
 /// The whole file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ReportFile {
     #[serde(default)]
-    pub bus: String,
-    #[serde(default)]
-    pub harness_version: String,
+    pub format: u32,
     /// Present only when the run was asked to stop before it ended.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub interrupted: bool,
-    #[serde(default)]
-    pub iut: String,
+    pub meta: RunMeta,
     pub profiles: Vec<ProfileEntry>,
-    #[serde(default)]
-    pub scenarios: Vec<ScenarioEntry>,
-    #[serde(default)]
-    pub seed: u64,
-    #[serde(default)]
     pub totals: TotalsEntry,
-    #[serde(default)]
     pub wall_time_ms: u64,
 }
 
@@ -40,6 +96,7 @@ pub struct TotalsEntry {
     pub error: usize,
     pub fail: usize,
     pub not_applicable: usize,
+    pub not_run: usize,
     pub not_testable: usize,
     pub pass: usize,
 }
@@ -47,71 +104,42 @@ pub struct TotalsEntry {
 /// One profile's run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ProfileEntry {
-    #[serde(default)]
+    pub checks: Vec<CheckEntry>,
     pub cycles: u64,
-    #[serde(default)]
     pub failures: Vec<FailureEntry>,
-    #[serde(default)]
     pub frames_checked: u64,
     pub profile: String,
-    #[serde(default)]
-    pub scenarios: Vec<RunEntry>,
     pub verdicts: BTreeMap<String, VerdictEntry>,
+}
+
+/// One check that ran: a lockstep scenario, a Gherkin scenario, a node check.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CheckEntry {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cause: Option<String>,
+    /// The stable key (`scenario: …`, `gherkin: …`, `canopen: …`).
+    pub check: String,
+    pub covers: Vec<String>,
+    pub elapsed_ms: f64,
+    /// `pass`, `fail` or `error`.
+    pub outcome: VerdictKind,
 }
 
 /// One requirement's verdict on a profile.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct VerdictEntry {
+    /// The checks it rests on (keys of [`CheckEntry::check`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub evidence: Vec<String>,
     /// Indexes into the profile's failures.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub failures: Option<Vec<usize>>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub failures: Vec<usize>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,
     pub verdict: VerdictKind,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-pub enum VerdictKind {
-    #[serde(rename = "pass")]
-    Pass,
-    #[serde(rename = "fail")]
-    Fail,
-    #[serde(rename = "error")]
-    Error,
-    #[serde(rename = "not applicable")]
-    NotApplicable,
-    #[serde(rename = "not testable")]
-    NotTestable,
-}
-
-impl VerdictKind {
-    pub fn label(self) -> &'static str {
-        match self {
-            VerdictKind::Pass => "pass",
-            VerdictKind::Fail => "fail",
-            VerdictKind::Error => "error",
-            VerdictKind::NotApplicable => "not applicable",
-            VerdictKind::NotTestable => "not testable",
-        }
-    }
-
-    /// A verdict that stops a gate.
-    pub fn is_bad(self) -> bool {
-        matches!(self, VerdictKind::Fail | VerdictKind::Error)
-    }
-}
-
-/// One scenario of the lockstep.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-pub struct RunEntry {
-    pub cycles: u64,
-    pub frames_checked: u64,
-    /// `pass`, `fail` or `error: …`.
-    pub outcome: String,
-    pub scenario: String,
-}
-
-/// One failure, as text.
+/// One lockstep failure, as text.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct FailureEntry {
     pub actual: String,
@@ -124,34 +152,17 @@ pub struct FailureEntry {
     pub what: String,
 }
 
-/// One Gherkin scenario (or Examples row) against one profile.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-pub struct ScenarioEntry {
-    pub file: String,
-    pub line: usize,
-    pub name: String,
-    pub outcome: VerdictKind,
-    /// cucumber's report of the failing step.
-    pub report: Option<String>,
-    pub requirements: Vec<String>,
-    pub suite: String,
-}
-
 impl From<&Verdict> for VerdictEntry {
     fn from(verdict: &Verdict) -> Self {
-        let (verdict, failures, reason) = match verdict {
-            Verdict::Pass => (VerdictKind::Pass, None, None),
-            Verdict::Fail(indexes) => (VerdictKind::Fail, Some(indexes.clone()), None),
-            Verdict::Error(message) => (VerdictKind::Error, None, Some(message.clone())),
-            Verdict::NotApplicable(reason) => {
-                (VerdictKind::NotApplicable, None, Some(reason.clone()))
-            }
-            Verdict::NotTestable(reason) => (VerdictKind::NotTestable, None, Some(reason.clone())),
+        let failures = match verdict {
+            Verdict::Fail(found) => found.iter().filter_map(|(_, f)| f.failure).collect(),
+            _ => Vec::new(),
         };
         VerdictEntry {
+            evidence: verdict.evidence().iter().map(|e| e.key()).collect(),
             failures,
-            reason,
-            verdict,
+            reason: verdict.reason(),
+            verdict: verdict.kind(),
         }
     }
 }
@@ -175,14 +186,16 @@ impl From<&Failure> for FailureEntry {
     }
 }
 
-impl From<Totals> for TotalsEntry {
-    fn from(t: Totals) -> Self {
+impl TotalsEntry {
+    pub fn of(totals: &super::Totals) -> Self {
+        let n = |k: VerdictKind| totals.get(&k).copied().unwrap_or(0);
         TotalsEntry {
-            error: t.error,
-            fail: t.fail,
-            not_applicable: t.not_applicable,
-            not_testable: t.not_testable,
-            pass: t.pass,
+            error: n(VerdictKind::Error),
+            fail: n(VerdictKind::Fail),
+            not_applicable: n(VerdictKind::NotApplicable),
+            not_run: n(VerdictKind::NotRun),
+            not_testable: n(VerdictKind::NotTestable),
+            pass: n(VerdictKind::Pass),
         }
     }
 }
@@ -190,63 +203,58 @@ impl From<Totals> for TotalsEntry {
 impl ReportFile {
     pub fn new(report: &RunReport, catalogue: &Catalogue) -> Self {
         ReportFile {
-            bus: report.bus.clone(),
-            harness_version: env!("CARGO_PKG_VERSION").into(),
+            format: REPORT_FORMAT,
             interrupted: report.interrupted,
-            iut: report.iut.clone(),
+            meta: report.meta.clone(),
             profiles: report
                 .profiles
                 .iter()
                 .map(|p| ProfileEntry {
-                    cycles: p.cycles(),
-                    failures: p.failures.iter().map(FailureEntry::from).collect(),
-                    frames_checked: p.frames_checked(),
-                    profile: p.profile.clone(),
-                    scenarios: p
-                        .runs
+                    checks: p
+                        .checks
                         .iter()
-                        .map(|r| RunEntry {
-                            cycles: r.cycles,
-                            frames_checked: r.frames_checked,
-                            outcome: match &r.outcome {
-                                Outcome::Pass => "pass".into(),
-                                Outcome::Fail(_) => "fail".into(),
-                                Outcome::Error(e) => format!("error: {e}"),
+                        .map(|c| CheckEntry {
+                            cause: match &c.result {
+                                CheckResult::Pass => None,
+                                CheckResult::Fail(finding) => Some(finding.cause.clone()),
+                                CheckResult::Error(cause) => Some(cause.clone()),
                             },
-                            scenario: r.scenario.clone(),
+                            check: c.evidence.key(),
+                            covers: c.covers.clone(),
+                            elapsed_ms: c.elapsed.as_secs_f64() * 1e3,
+                            outcome: match c.result {
+                                CheckResult::Pass => VerdictKind::Pass,
+                                CheckResult::Fail(_) => VerdictKind::Fail,
+                                CheckResult::Error(_) => VerdictKind::Error,
+                            },
                         })
                         .collect(),
+                    cycles: p.lockstep.cycles(),
+                    failures: p.lockstep.failures.iter().map(FailureEntry::from).collect(),
+                    frames_checked: p.lockstep.frames_checked(),
+                    profile: p.profile.clone(),
                     verdicts: catalogue
                         .requirements()
                         .filter_map(|r| p.verdicts.get(&r.id).map(|v| (r.id.clone(), v.into())))
                         .collect(),
                 })
                 .collect(),
-            scenarios: report
-                .scenarios
-                .iter()
-                .map(|s| ScenarioEntry {
-                    file: s.file.clone(),
-                    line: s.line,
-                    name: s.name.clone(),
-                    outcome: match &s.outcome {
-                        Ok(()) => VerdictKind::Pass,
-                        Err(_) if s.error => VerdictKind::Error,
-                        Err(_) => VerdictKind::Fail,
-                    },
-                    report: s.outcome.as_ref().err().cloned(),
-                    requirements: s.requirements.clone(),
-                    suite: s.suite.clone(),
-                })
-                .collect(),
-            seed: report.seed,
-            totals: report.totals().into(),
+            totals: TotalsEntry::of(&report.totals()),
             wall_time_ms: report.wall_time_ms as u64,
         }
     }
 
     /// Reads a `report.json`; the error names what does not fit.
     pub fn parse(text: &str) -> Result<Self, String> {
-        serde_json::from_str(text).map_err(|e| format!("not a canif report.json: {e}"))
+        let not_a_report = |e: serde_json::Error| format!("not a canif report.json: {e}");
+        let value: serde_json::Value = serde_json::from_str(text).map_err(not_a_report)?;
+        // Reports before format 2 had no `format` field.
+        let format = value.get("format").and_then(|f| f.as_u64()).unwrap_or(1);
+        if format != u64::from(REPORT_FORMAT) {
+            return Err(format!(
+                "a report.json of format {format}; this canif reads format {REPORT_FORMAT}: write it again with this canif"
+            ));
+        }
+        serde_json::from_str(text).map_err(not_a_report)
     }
 }

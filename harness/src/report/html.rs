@@ -1,246 +1,214 @@
-//! The report for people: `report.html` with a timing diagram of each
-//! failure, and the one-line and detailed texts of a failure.
+//! `report.html`: one self-contained page (no network) with the run's
+//! metadata, a summary per profile, every failing requirement and its cause,
+//! each failure with its timing diagram, errors grouped by cause, and every
+//! verdict linked to the checks it rests on.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
 
 use canif_spec::Catalogue;
 
+use super::diagram::esc;
+pub use super::diagram::timing_diagram;
+use super::summary::utc;
 use super::RunReport;
-use crate::outcome::Failure;
-use crate::suite::Verdict;
+use crate::verdict::{CheckResult, Evidence, Verdict, VerdictKind};
 
-/// One line: where and what.
-pub fn headline(failure: &Failure) -> String {
+/// The anchor of a check on a profile.
+fn anchor(profile: &str, index: usize) -> String {
     format!(
-        "{} at cycle {}: {} differs ({})",
-        failure.scenario,
-        failure.cycle,
-        failure.what,
-        canif_spec::ReqId::join(&failure.requirements, ", ")
+        "check-{}-{index}",
+        profile.replace(|c: char| !c.is_ascii_alphanumeric(), "-")
     )
-}
-
-/// Expected and actual, and the cycles before.
-pub fn details(failure: &Failure) -> String {
-    format!(
-        "{}\n  expected: {}\n  actual:   {}\n  at t = {:.6} ms\ncycles before:\n  {}",
-        headline(failure),
-        failure.expected,
-        failure.actual,
-        failure.time as f64 / 1e6,
-        failure.context.join("\n  ")
-    )
-}
-
-fn esc(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
-
-/// A timing diagram of a failure's last cycles: the PLC's outputs, then the
-/// input header as the model expected it and as the IUT gave it (a red cell
-/// where they differ), then the frames on the bus against time.
-pub fn timing_diagram(failure: &Failure) -> String {
-    let cycles = &failure.timeline;
-    if cycles.is_empty() {
-        return String::new();
-    }
-    let (label_width, cell, row) = (285.0, 150.0, 26.0);
-    let rows = [
-        "Outputs.TxCounter / RxCounter / NoOfTx",
-        "Inputs.TxCounter (expected | actual)",
-        "Inputs.RxCounter (expected | actual)",
-        "NoOfRxMessages (expected | actual)",
-        "TransactionNumber (expected | actual)",
-        "bus (blue: IUT, grey: other nodes)",
-    ];
-    let width = label_width + cell * cycles.len() as f64 + 10.0;
-    let height = row * (rows.len() as f64 + 1.5) + 20.0;
-    let mut svg = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" class=\"timing\" width=\"{width}\" height=\"{height}\" font-family=\"monospace\" font-size=\"11\">\n"
-    );
-    for (i, name) in rows.iter().enumerate() {
-        let y = row * (i as f64 + 1.5);
-        svg.push_str(&format!(
-            "<text x=\"4\" y=\"{}\">{}</text>\n",
-            y + 16.0,
-            esc(name)
-        ));
-        svg.push_str(&format!(
-            "<line x1=\"0\" y1=\"{y}\" x2=\"{width}\" y2=\"{y}\" stroke=\"#ddd\"/>\n"
-        ));
-    }
-    for (c, view) in cycles.iter().enumerate() {
-        let x = label_width + cell * c as f64;
-        let failing = c + 1 == cycles.len();
-        svg.push_str(&format!(
-            "<text x=\"{}\" y=\"18\" font-weight=\"{}\">cycle {} · {:.3} ms</text>\n",
-            x + 4.0,
-            if failing { "bold" } else { "normal" },
-            view.cycle,
-            view.time as f64 / 1e6
-        ));
-        if failing {
-            svg.push_str(&format!(
-                "<rect class=\"failing-cycle\" x=\"{x}\" y=\"2\" width=\"{cell}\" height=\"{}\" fill=\"none\" stroke=\"#c00\" stroke-width=\"2\"/>\n",
-                height - 4.0
-            ));
-        }
-        let o = view.outputs;
-        svg.push_str(&format!(
-            "<text x=\"{}\" y=\"{}\">{} / {} / {}</text>\n",
-            x + 4.0,
-            row * 1.5 + 16.0,
-            o.tx_counter,
-            o.rx_counter,
-            o.no_of_tx_messages
-        ));
-        let fields = |h: &canif_model::image::InputHeader| {
-            [
-                h.tx_counter,
-                h.rx_counter,
-                h.no_of_rx_messages,
-                h.transaction_number.unwrap_or(0),
-            ]
-        };
-        let (expected, actual) = (fields(&view.expected), fields(&view.actual));
-        for field in 0..4 {
-            let y = row * (field as f64 + 2.5);
-            let (e, a) = (expected[field], actual[field]);
-            if e != a {
-                svg.push_str(&format!("<rect class=\"mismatch\" x=\"{x}\" y=\"{y}\" width=\"{cell}\" height=\"{row}\" fill=\"#fcc\"/>\n"));
-            }
-            svg.push_str(&format!(
-                "<text x=\"{}\" y=\"{}\">{e} | {a}</text>\n",
-                x + 4.0,
-                y + 16.0
-            ));
-        }
-        let previous = if c == 0 {
-            view.time.saturating_sub(1_000_000)
-        } else {
-            cycles[c - 1].time
-        };
-        let span = view.time.saturating_sub(previous).max(1) as f64;
-        let y = row * 6.5;
-        for frame in &view.frames {
-            let (end, from_iut, text) = (&frame.end, &frame.from_iut, &frame.text);
-            let fx = x + cell * (end.saturating_sub(previous) as f64 / span).min(1.0) - cell + 2.0;
-            let fx = fx.max(x - cell + 2.0);
-            let colour = if *from_iut { "#36c" } else { "#999" };
-            let id = text.split('#').next().unwrap_or("");
-            svg.push_str(&format!(
-                "<rect x=\"{fx:.1}\" y=\"{}\" width=\"3\" height=\"14\" fill=\"{colour}\"><title>{}</title></rect>\n",
-                y + 4.0,
-                esc(text)
-            ));
-            svg.push_str(&format!(
-                "<text x=\"{:.1}\" y=\"{}\" font-size=\"8\" fill=\"{colour}\">{}</text>\n",
-                fx + 4.0,
-                y + 14.0,
-                esc(id)
-            ));
-        }
-    }
-    svg.push_str("</svg>\n");
-    svg
 }
 
 impl RunReport {
-    /// `report.html`: one self-contained page (no network): verdicts per
-    /// requirement and per scenario, filterable, and each failure with its
-    /// timing diagram.
     pub fn html(&self, catalogue: &Catalogue) -> String {
-        let totals = self.totals();
-        let mut rows = String::new();
-        for profile in &self.profiles {
-            for requirement in catalogue.requirements() {
-                let Some(verdict) = profile.verdicts.get(&requirement.id) else {
+        let m = &self.meta;
+        let mut meta = String::new();
+        for (name, value) in [
+            ("implementation", m.iut.clone()),
+            (
+                "product",
+                m.product.as_ref().map_or("not declared".into(), |p| {
+                    format!("{} {}", p.name, p.version)
+                }),
+            ),
+            ("side / suite", format!("{} / {:?}", m.side, m.suite)),
+            ("bus", m.bus.clone()),
+            ("seed", m.seed.to_string()),
+            ("started", utc(m.started_unix)),
+            ("canif", format!("{} ({})", m.canif_version, m.canif_commit)),
+            ("catalogue SHA-256", m.catalogue_sha256.clone()),
+            (
+                "left out",
+                m.left_out.clone().unwrap_or_else(|| "nothing".into()),
+            ),
+            ("wall time", format!("{} ms", self.wall_time_ms)),
+        ] {
+            let _ = writeln!(meta, "<tr><th>{name}</th><td>{}</td></tr>", esc(&value));
+        }
+        let mut profiles = String::new();
+        for p in &self.profiles {
+            let _ = write!(profiles, "<tr><td>{}</td>", esc(&p.profile));
+            for kind in VerdictKind::ALL {
+                let _ = write!(
+                    profiles,
+                    "<td class=\"{}\">{}</td>",
+                    kind.label().replace(' ', "-"),
+                    p.count(kind)
+                );
+            }
+            let _ = writeln!(
+                profiles,
+                "<td>{}</td><td>{}</td><td>{}</td></tr>",
+                p.checks.len(),
+                p.lockstep.cycles(),
+                p.lockstep.frames_checked()
+            );
+        }
+        let problems: String = self
+            .problems()
+            .iter()
+            .map(|line| format!("<li>{}</li>\n", esc(line)))
+            .collect();
+        let mut failures = String::new();
+        let mut checks = String::new();
+        for p in &self.profiles {
+            for (i, check) in p.checks.iter().enumerate() {
+                let (label, cause) = match &check.result {
+                    CheckResult::Pass => ("pass", String::new()),
+                    CheckResult::Fail(f) => ("fail", f.cause.clone()),
+                    CheckResult::Error(e) => {
+                        ("error", e.lines().next().unwrap_or_default().to_string())
+                    }
+                };
+                let _ = writeln!(
+                    checks,
+                    "<tr id=\"{}\" class=\"{label}\"><td>{}</td><td>{}</td><td>{label}</td><td>{}</td><td>{}</td></tr>",
+                    anchor(&p.profile, i),
+                    esc(&p.profile),
+                    esc(&check.evidence.key()),
+                    esc(&check.covers.join(", ")),
+                    esc(&cause)
+                );
+                let CheckResult::Fail(finding) = &check.result else {
                     continue;
                 };
-                let reason = match verdict {
-                    Verdict::NotApplicable(r) | Verdict::NotTestable(r) | Verdict::Error(r) => {
-                        r.clone()
-                    }
-                    Verdict::Fail(indexes) => headline(&profile.failures[indexes[0]]),
-                    Verdict::Pass => String::new(),
+                let diagram = finding
+                    .failure
+                    .and_then(|n| p.lockstep.failures.get(n))
+                    .map(|f| {
+                        format!(
+                            "<p>expected <code>{}</code><br>actual <code>{}</code></p>\n{}",
+                            esc(&f.expected),
+                            esc(&f.actual),
+                            timing_diagram(f)
+                        )
+                    })
+                    .unwrap_or_default();
+                let _ = writeln!(
+                    failures,
+                    "<section class=\"failure\" id=\"failure-{}\"><h3>{} — {} ({})</h3>\n<p class=\"cause\">{}</p>\n{diagram}<pre>{}</pre></section>",
+                    anchor(&p.profile, i),
+                    esc(&p.profile),
+                    esc(&check.evidence.key()),
+                    esc(&finding.requirements.join(", ")),
+                    esc(&finding.cause),
+                    esc(&finding.details)
+                );
+            }
+        }
+        let errors: String = self
+            .errors_by_cause()
+            .iter()
+            .map(|(cause, list)| {
+                format!(
+                    "<li><b>{} check(s)</b>: {}<br><small>first: {}</small></li>\n",
+                    list.len(),
+                    esc(cause),
+                    esc(&list[0])
+                )
+            })
+            .collect();
+        let mut rows = String::new();
+        for p in &self.profiles {
+            let index: BTreeMap<&Evidence, usize> = p
+                .checks
+                .iter()
+                .enumerate()
+                .map(|(i, c)| (&c.evidence, i))
+                .collect();
+            for requirement in catalogue.requirements() {
+                let Some(verdict) = p.verdicts.get(&requirement.id) else {
+                    continue;
                 };
-                rows.push_str(&format!(
-                    "<tr class=\"{}\"><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>\n",
+                let evidence: Vec<String> = verdict
+                    .evidence()
+                    .into_iter()
+                    .map(|e| match index.get(e) {
+                        Some(i) => format!(
+                            "<a href=\"#{}\">{}</a>",
+                            anchor(&p.profile, *i),
+                            esc(&e.key())
+                        ),
+                        None => esc(&e.key()),
+                    })
+                    .collect();
+                let why = match verdict {
+                    Verdict::Pass(_) => String::new(),
+                    _ => esc(&verdict.reason().unwrap_or_default()),
+                };
+                let _ = writeln!(
+                    rows,
+                    "<tr class=\"{}\"><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{why}</td><td class=\"evidence\">{}</td></tr>",
                     verdict.label().replace(' ', "-"),
-                    esc(&profile.profile),
+                    esc(&p.profile),
                     requirement.id,
                     verdict.label(),
                     esc(&requirement.statement),
-                    esc(&reason)
-                ));
+                    evidence.join("<br>")
+                );
             }
         }
-        for scenario in &self.scenarios {
-            let (label, reason) = match &scenario.outcome {
-                Ok(()) => ("pass", String::new()),
-                Err(report) => (
-                    "fail",
-                    report
-                        .lines()
-                        .find(|l| l.contains("Step panicked") || l.contains('✘'))
-                        .unwrap_or("")
-                        .trim()
-                        .to_string(),
-                ),
-            };
-            rows.push_str(&format!(
-                "<tr class=\"{label} scenario\"><td>{}</td><td>{}:{}</td><td>{label}</td><td>{}</td><td>{}</td></tr>\n",
-                esc(&scenario.suite),
-                esc(&scenario.file),
-                scenario.line,
-                esc(&format!("{} ({})", scenario.name, scenario.requirements.join(", "))),
-                esc(&reason)
-            ));
-        }
-        let mut failures = String::new();
-        for profile in &self.profiles {
-            for failure in &profile.failures {
-                failures.push_str(&format!(
-                    "<section class=\"failure\"><h3>{} — {}</h3>\n<p>expected <code>{}</code><br>actual <code>{}</code></p>\n{}<pre>{}</pre></section>\n",
-                    esc(&profile.profile),
-                    esc(&headline(failure)),
-                    esc(&failure.expected),
-                    esc(&failure.actual),
-                    timing_diagram(failure),
-                    esc(&details(failure))
-                ));
+        let none = |html: String| {
+            if html.is_empty() {
+                "<p>None.</p>".to_string()
+            } else {
+                html
             }
-        }
-        for scenario in self.scenarios.iter().filter(|s| s.outcome.is_err()) {
-            failures.push_str(&format!(
-                "<section class=\"failure\"><h3>{} — scenario {}:{} {}</h3><pre>{}</pre></section>\n",
-                esc(&scenario.suite),
-                esc(&scenario.file),
-                scenario.line,
-                esc(&scenario.name),
-                esc(scenario.outcome.as_ref().err().map_or("", String::as_str))
-            ));
-        }
+        };
         format!(
             r#"<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>canif report — {iut}</title>
 <style>
-body{{font-family:sans-serif;margin:1.5em}} table{{border-collapse:collapse;font-size:13px}} td,th{{border:1px solid #ddd;padding:2px 6px;vertical-align:top}}
-tr.fail td:nth-child(3),tr.error td:nth-child(3){{color:#b00;font-weight:bold}} tr.pass td:nth-child(3){{color:#070}} tr.not-applicable,tr.not-testable{{color:#888}}
-pre{{background:#f6f6f6;padding:6px;overflow-x:auto;font-size:12px}} svg.timing{{border:1px solid #ccc;background:#fff;margin:6px 0}}
+body{{font-family:sans-serif;margin:1.5em}} table{{border-collapse:collapse;font-size:13px}} td,th{{border:1px solid #ddd;padding:2px 6px;vertical-align:top;text-align:left}}
+tr.fail td:nth-child(3),tr.error td:nth-child(3),td.fail,td.error{{color:#b00;font-weight:bold}} tr.pass td:nth-child(3){{color:#070}} tr.not-applicable,tr.not-testable,tr.not-run{{color:#888}}
+pre{{background:#f6f6f6;padding:6px;overflow-x:auto;font-size:12px}} svg.timing{{border:1px solid #ccc;background:#fff;margin:6px 0}} td.evidence{{font-size:11px}}
 </style></head>
 <body>
 <h1>canif conformance run</h1>
-<p><b>{verdict}</b> — IUT <code>{iut}</code> on {bus}, seed {seed}: {pass} pass, {fail} fail, {error} error, {na} not applicable, {nt} not testable; Gherkin scenarios: {scenarios} run, {failed} failed.</p>
+<p id="headline"><b>{headline}</b>: {totals}.</p>
+<table id="meta">{meta}</table>
+<h2>Profiles</h2>
+<table id="profiles"><tr><th>profile</th><th>pass</th><th>fail</th><th>error</th><th>not applicable</th><th>not run</th><th>not testable</th><th>checks</th><th>cycles</th><th>frames checked</th></tr>
+{profiles}</table>
+<h2>Failing and erring requirements</h2>
+{problems}
 <h2>Failures</h2>
-{failures_or_none}
+{failures}
+<h2>Errors</h2>
+{errors}
 <h2>Verdicts</h2>
 <p><label>Filter: <input id="filter" type="search" placeholder="profile, id, verdict, words"></label>
 <label><input id="only-problems" type="checkbox"> only fail and error</label> <span id="shown"></span></p>
-<table id="verdicts"><thead><tr><th>profile / suite</th><th>requirement / scenario</th><th>verdict</th><th>statement</th><th>why</th></tr></thead>
+<table id="verdicts"><thead><tr><th>profile</th><th>requirement</th><th>verdict</th><th>statement</th><th>why</th><th>evidence</th></tr></thead>
 <tbody>
 {rows}</tbody></table>
+<h2>Checks</h2>
+<table id="checks"><thead><tr><th>profile</th><th>check</th><th>outcome</th><th>exercises</th><th>cause</th></tr></thead>
+<tbody>
+{checks}</tbody></table>
 <script>
 window.addEventListener('error', function (e) {{ document.body.dataset.errors = (document.body.dataset.errors || '') + e.message + ';'; }});
 (function () {{
@@ -265,27 +233,20 @@ window.addEventListener('error', function (e) {{ document.body.dataset.errors = 
 </script>
 </body></html>
 "#,
-            iut = esc(&self.iut),
-            bus = esc(&self.bus),
-            seed = self.seed,
-            verdict = match self.exit_code() {
-                0 => "CONFORMS",
-                1 => "DOES NOT CONFORM",
-                _ => "ERROR",
-            },
-            pass = totals.pass,
-            fail = totals.fail,
-            error = totals.error,
-            na = totals.not_applicable,
-            nt = totals.not_testable,
-            scenarios = self.scenarios.len(),
-            failed = self.failed_scenarios(),
-            failures_or_none = if failures.is_empty() {
+            iut = esc(&m.iut),
+            headline = esc(&self.headline()),
+            totals = esc(&self.totals_line()),
+            problems = if problems.is_empty() {
                 "<p>None.</p>".to_string()
             } else {
-                failures
+                format!("<ul id=\"problems\">{problems}</ul>")
             },
-            rows = rows,
+            failures = none(failures),
+            errors = if errors.is_empty() {
+                "<p>None.</p>".to_string()
+            } else {
+                format!("<ul>{errors}</ul>")
+            },
         )
     }
 }

@@ -94,7 +94,7 @@ pub struct Scenario {
     /// profile's timestamp_tolerance_ns, TS-004).
     pub time_stamp_tolerance: Nanos,
     /// Write the bus as `DIR/NAME.log` (candump) and `DIR/NAME.pcapng`.
-    pub trace: Option<(std::path::PathBuf, String)>,
+    pub trace: Option<(std::path::PathBuf, String, canif_model::Nanos)>,
     /// The bus it runs on.
     pub bus: BusChoice,
     pub steps: Steps,

@@ -1,0 +1,204 @@
+//! The timing diagram of a failure's last cycles, as SVG: the PLC's outputs,
+//! the input header as the model expected it and as the IUT gave it (a red
+//! cell where they differ), the frames that ended on the bus in each cycle,
+//! and, in the failing cycle, the failing frame byte by byte with the bytes
+//! that differ highlighted.
+
+use std::fmt::Write as _;
+
+use canif_model::frame::Frame;
+
+use crate::outcome::Failure;
+
+const LABEL_WIDTH: f64 = 300.0;
+const CELL: f64 = 150.0;
+const ROW: f64 = 26.0;
+/// Width of one byte as `AB ` in the 11-pixel monospace font.
+const BYTE_WIDTH: f64 = 20.0;
+
+pub(super) fn esc(text: &str) -> String {
+    text.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// A frame's identifier and bytes as SVG text, the bytes that differ from
+/// `other` (or that `other` lacks) marked `differs`.
+fn frame_text(frame: Option<&Frame>, other: Option<&Frame>) -> String {
+    let Some(frame) = frame else {
+        return "<tspan class=\"differs\" fill=\"#c00\" font-weight=\"bold\">no frame</tspan>"
+            .into();
+    };
+    let id_differs = other.is_none_or(|o| o.id != frame.id || o.kind != frame.kind);
+    let mut text = format!(
+        "<tspan{}>{:0width$X}{}</tspan> [{}] ",
+        if id_differs {
+            " class=\"differs\" fill=\"#c00\" font-weight=\"bold\""
+        } else {
+            ""
+        },
+        frame.id.raw(),
+        if frame.is_remote() { " R" } else { "" },
+        frame.len(),
+        width = if frame.id.is_extended() { 8 } else { 3 }
+    );
+    for (i, byte) in frame.data().iter().enumerate() {
+        let differs = other.is_none_or(|o| o.data().get(i) != Some(byte));
+        let _ = write!(
+            text,
+            "<tspan{}>{byte:02X}</tspan> ",
+            if differs {
+                " class=\"differs\" fill=\"#c00\" font-weight=\"bold\""
+            } else {
+                ""
+            }
+        );
+    }
+    text
+}
+
+pub fn timing_diagram(failure: &Failure) -> String {
+    let cycles = &failure.timeline;
+    if cycles.is_empty() {
+        return String::new();
+    }
+    let mut rows = vec![
+        "Outputs.TxCounter / RxCounter / NoOfTx",
+        "Inputs.TxCounter (expected | actual)",
+        "Inputs.RxCounter (expected | actual)",
+        "NoOfRxMessages (expected | actual)",
+        "TransactionNumber (expected | actual)",
+        "bus (blue: IUT, grey: other nodes)",
+    ];
+    if failure.frames.is_some() {
+        rows.extend(["failing frame, expected", "failing frame, actual"]);
+    }
+    let longest = failure.frames.as_ref().map_or(0, |f| {
+        [f.expected, f.actual]
+            .iter()
+            .flatten()
+            .map(|frame| frame.len() + 6)
+            .max()
+            .unwrap_or(2)
+    });
+    let last_x = LABEL_WIDTH + CELL * (cycles.len() - 1) as f64;
+    let width =
+        (LABEL_WIDTH + CELL * cycles.len() as f64).max(last_x + BYTE_WIDTH * longest as f64) + 10.0;
+    let height = ROW * (rows.len() as f64 + 1.5) + 20.0;
+    let mut svg = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" class=\"timing\" width=\"{width}\" height=\"{height}\" font-family=\"monospace\" font-size=\"11\">\n"
+    );
+    for (i, name) in rows.iter().enumerate() {
+        let y = ROW * (i as f64 + 1.5);
+        let _ = writeln!(svg, "<text x=\"4\" y=\"{}\">{}</text>", y + 16.0, esc(name));
+        let _ = writeln!(
+            svg,
+            "<line x1=\"0\" y1=\"{y}\" x2=\"{width}\" y2=\"{y}\" stroke=\"#ddd\"/>"
+        );
+    }
+    for (c, view) in cycles.iter().enumerate() {
+        let x = LABEL_WIDTH + CELL * c as f64;
+        let failing = c + 1 == cycles.len();
+        let _ = writeln!(
+            svg,
+            "<text x=\"{}\" y=\"18\" font-weight=\"{}\">cycle {} · {:.3} ms</text>",
+            x + 4.0,
+            if failing { "bold" } else { "normal" },
+            view.cycle,
+            view.time as f64 / 1e6
+        );
+        if failing {
+            let _ = writeln!(
+                svg,
+                "<rect class=\"failing-cycle\" x=\"{x}\" y=\"2\" width=\"{CELL}\" height=\"{}\" fill=\"none\" stroke=\"#c00\" stroke-width=\"2\"/>",
+                ROW * 7.5 - 4.0
+            );
+        }
+        let o = view.outputs;
+        let _ = writeln!(
+            svg,
+            "<text x=\"{}\" y=\"{}\">{} / {} / {}</text>",
+            x + 4.0,
+            ROW * 1.5 + 16.0,
+            o.tx_counter,
+            o.rx_counter,
+            o.no_of_tx_messages
+        );
+        let fields = |h: &canif_model::image::InputHeader| {
+            [
+                h.tx_counter,
+                h.rx_counter,
+                h.no_of_rx_messages,
+                h.transaction_number.unwrap_or(0),
+            ]
+        };
+        let (expected, actual) = (fields(&view.expected), fields(&view.actual));
+        for field in 0..4 {
+            let y = ROW * (field as f64 + 2.5);
+            let (e, a) = (expected[field], actual[field]);
+            if e != a {
+                let _ = writeln!(svg, "<rect class=\"mismatch\" x=\"{x}\" y=\"{y}\" width=\"{CELL}\" height=\"{ROW}\" fill=\"#fcc\"/>");
+            }
+            let _ = writeln!(
+                svg,
+                "<text x=\"{}\" y=\"{}\">{e} | {a}</text>",
+                x + 4.0,
+                y + 16.0
+            );
+        }
+        // The frames the text lists under this cycle, placed inside its own
+        // column by when they ended since the cycle before.
+        let previous = if c == 0 {
+            view.time.saturating_sub(1_000_000)
+        } else {
+            cycles[c - 1].time
+        };
+        let span = view.time.saturating_sub(previous).max(1) as f64;
+        let y = ROW * 6.5;
+        for frame in &view.frames {
+            let at = (frame.end.saturating_sub(previous) as f64 / span).clamp(0.0, 1.0);
+            let fx = x + 2.0 + (CELL - 40.0) * at;
+            let colour = if frame.from_iut { "#36c" } else { "#999" };
+            let id = frame.text.split('#').next().unwrap_or("");
+            let _ = writeln!(
+                svg,
+                "<rect class=\"bus-frame\" x=\"{fx:.1}\" y=\"{}\" width=\"3\" height=\"14\" fill=\"{colour}\"><title>{}</title></rect>",
+                y + 4.0,
+                esc(&frame.text)
+            );
+            let _ = writeln!(
+                svg,
+                "<text x=\"{:.1}\" y=\"{}\" font-size=\"8\" fill=\"{colour}\">{}</text>",
+                fx + 4.0,
+                y + 14.0,
+                esc(id)
+            );
+        }
+        if let (true, Some(frames)) = (failing, &failure.frames) {
+            let _ = writeln!(
+                svg,
+                "<rect class=\"failing-frame\" x=\"{}\" y=\"{}\" width=\"6\" height=\"14\" fill=\"#c00\"><title>the failing frame</title></rect>",
+                x + CELL - 10.0,
+                y + 4.0
+            );
+            for (row, (frame, other)) in [
+                (frames.expected.as_ref(), frames.actual.as_ref()),
+                (frames.actual.as_ref(), frames.expected.as_ref()),
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                let _ = writeln!(
+                    svg,
+                    "<text class=\"failing-frame-bytes\" x=\"{}\" y=\"{}\">{}</text>",
+                    x + 4.0,
+                    ROW * (7.5 + row as f64) + 16.0,
+                    frame_text(frame, other)
+                );
+            }
+        }
+    }
+    svg.push_str("</svg>\n");
+    svg
+}

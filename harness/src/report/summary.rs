@@ -1,0 +1,125 @@
+//! `summary.md`: the run for a CI page or a pull request.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+use canif_spec::Catalogue;
+
+use super::RunReport;
+use crate::verdict::{CheckResult, VerdictKind};
+
+/// Seconds since the Unix epoch as RFC 3339 in UTC.
+pub fn utc(seconds: u64) -> String {
+    chrono::DateTime::from_timestamp(seconds as i64, 0)
+        .map_or_else(|| seconds.to_string(), |t| t.to_rfc3339())
+}
+
+impl RunReport {
+    /// One line of metadata: what ran, against what, when, with which canif and catalogue.
+    pub fn provenance(&self) -> String {
+        let m = &self.meta;
+        format!(
+            "IUT `{}`{} ({} side, {:?} suite) on {}, seed {}, started {}, canif {} ({}), catalogue SHA-256 `{}`, {} ms",
+            m.iut,
+            m.product
+                .as_ref()
+                .map_or(String::new(), |p| format!(" — {} {}", p.name, p.version)),
+            m.side,
+            m.suite,
+            m.bus,
+            m.seed,
+            utc(m.started_unix),
+            m.canif_version,
+            m.canif_commit,
+            m.catalogue_sha256,
+            self.wall_time_ms
+        )
+    }
+
+    /// The totals in words.
+    pub fn totals_line(&self) -> String {
+        self.totals()
+            .iter()
+            .map(|(kind, n)| format!("{n} {}", kind.label()))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
+    pub fn summary(&self, catalogue: &Catalogue) -> String {
+        let mut md = format!(
+            "# canif conformance run\n\n**{}**: {}.\n\n{}.\n",
+            self.headline(),
+            self.totals_line(),
+            self.provenance()
+        );
+        if let Some(left_out) = &self.meta.left_out {
+            let _ = writeln!(md, "\nLeft out: {left_out}.");
+        }
+        md.push_str("\n| profile | pass | fail | error | n/a | not run | not testable | checks | cycles | frames checked |\n|---|---|---|---|---|---|---|---|---|---|\n");
+        for p in &self.profiles {
+            let _ = writeln!(
+                md,
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                p.profile,
+                p.count(VerdictKind::Pass),
+                p.count(VerdictKind::Fail),
+                p.count(VerdictKind::Error),
+                p.count(VerdictKind::NotApplicable),
+                p.count(VerdictKind::NotRun),
+                p.count(VerdictKind::NotTestable),
+                p.checks.len(),
+                p.lockstep.cycles(),
+                p.lockstep.frames_checked()
+            );
+        }
+        let problems = self.problems();
+        if !problems.is_empty() {
+            md.push_str("\n## Failing requirements\n\n");
+            for line in problems.iter().filter(|l| l.starts_with("FAIL")) {
+                let _ = writeln!(md, "- {line}");
+            }
+        }
+        for p in &self.profiles {
+            for check in &p.checks {
+                let CheckResult::Fail(finding) = &check.result else {
+                    continue;
+                };
+                let _ = write!(md, "\n## {} — {}\n\n", p.profile, check.evidence);
+                for id in &finding.requirements {
+                    if let Some(r) = catalogue.requirement(id) {
+                        let _ = writeln!(md, "- **{id}**: {}", r.statement);
+                    }
+                }
+                let _ = write!(md, "\n```\n{}\n```\n", finding.details);
+            }
+        }
+        let errors = self.errors_by_cause();
+        if !errors.is_empty() {
+            md.push_str("\n## Errors\n\n");
+            for (cause, checks) in errors {
+                let _ = writeln!(
+                    md,
+                    "- {} check(s), first `{}`: {cause}",
+                    checks.len(),
+                    checks[0]
+                );
+            }
+        }
+        md
+    }
+
+    /// Checks that could not run, grouped by their cause (a broken IUT is one
+    /// entry, not one per scenario).
+    pub fn errors_by_cause(&self) -> BTreeMap<String, Vec<String>> {
+        let mut grouped: BTreeMap<String, Vec<String>> = BTreeMap::new();
+        for (profile, check) in self.checks() {
+            if let CheckResult::Error(cause) = &check.result {
+                grouped
+                    .entry(cause.lines().next().unwrap_or_default().to_string())
+                    .or_default()
+                    .push(format!("{}: {}", profile.profile, check.evidence));
+            }
+        }
+        grouped
+    }
+}

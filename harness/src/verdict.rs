@@ -1,0 +1,350 @@
+//! One verdict per requirement and profile, merged from every check that
+//! exercised it: lockstep scenarios, Gherkin scenarios and CANopen node checks.
+//!
+//! A fail outranks an error, an error outranks a pass, and a pass names its
+//! evidence. A requirement the run could have exercised but did not is `not
+//! run`; `not testable` is kept for what nothing in canif exercises against an
+//! implementation, with the catalogue's reason.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::fmt;
+
+use canif_spec::{Catalogue, Profile, Verification};
+use serde::{Deserialize, Serialize};
+
+/// One check that ran against the implementation, named stably (no line
+/// numbers, no statement text), so that two runs can be compared.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Evidence {
+    /// A lockstep scenario of the interface suite (scripted or generated).
+    Scenario(String),
+    /// A Gherkin scenario: `feature file: scenario name`, with an Examples row's values.
+    Gherkin(String),
+    /// A CANopen node check (002, 004).
+    NodeCheck(String),
+}
+
+impl Evidence {
+    /// The stable key reports and `compare` use: `scenario: …`, `gherkin: …`, `canopen: …`.
+    pub fn key(&self) -> String {
+        match self {
+            Evidence::Scenario(name) => format!("scenario: {name}"),
+            Evidence::Gherkin(id) => format!("gherkin: {id}"),
+            Evidence::NodeCheck(name) => format!("canopen: {name}"),
+        }
+    }
+
+    /// The inverse of [`Evidence::key`].
+    pub fn from_key(key: &str) -> Option<Self> {
+        let (kind, name) = key.split_once(": ")?;
+        let name = name.to_string();
+        match kind {
+            "scenario" => Some(Evidence::Scenario(name)),
+            "gherkin" => Some(Evidence::Gherkin(name)),
+            "canopen" => Some(Evidence::NodeCheck(name)),
+            _ => None,
+        }
+    }
+}
+
+impl fmt::Display for Evidence {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.key())
+    }
+}
+
+/// What a failing check found: the requirements it blames and why, in one line.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Finding {
+    pub requirements: Vec<String>,
+    /// One line: where it differs and how.
+    pub cause: String,
+    /// Expected, actual and the steps or cycles before.
+    pub details: String,
+    /// The lockstep failure it came from (an index into the profile's failures).
+    pub failure: Option<usize>,
+}
+
+/// How one check ended.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum CheckResult {
+    Pass,
+    Fail(Finding),
+    /// The implementation or the harness could not run it.
+    Error(String),
+}
+
+/// One check against one profile, with the requirements it exercises.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Check {
+    pub evidence: Evidence,
+    pub covers: Vec<String>,
+    pub result: CheckResult,
+    /// Wall time the check took.
+    pub elapsed: std::time::Duration,
+}
+
+/// The kinds of verdict, as reports spell them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+pub enum VerdictKind {
+    #[serde(rename = "pass")]
+    Pass,
+    #[serde(rename = "fail")]
+    Fail,
+    #[serde(rename = "error")]
+    Error,
+    #[serde(rename = "not applicable")]
+    NotApplicable,
+    #[serde(rename = "not run")]
+    NotRun,
+    #[serde(rename = "not testable")]
+    NotTestable,
+}
+
+impl VerdictKind {
+    pub const ALL: [VerdictKind; 6] = [
+        VerdictKind::Pass,
+        VerdictKind::Fail,
+        VerdictKind::Error,
+        VerdictKind::NotApplicable,
+        VerdictKind::NotRun,
+        VerdictKind::NotTestable,
+    ];
+
+    pub fn label(self) -> &'static str {
+        match self {
+            VerdictKind::Pass => "pass",
+            VerdictKind::Fail => "fail",
+            VerdictKind::Error => "error",
+            VerdictKind::NotApplicable => "not applicable",
+            VerdictKind::NotRun => "not run",
+            VerdictKind::NotTestable => "not testable",
+        }
+    }
+
+    /// A verdict that stops a gate.
+    pub fn is_bad(self) -> bool {
+        matches!(self, VerdictKind::Fail | VerdictKind::Error)
+    }
+}
+
+/// A requirement's verdict on one profile, with what it rests on.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Verdict {
+    /// Every check that exercised it passed; they are listed.
+    Pass(Vec<Evidence>),
+    /// The checks that failed on it, each with its finding.
+    Fail(Vec<(Evidence, Finding)>),
+    /// The checks that could not run, each with its cause (none failed).
+    Error(Vec<(Evidence, String)>),
+    /// The profile lacks a capability the requirement needs.
+    NotApplicable(String),
+    /// Something in canif exercises it, but not this run (the selection, an
+    /// earlier error, another suite).
+    NotRun(String),
+    /// Nothing in canif exercises it against an implementation: the catalogue's reason.
+    NotTestable(String),
+}
+
+impl Verdict {
+    pub fn kind(&self) -> VerdictKind {
+        match self {
+            Verdict::Pass(_) => VerdictKind::Pass,
+            Verdict::Fail(_) => VerdictKind::Fail,
+            Verdict::Error(_) => VerdictKind::Error,
+            Verdict::NotApplicable(_) => VerdictKind::NotApplicable,
+            Verdict::NotRun(_) => VerdictKind::NotRun,
+            Verdict::NotTestable(_) => VerdictKind::NotTestable,
+        }
+    }
+
+    pub fn label(&self) -> &'static str {
+        self.kind().label()
+    }
+
+    /// Why, in one line: the first finding or error, or the reason given.
+    pub fn reason(&self) -> Option<String> {
+        match self {
+            Verdict::Pass(_) => None,
+            Verdict::Fail(found) => found.first().map(|(e, f)| format!("{e}: {}", f.cause)),
+            Verdict::Error(errors) => errors.first().map(|(e, cause)| format!("{e}: {cause}")),
+            Verdict::NotApplicable(reason)
+            | Verdict::NotRun(reason)
+            | Verdict::NotTestable(reason) => Some(reason.clone()),
+        }
+    }
+
+    /// The checks the verdict rests on.
+    pub fn evidence(&self) -> Vec<&Evidence> {
+        match self {
+            Verdict::Pass(evidence) => evidence.iter().collect(),
+            Verdict::Fail(found) => found.iter().map(|(e, _)| e).collect(),
+            Verdict::Error(errors) => errors.iter().map(|(e, _)| e).collect(),
+            _ => Vec::new(),
+        }
+    }
+}
+
+/// What the suite can exercise on a profile, beyond what this run did.
+#[derive(Debug, Clone, Default)]
+pub struct Reach {
+    /// Requirements this run's suite exercises on the profile when nothing is left out.
+    pub here: BTreeSet<String>,
+    /// Requirements only another suite or stage exercises, with where.
+    pub elsewhere: BTreeMap<String, String>,
+    /// Why this run left out what it could have run (the selection, an error, a signal).
+    pub left_out: String,
+}
+
+/// Every requirement's verdict on `profile`, from the checks that ran.
+pub fn judge(
+    catalogue: &Catalogue,
+    profile: &Profile,
+    checks: &[Check],
+    reach: &Reach,
+) -> BTreeMap<String, Verdict> {
+    let mut passed: BTreeMap<&str, Vec<Evidence>> = BTreeMap::new();
+    let mut failed: BTreeMap<&str, Vec<(Evidence, Finding)>> = BTreeMap::new();
+    let mut broke: BTreeMap<&str, Vec<(Evidence, String)>> = BTreeMap::new();
+    for check in checks {
+        match &check.result {
+            CheckResult::Pass => {
+                for id in &check.covers {
+                    passed.entry(id).or_default().push(check.evidence.clone());
+                }
+            }
+            CheckResult::Fail(finding) => {
+                for id in &finding.requirements {
+                    failed
+                        .entry(id)
+                        .or_default()
+                        .push((check.evidence.clone(), finding.clone()));
+                }
+                // What the check covers but does not blame was exercised up to
+                // the failure only: that is no evidence of a pass.
+            }
+            CheckResult::Error(cause) => {
+                for id in &check.covers {
+                    broke
+                        .entry(id)
+                        .or_default()
+                        .push((check.evidence.clone(), cause.clone()));
+                }
+            }
+        }
+    }
+    let mut verdicts = BTreeMap::new();
+    for requirement in catalogue.requirements() {
+        let id = requirement.id.as_str();
+        let missing = profile.lacks(&requirement.capabilities);
+        let verdict = if !missing.is_empty() {
+            Verdict::NotApplicable(format!("{} lacks {}", profile.name, missing.join(", ")))
+        } else if let Some(found) = failed.remove(id) {
+            Verdict::Fail(found)
+        } else if let Some(errors) = broke.remove(id) {
+            Verdict::Error(errors)
+        } else if let Some(evidence) = passed.remove(id) {
+            Verdict::Pass(evidence)
+        } else if reach.here.contains(id) {
+            Verdict::NotRun(reach.left_out.clone())
+        } else if let Some(where_) = reach.elsewhere.get(id) {
+            Verdict::NotRun(where_.clone())
+        } else {
+            Verdict::NotTestable(match (&requirement.reason, requirement.verification) {
+                (Some(reason), _) => reason.clone(),
+                (None, Verification::Inspection) => "verified by inspection".into(),
+                (None, _) => {
+                    "no run against an implementation can show it; the model's own tests check it"
+                        .into()
+                }
+            })
+        };
+        verdicts.insert(requirement.id.clone(), verdict);
+    }
+    verdicts
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn catalogue() -> Catalogue {
+        Catalogue::embedded().expect("the embedded catalogue loads")
+    }
+
+    fn check(name: &str, covers: &[&str], result: CheckResult) -> Check {
+        Check {
+            evidence: Evidence::Gherkin(name.into()),
+            covers: covers.iter().map(|s| s.to_string()).collect(),
+            result,
+            elapsed: std::time::Duration::ZERO,
+        }
+    }
+
+    fn finding(blames: &[&str]) -> Finding {
+        Finding {
+            requirements: blames.iter().map(|s| s.to_string()).collect(),
+            cause: "differs".into(),
+            details: String::new(),
+            failure: None,
+        }
+    }
+
+    #[test]
+    fn a_failure_outranks_a_pass_and_an_error_from_other_checks() {
+        let catalogue = catalogue();
+        let profile = catalogue.profile("fc532x").unwrap();
+        let checks = [
+            check("a", &["HS-TX-001", "HS-TX-002"], CheckResult::Pass),
+            check(
+                "b",
+                &["HS-TX-001"],
+                CheckResult::Fail(finding(&["HS-TX-001"])),
+            ),
+            check(
+                "c",
+                &["HS-TX-001", "HS-TX-003"],
+                CheckResult::Error("died".into()),
+            ),
+        ];
+        let verdicts = judge(&catalogue, profile, &checks, &Reach::default());
+        assert_eq!(verdicts["HS-TX-001"].kind(), VerdictKind::Fail);
+        assert_eq!(
+            verdicts["HS-TX-002"],
+            Verdict::Pass(vec![Evidence::Gherkin("a".into())])
+        );
+        assert_eq!(verdicts["HS-TX-003"].kind(), VerdictKind::Error);
+    }
+
+    #[test]
+    fn what_the_run_left_out_is_not_run_and_never_not_testable() {
+        let catalogue = catalogue();
+        let profile = catalogue.profile("fc532x").unwrap();
+        let reach = Reach {
+            here: ["HS-TX-001".to_string()].into(),
+            elsewhere: [("NMT-001".to_string(), "run --suite canopen".to_string())].into(),
+            left_out: "left out by --scenario x".into(),
+        };
+        let verdicts = judge(&catalogue, profile, &[], &reach);
+        assert_eq!(
+            verdicts["HS-TX-001"],
+            Verdict::NotRun("left out by --scenario x".into())
+        );
+        assert_eq!(
+            verdicts["NMT-001"],
+            Verdict::NotRun("run --suite canopen".into())
+        );
+        assert!(!verdicts.values().any(|v| v.kind() == VerdictKind::Pass));
+    }
+
+    #[test]
+    fn evidence_keys_read_back() {
+        for evidence in [
+            Evidence::Scenario("tx-batches [11-bit]".into()),
+            Evidence::Gherkin("fd-length.feature: Lengths [dlc=9]".into()),
+            Evidence::NodeCheck("boot-up".into()),
+        ] {
+            assert_eq!(Evidence::from_key(&evidence.key()), Some(evidence));
+        }
+    }
+}

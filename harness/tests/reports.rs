@@ -1,0 +1,444 @@
+//! The reports a certifier reads and signs: verdicts that merge every check,
+//! JUnit that a JUnit reader accepts with counts that match, a compare gate
+//! that does not pass when checks vanish, a signed certificate that
+//! `ssh-keygen` verifies, and an HTML page that draws the failing frame.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use canif_harness::compare::{compare, CompareOptions};
+use canif_harness::report::{ProfileReport, ReportFile, RunMeta, RunReport};
+use canif_harness::suite::{run_profile, Options};
+use canif_harness::verdict::Reach;
+use canif_harness::{GherkinOutcome, GherkinRun, IutKind, VerdictKind};
+use canif_softdevice::Fault;
+use canif_spec::Catalogue;
+
+fn temp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("canif-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// One profile's lockstep run with `faults`, plus `gherkin`, as a report.
+fn report(profile: &str, faults: Vec<Fault>, seed: u64, gherkin: Vec<GherkinRun>) -> RunReport {
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile(profile).unwrap();
+    let options = Options::quick(seed);
+    let run = run_profile(
+        &catalogue,
+        profile,
+        &IutKind::SoftDevice { faults },
+        &options,
+        |_| {},
+    );
+    let reach = Reach {
+        here: canif_harness::suite::checked_ids(&profile.model_capabilities(), &options)
+            .into_iter()
+            .collect(),
+        ..Reach::default()
+    };
+    RunReport {
+        meta: RunMeta::new("softdevice".into(), "sim".into(), seed, &catalogue),
+        profiles: vec![ProfileReport::new(
+            &catalogue,
+            profile,
+            run,
+            gherkin,
+            Vec::new(),
+            &reach,
+        )],
+        wall_time_ms: 1,
+        interrupted: false,
+    }
+}
+
+fn gherkin(id: &str, requirements: &[&str], outcome: GherkinOutcome) -> GherkinRun {
+    GherkinRun {
+        id: id.into(),
+        file: "x.feature".into(),
+        line: 1,
+        requirements: requirements.iter().map(|s| s.to_string()).collect(),
+        outcome,
+        elapsed: std::time::Duration::from_millis(3),
+    }
+}
+
+fn json(report: &RunReport) -> ReportFile {
+    report.json(&Catalogue::embedded().unwrap())
+}
+
+/// Problem 1: a failing Gherkin scenario fails the requirements it is tagged
+/// with, even when every lockstep scenario passed them; a pass names evidence.
+#[test]
+fn a_failing_gherkin_scenario_fails_its_requirement() {
+    let failing = gherkin(
+        "fd-length.feature: padding",
+        &["FD-LEN-003"],
+        GherkinOutcome::Fail {
+            step: "Then the padding bytes are 0x00: expected 00, got FF".into(),
+            report: "✘ Then the padding bytes are 0x00".into(),
+        },
+    );
+    let run = report("fc532x", vec![], 1, vec![failing]);
+    let verdict = &run.profiles[0].verdicts["FD-LEN-003"];
+    assert_eq!(verdict.kind(), VerdictKind::Fail);
+    assert!(verdict.reason().unwrap().contains("expected 00, got FF"));
+    assert_eq!(run.exit_code(), 1);
+    let file = json(&run);
+    let entry = &file.profiles[0].verdicts["HS-TX-001"];
+    assert_eq!(entry.verdict, VerdictKind::Pass);
+    assert!(
+        entry.evidence.iter().any(|e| e.starts_with("scenario: ")),
+        "a pass names the scenarios it rests on: {entry:?}"
+    );
+}
+
+/// Problem 2: a run that exercised nothing is not "conforms".
+#[test]
+fn a_run_that_checked_nothing_does_not_conform() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("fc532x").unwrap();
+    let options = Options {
+        selection: canif_harness::Selection {
+            scenarios: vec!["no-such-scenario-xyz".into()],
+            requirements: vec![],
+        },
+        ..Options::quick(1)
+    };
+    let run = run_profile(
+        &catalogue,
+        profile,
+        &IutKind::SoftDevice { faults: vec![] },
+        &options,
+        |_| {},
+    );
+    assert!(run.runs.is_empty());
+    let reach = Reach {
+        here: ["HS-TX-001".to_string()].into(),
+        left_out: options.selection.describe(),
+        ..Reach::default()
+    };
+    let report = RunReport {
+        meta: RunMeta {
+            complete: false,
+            ..RunMeta::new("softdevice".into(), "sim".into(), 1, &catalogue)
+        },
+        profiles: vec![ProfileReport::new(
+            &catalogue,
+            profile,
+            run,
+            vec![],
+            vec![],
+            &reach,
+        )],
+        wall_time_ms: 1,
+        interrupted: false,
+    };
+    assert_eq!(report.exit_code(), 2);
+    assert_eq!(report.headline(), "NOTHING CHECKED");
+    assert_eq!(
+        report.profiles[0].verdicts["HS-TX-001"].kind(),
+        VerdictKind::NotRun
+    );
+}
+
+#[test]
+fn the_same_seed_gives_the_same_verdicts() {
+    let strip = |mut file: ReportFile| {
+        file.meta.started_unix = 0;
+        for p in &mut file.profiles {
+            for c in &mut p.checks {
+                c.elapsed_ms = 0.0;
+            }
+        }
+        serde_json::to_string(&file).unwrap()
+    };
+    let faults = || vec![Fault::HeadDropWhenFull];
+    let first = strip(json(&report("el6751-mdp", faults(), 7, vec![])));
+    assert_eq!(
+        first,
+        strip(json(&report("el6751-mdp", faults(), 7, vec![])))
+    );
+    assert_ne!(
+        first,
+        strip(json(&report("el6751-mdp", faults(), 8, vec![])))
+    );
+}
+
+/// Problem 3: a gate that goes quietly green when checks vanish.
+#[test]
+fn compare_counts_vanished_checks_and_refuses_other_runs() {
+    let base = json(&report("fc510x", vec![], 3, vec![]));
+    let same = compare(&base, &base, CompareOptions::default()).unwrap();
+    assert!(!same.regressed() && same.unchanged > 100);
+
+    let mut fewer = base.clone();
+    fewer.profiles[0].checks.truncate(1);
+    for v in fewer.profiles[0]
+        .verdicts
+        .values_mut()
+        .filter(|v| v.verdict == VerdictKind::Pass)
+        .take(5)
+    {
+        v.verdict = VerdictKind::NotRun;
+    }
+    let gate = compare(&base, &fewer, CompareOptions::default()).unwrap();
+    assert!(gate.regressed(), "checks that vanished stop the gate");
+    assert!(gate.removed.len() >= 5);
+    assert!(gate.markdown().contains("REGRESSED"));
+    let allowed = compare(
+        &base,
+        &fewer,
+        CompareOptions {
+            allow_removed: true,
+            force: false,
+        },
+    )
+    .unwrap();
+    assert!(!allowed.regressed());
+
+    let mut empty = base.clone();
+    empty.profiles.clear();
+    let refused = compare(&base, &empty, CompareOptions::default()).unwrap_err();
+    assert!(
+        refused.iter().any(|m| m.starts_with("profiles")),
+        "{refused:?}"
+    );
+    let forced = compare(
+        &base,
+        &empty,
+        CompareOptions {
+            allow_removed: false,
+            force: true,
+        },
+    )
+    .unwrap();
+    assert!(forced.regressed() && !forced.forced_despite.is_empty());
+
+    let mut other = base.clone();
+    other.meta.iut = "exec:./other".into();
+    assert!(compare(&base, &other, CompareOptions::default()).is_err());
+
+    let mut value = serde_json::to_value(&base).unwrap();
+    value.as_object_mut().unwrap().remove("format");
+    let old = ReportFile::parse(&value.to_string()).unwrap_err();
+    assert!(old.contains("format 1"), "{old}");
+}
+
+/// Problem 4: JUnit read back by a JUnit reader: counts match the cases,
+/// names are `profile::REQ-ID`, a failure says expected and actual, and the
+/// properties carry seed, catalogue hash and version.
+#[test]
+fn junit_is_read_back_with_matching_counts() {
+    let run = report(
+        "el6751-mdp",
+        vec![Fault::OverwritesUnacknowledgedRx],
+        2,
+        vec![],
+    );
+    let catalogue = Catalogue::embedded().unwrap();
+    let xml = run.junit(&catalogue).unwrap();
+    let suites =
+        junit_parser::from_reader(std::io::Cursor::new(xml.as_bytes())).expect("JUnit parses");
+    let mut cases = 0;
+    let mut failures = 0;
+    for suite in &suites.suites {
+        assert_eq!(suite.tests as usize, suite.cases.len(), "{}", suite.name);
+        let failed = suite.cases.iter().filter(|c| c.status.is_failure()).count();
+        assert_eq!(suite.failures as usize, failed, "{}", suite.name);
+        cases += suite.cases.len();
+        failures += failed;
+        let props = &suite.properties.hashmap;
+        assert_eq!(props.get("seed").map(String::as_str), Some("2"));
+        assert_eq!(props.get("catalogue_sha256"), Some(&catalogue.sha256));
+        assert!(props.contains_key("canif_version"));
+    }
+    assert_eq!(suites.tests as usize, cases);
+    assert_eq!(suites.failures as usize, failures);
+    assert!(failures > 0);
+    let verdicts = &suites.suites[0];
+    assert!(
+        verdicts
+            .cases
+            .iter()
+            .all(|c| c.original_name.starts_with("el6751-mdp::") && !c.original_name.contains(" ")),
+        "{:?}",
+        verdicts.cases[0].original_name
+    );
+    let failed = verdicts
+        .cases
+        .iter()
+        .find(|c| c.status.is_failure())
+        .unwrap();
+    let text = &failed.status.failure_as_ref().text;
+    assert!(
+        text.contains("expected:") && text.contains("actual:"),
+        "{text}"
+    );
+    assert!(
+        suites.suites[1].cases.iter().any(|c| c.time > 0.0),
+        "real times"
+    );
+}
+
+fn ssh_keygen() -> Option<&'static str> {
+    let found = Command::new("ssh-keygen").arg("-?").output().is_ok();
+    if !found {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "ssh-keygen is not installed in CI (.ci/run installs openssh-client)"
+        );
+        eprintln!(
+            "SKIPPED: ssh-keygen is not installed (apt-get install openssh-client; .ci/run does)"
+        );
+    }
+    found.then_some("ssh-keygen")
+}
+
+fn external_verify(dir: &Path, certificate: &Path) -> bool {
+    let allowed = dir.join("allowed_signers");
+    let public = std::fs::read_to_string(dir.join("key.pub")).unwrap();
+    std::fs::write(
+        &allowed,
+        format!("certifier namespaces=\"canif-certificate\" {public}"),
+    )
+    .unwrap();
+    Command::new("ssh-keygen")
+        .args(["-Y", "verify", "-f"])
+        .arg(&allowed)
+        .args(["-I", "certifier", "-n", "canif-certificate", "-s"])
+        .arg(certificate.with_extension("json.sig"))
+        .stdin(std::fs::File::open(certificate).unwrap())
+        .output()
+        .unwrap()
+        .status
+        .success()
+}
+
+/// Problem 5: the certificate is signed with Ed25519 (SSHSIG); ssh-keygen,
+/// not canif, accepts the genuine one and rejects a tampered one.
+#[test]
+fn ssh_keygen_verifies_a_genuine_certificate_and_rejects_a_tampered_one() {
+    use canif_harness::certificate::{sign, verify, Certificate};
+    let Some(keygen) = ssh_keygen() else { return };
+    let dir = temp("certificate");
+    let key = dir.join("key");
+    let made = Command::new(keygen)
+        .args(["-q", "-t", "ed25519", "-N", "", "-C", "certifier", "-f"])
+        .arg(&key)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let run = report("fc510x", vec![], 9, vec![]);
+    let cert = Certificate::of(&run);
+    assert_eq!(cert.catalogue_sha256, Catalogue::embedded().unwrap().sha256);
+    assert!(cert
+        .verdicts
+        .values()
+        .all(|v| v.verdict == VerdictKind::Pass || v.reason.is_some()));
+    let bytes = cert.canonical();
+    assert_eq!(
+        Certificate::parse(&bytes).unwrap().canonical(),
+        bytes,
+        "canonical form is stable"
+    );
+    let path = dir.join("certificate.json");
+    std::fs::write(&path, &bytes).unwrap();
+    std::fs::write(path.with_extension("json.sig"), sign(&bytes, &key).unwrap()).unwrap();
+    assert!(
+        external_verify(&dir, &path),
+        "ssh-keygen accepts the genuine certificate"
+    );
+    verify(
+        &bytes,
+        &std::fs::read_to_string(path.with_extension("json.sig")).unwrap(),
+        &dir.join("key.pub"),
+    )
+    .unwrap();
+
+    let text = String::from_utf8(bytes).unwrap();
+    let tampered = text
+        .replacen("\"conforms\":true", "\"conforms\":false", 1)
+        .replacen("\"verdict\":\"pass\"", "\"verdict\":\"fail\"", 1);
+    assert_ne!(tampered, text);
+    std::fs::write(&path, &tampered).unwrap();
+    assert!(
+        !external_verify(&dir, &path),
+        "ssh-keygen rejects a tampered certificate"
+    );
+    let sig = std::fs::read_to_string(path.with_extension("json.sig")).unwrap();
+    assert!(verify(tampered.as_bytes(), &sig, &dir.join("key.pub")).is_err());
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// Problem 6: the failing frame is drawn in the failing cycle with its
+/// differing bytes marked, in the page a browser renders.
+#[test]
+fn the_html_report_draws_the_failing_frame_in_a_browser() {
+    let run = report("fc532x", vec![Fault::FdPaddingFf], 2, vec![]);
+    assert_eq!(run.exit_code(), 1);
+    let dir = temp("html");
+    run.write(&Catalogue::embedded().unwrap(), &dir).unwrap();
+    let page = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    for needle in [
+        "class=\"failing-cycle\"",
+        "class=\"failing-frame\"",
+        "class=\"failing-frame-bytes\"",
+        "class=\"differs\"",
+        "id=\"problems\"",
+    ] {
+        assert!(page.contains(needle), "{needle} is not in the page");
+    }
+    for external in ["src=\"http", "href=\"http", "@import"] {
+        assert!(!page.contains(external), "the page loads {external}");
+    }
+    let browser = ["chromium", "chromium-browser", "google-chrome"]
+        .into_iter()
+        .find(|b| {
+            Command::new(b)
+                .arg("--version")
+                .output()
+                .is_ok_and(|o| o.status.success())
+        });
+    let Some(browser) = browser else {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "Chromium is not installed in CI (.ci/run installs it)"
+        );
+        eprintln!("SKIPPED the browser check: no Chromium installed (apt-get install chromium; .ci/run does)");
+        return;
+    };
+    let out = Command::new(browser)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+        ])
+        .arg(format!(
+            "--user-data-dir={}",
+            dir.join("browser-profile").display()
+        ))
+        .arg("--dump-dom")
+        .arg(format!("file://{}", dir.join("report.html").display()))
+        .output()
+        .expect("the browser runs");
+    let dom = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        dom.contains("data-ready=\"yes\""),
+        "the script did not finish: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!dom.contains("data-errors"), "script errors in the page");
+    assert!(
+        dom.contains("failing-frame-bytes") && dom.contains("class=\"differs\""),
+        "the failing frame's differing bytes are in the rendered page"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -1,0 +1,139 @@
+//! Verdicts as a new user meets them on the command line (issue 14's
+//! numbered problems): a selection that matches nothing, a partial run, the
+//! CANopen suite's reports, and a compare gate that refuses other runs.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn canif(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_canif"))
+        .args(args)
+        .output()
+        .expect("canif runs")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("canif-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+fn report(dir: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
+}
+
+/// Problem 2: a selection that matches nothing is a usage error, not "conforms".
+#[test]
+fn a_selection_that_matches_nothing_is_a_usage_error() {
+    for args in [
+        &["run", "--profile", "fc532x", "--scenario", "FD-LEN-005"][..],
+        &["run", "--scenario", "no-such-scenario-xyz"],
+        &["run", "--requirement", "NO-SUCH-001"],
+    ] {
+        let out = canif(&[args, &["--report", "/nonexistent/never"]].concat());
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(!String::from_utf8_lossy(&out.stdout).contains("CONFORMS"));
+    }
+}
+
+/// A requirement selected alone: its checks run, the rest is `not run`, and
+/// the run is not called conforming.
+#[test]
+fn a_partial_run_says_so() {
+    let dir = scratch("partial");
+    let out = canif(&[
+        "run",
+        "--profile",
+        "fc532x",
+        "--requirement",
+        "FD-LEN-005",
+        "--cases",
+        "1",
+        "--report",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("PASSES WHAT RAN") && !stdout.contains("CONFORMS"),
+        "{stdout}"
+    );
+    let r = report(&dir);
+    let verdicts = &r["profiles"][0]["verdicts"];
+    assert_eq!(verdicts["FD-LEN-005"]["verdict"], "pass");
+    assert_eq!(verdicts["FLT-001"]["verdict"], "not run");
+    assert_eq!(r["meta"]["complete"], false);
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// Problem 5's last point: `--suite canopen` writes the same reports and
+/// refuses options that do not apply to it.
+#[test]
+fn the_canopen_suite_writes_reports_and_refuses_iut_options() {
+    let dir = scratch("canopen");
+    let out = canif(&[
+        "run",
+        "--suite",
+        "canopen",
+        "--coupler-fault",
+        "toggle-stuck",
+        "--report",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let r = report(&dir);
+    assert_eq!(r["meta"]["suite"], "canopen");
+    assert_eq!(r["profiles"][0]["verdicts"]["NMT-006"]["verdict"], "fail");
+    assert!(std::fs::read_to_string(dir.join("junit.xml"))
+        .unwrap()
+        .contains("NMT-006"));
+    for args in [&["--iut", "model"][..], &["--fault", "fd-padding-ff"]] {
+        let out = canif(
+            &[
+                &[
+                    "run",
+                    "--suite",
+                    "canopen",
+                    "--report",
+                    dir.to_str().unwrap(),
+                ],
+                args,
+            ]
+            .concat(),
+        );
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// Problem 3: a report with fewer profiles is refused, and with --force the
+/// vanished checks are regressions.
+#[test]
+fn compare_refuses_a_report_of_fewer_profiles() {
+    let dir = scratch("compare");
+    std::fs::create_dir_all(&dir).unwrap();
+    let baseline = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/reports/baseline/softdevice.json"
+    );
+    let mut r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(baseline).unwrap()).unwrap();
+    r["profiles"].as_array_mut().unwrap().truncate(1);
+    let fewer = dir.join("fewer.json");
+    std::fs::write(&fewer, r.to_string()).unwrap();
+    let out = canif(&["compare", baseline, fewer.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("profiles"));
+    let out = canif(&[
+        "compare",
+        baseline,
+        fewer.to_str().unwrap(),
+        "--force",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let answer: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(answer["removed"].as_array().unwrap().len() > 1000);
+    let _ = std::fs::remove_dir_all(dir);
+}
