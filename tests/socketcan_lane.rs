@@ -124,7 +124,7 @@ fn conforms_on(bus: &str, iut: &str, profile: &str, extra: &[&str]) -> Result<()
         )
         .into());
     }
-    let bus_text = report["bus"].as_str().unwrap_or_default();
+    let bus_text = report["meta"]["bus"].as_str().unwrap_or_default();
     let interface = bus
         .trim_start_matches("socketcan:")
         .split(',')
@@ -335,10 +335,12 @@ impl Drop for CouplerProcess {
 /// passes, each faulty variant fails on the requirement it breaks.
 fn canopen_checks_over(interface: &str) -> Result<(), Failed> {
     let bus = format!("socketcan:{interface}");
+    let dir = report_path("canopen");
+    let report = dir.to_string_lossy().into_owned();
     let check = |fault: Option<&str>| -> Result<Output, Failed> {
         let _coupler = CouplerProcess::start(interface, fault)?;
         Ok(canif(&[
-            "run", "--suite", "canopen", "--bus", &bus, "--node", "5",
+            "run", "--suite", "canopen", "--bus", &bus, "--node", "5", "--report", &report,
         ]))
     };
     let output = check(None)?;
@@ -351,10 +353,11 @@ fn canopen_checks_over(interface: &str) -> Result<(), Failed> {
         ("no-abort", "SDO-007"),
     ] {
         let output = check(Some(fault))?;
-        let stdout = String::from_utf8_lossy(&output.stdout);
-        let caught = stdout
+        // One line per failing requirement on stderr: `FAIL canopen-node-5::ID: …`.
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        let caught = stderr
             .lines()
-            .any(|l| l.starts_with("FAIL") && l.contains(requirement));
+            .any(|l| l.starts_with("FAIL") && l.contains(&format!("::{requirement}:")));
         if output.status.code() != Some(1) || !caught {
             return Err(format!("{fault} must fail {requirement}\n{}", text(&output)).into());
         }
@@ -484,26 +487,27 @@ fn conforms_despite_transport_delays(
     let message = first.message().unwrap_or_default().to_string();
     let dir = report_path(&format!("{profile}-{}", bus.replace([':', ','], "-")));
     let report = report(&dir)?;
-    let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap_or_default();
-    let lines: Vec<&str> = summary.lines().collect();
-    let errors: Vec<&str> = lines
-        .iter()
-        .enumerate()
-        .filter(|(_, l)| l.starts_with("## ") && l.contains("— error in"))
-        .filter_map(|(i, _)| {
-            lines[i + 1..]
-                .iter()
-                .find(|l| !l.trim().is_empty())
-                .copied()
-        })
-        .collect();
-    let delays = |l: &&str| l.contains("did not arrive") || l.contains("the kernel delivered");
-    let passed = report["profiles"]
+    let checks: Vec<serde_json::Value> = report["profiles"]
         .as_array()
         .into_iter()
         .flatten()
-        .flat_map(|p| p["scenarios"].as_array().cloned().unwrap_or_default())
-        .filter(|s| s["outcome"] == "pass" && s["frames_checked"].as_u64().unwrap_or(0) > 0)
+        .flat_map(|p| p["checks"].as_array().cloned().unwrap_or_default())
+        .collect();
+    let errors: Vec<String> = checks
+        .iter()
+        .filter(|c| c["outcome"] == "error")
+        .map(|c| c["cause"].as_str().unwrap_or_default().to_string())
+        .collect();
+    let delays = |l: &String| l.contains("did not arrive") || l.contains("the kernel delivered");
+    // Lockstep scenarios that passed over the bus (the refusal grid sends no frame).
+    let passed = checks
+        .iter()
+        .filter(|c| c["outcome"] == "pass")
+        .filter(|c| {
+            c["check"].as_str().is_some_and(|k| {
+                k.starts_with("scenario: ") && !k.contains("configuration refusals")
+            })
+        })
         .count();
     if report["totals"]["fail"] == 0
         && !errors.is_empty()
