@@ -113,12 +113,10 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                 selection,
                 fail_fast: !no_fail_fast,
             };
-            let plan = run::Plan {
-                profiles,
-                options,
-                product: product.product(),
-            };
-            run::run(&catalogue, &iut, &plan, &report)
+            match run::Plan::new(profiles, options, product.product()) {
+                Ok(plan) => run::run(&catalogue, &iut, &plan, &report),
+                Err(code) => code,
+            }
         }
         Command::List {
             what: ListCommand::Scenarios { profile },

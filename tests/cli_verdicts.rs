@@ -25,13 +25,25 @@ fn report(dir: &std::path::Path) -> serde_json::Value {
 /// Problem 2: a selection that matches nothing is a usage error, not "conforms".
 #[test]
 fn a_selection_that_matches_nothing_is_a_usage_error() {
-    for args in [
-        &["run", "--profile", "fc532x", "--scenario", "FD-LEN-005"][..],
-        &["run", "--scenario", "no-such-scenario-xyz"],
-        &["run", "--requirement", "NO-SUCH-001"],
+    // The report folder cannot be written: only a refusal before the run can exit without it.
+    for (args, said) in [
+        (
+            &["run", "--profile", "fc532x", "--scenario", "FD-LEN-005"][..],
+            "matches no check",
+        ),
+        (
+            &["run", "--scenario", "no-such-scenario-xyz"],
+            "matches no check",
+        ),
+        (
+            &["run", "--requirement", "NO-SUCH-001"],
+            "no such requirement",
+        ),
     ] {
         let out = canif(&[args, &["--report", "/nonexistent/never"]].concat());
         assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains(said), "{args:?}: {stderr}");
         assert!(!String::from_utf8_lossy(&out.stdout).contains("CONFORMS"));
     }
 }
@@ -102,6 +114,10 @@ fn the_canopen_suite_writes_reports_and_refuses_iut_options() {
             .concat(),
         );
         assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(
+            String::from_utf8_lossy(&out.stderr).contains("do not apply"),
+            "{args:?}"
+        );
     }
     let _ = std::fs::remove_dir_all(dir);
 }

@@ -90,22 +90,22 @@ impl Selection {
             || covers.any(|id| self.requirements.iter().any(|r| r == id))
     }
 
-    /// The command line that made it, for a `not run` verdict.
-    pub fn describe(&self) -> String {
-        let mut parts: Vec<String> = self
-            .scenarios
+    /// The options that made it: `--scenario X --requirement Y`.
+    pub fn flags(&self) -> String {
+        let scenarios = self.scenarios.iter().map(|s| format!("--scenario {s}"));
+        let requirements = self
+            .requirements
             .iter()
-            .map(|s| format!("--scenario {s}"))
-            .collect();
-        parts.extend(
-            self.requirements
-                .iter()
-                .map(|r| format!("--requirement {r}")),
-        );
-        if parts.is_empty() {
+            .map(|r| format!("--requirement {r}"));
+        scenarios.chain(requirements).collect::<Vec<_>>().join(" ")
+    }
+
+    /// Why a requirement it leaves out was not run.
+    pub fn describe(&self) -> String {
+        if self.is_everything() {
             "not selected".into()
         } else {
-            format!("left out by the selection ({})", parts.join(" "))
+            format!("left out by the selection ({})", self.flags())
         }
     }
 }
@@ -120,6 +120,16 @@ pub struct ProfileRun {
 }
 
 impl ProfileRun {
+    /// A profile on which no lockstep scenario ran (the CANopen suite's node).
+    pub fn none(profile: &str) -> Self {
+        ProfileRun {
+            profile: profile.to_string(),
+            runs: Vec::new(),
+            failures: Vec::new(),
+            verdicts: BTreeMap::new(),
+        }
+    }
+
     /// The requirements that failed on this profile.
     pub fn failed_requirements(&self) -> Vec<String> {
         self.verdicts

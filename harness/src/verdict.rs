@@ -27,29 +27,17 @@ pub enum Evidence {
 impl Evidence {
     /// The stable key reports and `compare` use: `scenario: …`, `gherkin: …`, `canopen: …`.
     pub fn key(&self) -> String {
-        match self {
-            Evidence::Scenario(name) => format!("scenario: {name}"),
-            Evidence::Gherkin(id) => format!("gherkin: {id}"),
-            Evidence::NodeCheck(name) => format!("canopen: {name}"),
-        }
-    }
-
-    /// The inverse of [`Evidence::key`].
-    pub fn from_key(key: &str) -> Option<Self> {
-        let (kind, name) = key.split_once(": ")?;
-        let name = name.to_string();
-        match kind {
-            "scenario" => Some(Evidence::Scenario(name)),
-            "gherkin" => Some(Evidence::Gherkin(name)),
-            "canopen" => Some(Evidence::NodeCheck(name)),
-            _ => None,
-        }
+        self.to_string()
     }
 }
 
 impl fmt::Display for Evidence {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.key())
+        match self {
+            Evidence::Scenario(name) => write!(f, "scenario: {name}"),
+            Evidence::Gherkin(id) => write!(f, "gherkin: {id}"),
+            Evidence::NodeCheck(name) => write!(f, "canopen: {name}"),
+        }
     }
 }
 
@@ -72,6 +60,26 @@ pub enum CheckResult {
     Fail(Finding),
     /// The implementation or the harness could not run it.
     Error(String),
+}
+
+impl CheckResult {
+    /// `pass`, `fail` or `error`, as reports spell a check's outcome.
+    pub fn kind(&self) -> VerdictKind {
+        match self {
+            CheckResult::Pass => VerdictKind::Pass,
+            CheckResult::Fail(_) => VerdictKind::Fail,
+            CheckResult::Error(_) => VerdictKind::Error,
+        }
+    }
+
+    /// Why it did not pass, in one line.
+    pub fn cause(&self) -> Option<&str> {
+        match self {
+            CheckResult::Pass => None,
+            CheckResult::Fail(finding) => Some(&finding.cause),
+            CheckResult::Error(cause) => Some(cause.lines().next().unwrap_or_default()),
+        }
+    }
 }
 
 /// One check against one profile, with the requirements it exercises.
@@ -335,16 +343,5 @@ mod tests {
             Verdict::NotRun("run --suite canopen".into())
         );
         assert!(!verdicts.values().any(|v| v.kind() == VerdictKind::Pass));
-    }
-
-    #[test]
-    fn evidence_keys_read_back() {
-        for evidence in [
-            Evidence::Scenario("tx-batches [11-bit]".into()),
-            Evidence::Gherkin("fd-length.feature: Lengths [dlc=9]".into()),
-            Evidence::NodeCheck("boot-up".into()),
-        ] {
-            assert_eq!(Evidence::from_key(&evidence.key()), Some(evidence));
-        }
     }
 }

@@ -47,21 +47,18 @@ pub fn certify(
             return ExitCode::from(2);
         }
     }
-    let plan = Plan {
-        profiles,
-        options: Options {
-            seed,
-            ..Options::default()
-        },
-        product,
+    let options = Options {
+        seed,
+        ..Options::default()
+    };
+    let plan = match Plan::new(profiles, options, product) {
+        Ok(plan) => plan,
+        Err(code) => return code,
     };
     if let Err(code) = check_selection(catalogue, &plan) {
         return code;
     }
-    let report = match execute(catalogue, &kind, &plan) {
-        Ok(report) => report,
-        Err(code) => return code,
-    };
+    let report = execute(catalogue, &kind, &plan);
     let code = finish(catalogue, &report, &out.join("run"));
     let mut cert = Certificate::of(&report);
     let page = certificate::html(&cert, catalogue);

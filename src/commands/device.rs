@@ -200,7 +200,7 @@ pub fn canopen_suite(
     if selected.is_empty() {
         eprintln!(
             "{} matches no CANopen node check; `canif run --suite canopen` runs them all",
-            selection.describe()
+            selection.flags()
         );
         return ExitCode::from(2);
     }
@@ -215,25 +215,40 @@ pub fn canopen_suite(
         }
     }
     // The node is judged against every requirement as one "profile" with every capability.
-    let mut profile = catalogue.profiles[0].clone();
+    let Some(mut profile) = catalogue.profiles.first().cloned() else {
+        eprintln!("the catalogue has no profile to judge the node against");
+        return ExitCode::from(2);
+    };
     profile.name = format!("canopen-node-{}", node.get());
     profile.capabilities = catalogue
         .capabilities
         .iter()
         .map(|c| c.name.clone())
         .collect();
-    let mut elsewhere = std::collections::BTreeMap::new();
-    for p in &catalogue.profiles {
-        for id in canif_harness::suite::checked_ids(
+    // What the interface suite (lockstep and Gherkin) exercises on any profile.
+    let all: Vec<&canif_spec::Profile> = catalogue.profiles.iter().collect();
+    let gherkin = match super::run::gherkin_targets(&all) {
+        Ok(targets) => targets,
+        Err(error) => {
+            eprintln!("the feature files do not parse: {error}");
+            return ExitCode::from(2);
+        }
+    };
+    let lockstep = all.iter().flat_map(|p| {
+        canif_harness::suite::checked_ids(
             &p.model_capabilities(),
             &canif_harness::Options::default(),
-        ) {
-            elsewhere.insert(
+        )
+    });
+    let elsewhere = lockstep
+        .chain(gherkin.into_iter().flat_map(|(_, s)| s.requirements))
+        .map(|id| {
+            (
                 id,
                 "exercised by the interface suite (`canif run`)".to_string(),
-            );
-        }
-    }
+            )
+        })
+        .collect();
     let reach = canif_harness::verdict::Reach {
         here: canif_harness::canopen::node_check_ids()
             .iter()
@@ -254,12 +269,7 @@ pub fn canopen_suite(
         profiles: vec![canif_harness::report::ProfileReport::new(
             catalogue,
             &profile,
-            canif_harness::suite::judge(
-                catalogue,
-                &profile,
-                Vec::new(),
-                &canif_harness::Options::default(),
-            ),
+            canif_harness::ProfileRun::none(&profile.name),
             Vec::new(),
             selected,
             &reach,

@@ -23,6 +23,28 @@ pub struct Plan<'c> {
     pub profiles: Vec<&'c Profile>,
     pub options: Options,
     pub product: Option<Product>,
+    /// The Gherkin scenarios these profiles run, read once: (profile, scenario).
+    pub gherkin: Vec<(String, canif_features::ScenarioInfo)>,
+}
+
+impl<'c> Plan<'c> {
+    /// The plan, or the exit code of feature files that do not parse (said on stderr).
+    pub fn new(
+        profiles: Vec<&'c Profile>,
+        options: Options,
+        product: Option<Product>,
+    ) -> Result<Self, ExitCode> {
+        let gherkin = gherkin_targets(&profiles).map_err(|error| {
+            eprintln!("the feature files do not parse: {error}");
+            ExitCode::from(2)
+        })?;
+        Ok(Plan {
+            profiles,
+            options,
+            product,
+            gherkin,
+        })
+    }
 }
 
 /// The profiles named on the command line (`all`, or names), or the exit code of a usage error.
@@ -49,7 +71,7 @@ pub fn profiles<'c>(
 }
 
 /// Every check a plan could run: (profile, name, requirements exercised).
-fn candidates(plan: &Plan) -> Result<Vec<(String, String, Vec<String>)>, String> {
+fn candidates(plan: &Plan) -> Vec<(String, String, Vec<String>)> {
     let mut list = Vec::new();
     for profile in &plan.profiles {
         let caps = profile.model_capabilities();
@@ -66,10 +88,14 @@ fn candidates(plan: &Plan) -> Result<Vec<(String, String, Vec<String>)>, String>
             list.push((profile.name.clone(), scenario.name, covers));
         }
     }
-    for (profile, scenario) in gherkin_targets(&plan.profiles)? {
-        list.push((profile, scenario.id(), scenario.requirements.clone()));
+    for (profile, scenario) in &plan.gherkin {
+        list.push((
+            profile.clone(),
+            scenario.id(),
+            scenario.requirements.clone(),
+        ));
     }
-    Ok(list)
+    list
 }
 
 /// Checks the selection against the catalogue and the scenarios: an unknown
@@ -85,11 +111,7 @@ pub fn check_selection(catalogue: &Catalogue, plan: &Plan) -> Result<(), ExitCod
     if selection.is_everything() {
         return Ok(());
     }
-    let candidates = candidates(plan).map_err(|error| {
-        eprintln!("the feature files do not parse: {error}");
-        ExitCode::from(2)
-    })?;
-    let matched = candidates
+    let matched = candidates(plan)
         .iter()
         .any(|(_, name, covers)| selection.admits(name, covers.iter().map(String::as_str)));
     if matched {
@@ -97,9 +119,7 @@ pub fn check_selection(catalogue: &Catalogue, plan: &Plan) -> Result<(), ExitCod
     } else {
         eprintln!(
             "{} matches no check on {}; `canif list scenarios` lists them",
-            selection
-                .describe()
-                .trim_start_matches("left out by the selection "),
+            selection.flags(),
             plan.profiles
                 .iter()
                 .map(|p| p.name.as_str())
@@ -116,23 +136,14 @@ pub fn list_scenarios(catalogue: &Catalogue, names: &[String], out: &mut String)
         Ok(p) => p,
         Err(code) => return code,
     };
-    let plan = Plan {
-        profiles,
-        options: Options::default(),
-        product: None,
+    let plan = match Plan::new(profiles, Options::default(), None) {
+        Ok(plan) => plan,
+        Err(code) => return code,
     };
-    match candidates(&plan) {
-        Ok(list) => {
-            for (profile, name, covers) in list {
-                outln!(out, "{profile}\t{name}\t{}", covers.join(" "));
-            }
-            ExitCode::SUCCESS
-        }
-        Err(error) => {
-            eprintln!("the feature files do not parse: {error}");
-            ExitCode::from(2)
-        }
+    for (profile, name, covers) in candidates(&plan) {
+        outln!(out, "{profile}\t{name}\t{}", covers.join(" "));
     }
+    ExitCode::SUCCESS
 }
 
 pub fn run(catalogue: &Catalogue, iut: &IutOptions, plan: &Plan, report_dir: &Path) -> ExitCode {
@@ -155,11 +166,7 @@ pub fn run(catalogue: &Catalogue, iut: &IutOptions, plan: &Plan, report_dir: &Pa
             return ExitCode::from(2);
         }
     }
-    let report = match execute(catalogue, &kind, plan) {
-        Ok(report) => report,
-        Err(code) => return code,
-    };
-    finish(catalogue, &report, report_dir)
+    finish(catalogue, &execute(catalogue, &kind, plan), report_dir)
 }
 
 /// Writes the reports and says the verdict: each failing requirement in one line.
@@ -197,7 +204,7 @@ pub fn finish(catalogue: &Catalogue, report: &RunReport, report_dir: &Path) -> E
 
 /// Runs a plan: the lockstep on each profile, then the Gherkin scenarios, and
 /// judges every requirement once over all of them.
-pub fn execute(catalogue: &Catalogue, kind: &IutKind, plan: &Plan) -> Result<RunReport, ExitCode> {
+pub fn execute(catalogue: &Catalogue, kind: &IutKind, plan: &Plan) -> RunReport {
     let options = &plan.options;
     let started_unix = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
@@ -274,19 +281,12 @@ pub fn execute(catalogue: &Catalogue, kind: &IutKind, plan: &Plan) -> Result<Run
         left_out.push("Gherkin scenarios not run: they use the simulated bus".into());
         Vec::new()
     } else {
-        match run_features(kind, &plan.profiles, options) {
-            Ok(runs) => runs,
-            Err(error) => {
-                eprintln!("the feature files do not parse: {error}");
-                return Err(ExitCode::from(2));
-            }
-        }
+        run_features(kind, plan)
     };
     for line in &left_out {
         eprintln!("left out: {line}");
     }
     let interrupted = canif_harness::interrupt::requested();
-    let targets = gherkin_targets(&plan.profiles).map_err(|_| ExitCode::from(2))?;
     let node_ids = canif_harness::canopen::node_check_ids();
     let profiles = lockstep
         .into_iter()
@@ -297,7 +297,7 @@ pub fn execute(catalogue: &Catalogue, kind: &IutKind, plan: &Plan) -> Result<Run
                     .into_iter()
                     .collect();
             here.extend(
-                targets
+                plan.gherkin
                     .iter()
                     .filter(|(p, _)| *p == profile.name)
                     .flat_map(|(_, s)| s.requirements.iter().cloned()),
@@ -329,7 +329,7 @@ pub fn execute(catalogue: &Catalogue, kind: &IutKind, plan: &Plan) -> Result<Run
             ProfileReport::new(catalogue, profile, run, runs, Vec::new(), &reach)
         })
         .collect();
-    Ok(RunReport {
+    RunReport {
         meta: RunMeta {
             complete: left_out.is_empty() && !interrupted,
             product: plan.product.clone(),
@@ -345,7 +345,7 @@ pub fn execute(catalogue: &Catalogue, kind: &IutKind, plan: &Plan) -> Result<Run
         profiles,
         wall_time_ms: started.elapsed().as_millis(),
         interrupted,
-    })
+    }
 }
 
 /// Which Gherkin scenario runs on which profile: once per profile whose
@@ -379,15 +379,12 @@ pub fn gherkin_targets(
 }
 
 /// The selected Gherkin scenarios against the IUT: (profile, run).
-pub fn run_features(
-    kind: &IutKind,
-    profiles: &[&Profile],
-    options: &Options,
-) -> Result<Vec<(String, GherkinRun)>, String> {
+pub fn run_features(kind: &IutKind, plan: &Plan) -> Vec<(String, GherkinRun)> {
     let mut results = Vec::new();
-    for (profile_name, scenario) in gherkin_targets(profiles)? {
+    for (profile_name, scenario) in &plan.gherkin {
         let id = scenario.id();
-        if !options
+        if !plan
+            .options
             .selection
             .admits(&id, scenario.requirements.iter().map(String::as_str))
         {
@@ -396,7 +393,7 @@ pub fn run_features(
         if canif_harness::interrupt::requested() {
             break;
         }
-        let Some(profile) = profiles.iter().find(|p| p.name == profile_name) else {
+        let Some(profile) = plan.profiles.iter().find(|p| p.name == *profile_name) else {
             continue;
         };
         let target = canif_features::Target {
@@ -414,7 +411,7 @@ pub fn run_features(
             canif_features::ScenarioOutcome::Error(report) => GherkinOutcome::Error(report),
         };
         results.push((
-            profile_name,
+            profile_name.clone(),
             GherkinRun {
                 id,
                 file: scenario.file.clone(),
@@ -437,7 +434,7 @@ pub fn run_features(
         "Gherkin scenarios: {} run, {failed} failed, {broken} error",
         results.len()
     );
-    Ok(results)
+    results
 }
 
 /// The failing step of cucumber's report and what it said, in one line:

@@ -222,11 +222,7 @@ impl ReportFile {
                             check: c.evidence.key(),
                             covers: c.covers.clone(),
                             elapsed_ms: c.elapsed.as_secs_f64() * 1e3,
-                            outcome: match c.result {
-                                CheckResult::Pass => VerdictKind::Pass,
-                                CheckResult::Fail(_) => VerdictKind::Fail,
-                                CheckResult::Error(_) => VerdictKind::Error,
-                            },
+                            outcome: c.result.kind(),
                         })
                         .collect(),
                     cycles: p.lockstep.cycles(),

@@ -70,19 +70,14 @@ impl RunReport {
         let problems: String = self
             .problems()
             .iter()
-            .map(|line| format!("<li>{}</li>\n", esc(line)))
+            .map(|problem| format!("<li>{}</li>\n", esc(&problem.to_string())))
             .collect();
         let mut failures = String::new();
         let mut checks = String::new();
         for p in &self.profiles {
             for (i, check) in p.checks.iter().enumerate() {
-                let (label, cause) = match &check.result {
-                    CheckResult::Pass => ("pass", String::new()),
-                    CheckResult::Fail(f) => ("fail", f.cause.clone()),
-                    CheckResult::Error(e) => {
-                        ("error", e.lines().next().unwrap_or_default().to_string())
-                    }
-                };
+                let label = check.result.kind().label();
+                let cause = check.result.cause().unwrap_or_default();
                 let _ = writeln!(
                     checks,
                     "<tr id=\"{}\" class=\"{label}\"><td>{}</td><td>{}</td><td>{label}</td><td>{}</td><td>{}</td></tr>",
@@ -90,7 +85,7 @@ impl RunReport {
                     esc(&p.profile),
                     esc(&check.evidence.key()),
                     esc(&check.covers.join(", ")),
-                    esc(&cause)
+                    esc(cause)
                 );
                 let CheckResult::Fail(finding) = &check.result else {
                     continue;

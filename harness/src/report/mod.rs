@@ -8,11 +8,11 @@ mod html;
 mod junit;
 mod summary;
 
+pub use diagram::timing_diagram;
 pub use file::{
     CheckEntry, FailureEntry, Product, ProfileEntry, ReportFile, RunMeta, SuiteKind, TotalsEntry,
     VerdictEntry, REPORT_FORMAT,
 };
-pub use html::timing_diagram;
 pub use summary::utc;
 
 use std::collections::BTreeMap;
@@ -86,6 +86,28 @@ fn gherkin_check(run: &GherkinRun) -> Check {
     }
 }
 
+/// A requirement that failed or erred on a profile; shown as one line,
+/// `FAIL profile::ID: check: cause`.
+#[derive(Debug, Clone, Copy)]
+pub struct Problem<'a> {
+    pub profile: &'a str,
+    pub id: &'a str,
+    pub verdict: &'a Verdict,
+}
+
+impl std::fmt::Display for Problem<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} {}::{}: {}",
+            self.verdict.label().to_uppercase(),
+            self.profile,
+            self.id,
+            self.verdict.reason().unwrap_or_default()
+        )
+    }
+}
+
 /// What a whole run produced, and how it was asked for.
 #[derive(Debug, Clone)]
 pub struct RunReport {
@@ -148,22 +170,21 @@ impl RunReport {
         }
     }
 
-    /// The failing and erring requirements, one line each: `profile::ID: cause`.
-    pub fn problems(&self) -> Vec<String> {
-        let mut lines = Vec::new();
-        for profile in &self.profiles {
-            for (id, verdict) in &profile.verdicts {
-                if verdict.kind().is_bad() {
-                    lines.push(format!(
-                        "{} {}::{id}: {}",
-                        verdict.label().to_uppercase(),
-                        profile.profile,
-                        verdict.reason().unwrap_or_default()
-                    ));
-                }
-            }
-        }
-        lines
+    /// The failing and erring requirements, every profile.
+    pub fn problems(&self) -> Vec<Problem<'_>> {
+        self.profiles
+            .iter()
+            .flat_map(|p| {
+                p.verdicts
+                    .iter()
+                    .filter(|(_, v)| v.kind().is_bad())
+                    .map(|(id, verdict)| Problem {
+                        profile: &p.profile,
+                        id,
+                        verdict,
+                    })
+            })
+            .collect()
     }
 
     /// Writes `junit.xml`, `report.json`, `summary.md` and `report.html` into `dir`.

@@ -72,11 +72,15 @@ impl RunReport {
                 p.lockstep.frames_checked()
             );
         }
-        let problems = self.problems();
-        if !problems.is_empty() {
+        let mut failing = self
+            .problems()
+            .into_iter()
+            .filter(|p| p.verdict.kind() == VerdictKind::Fail)
+            .peekable();
+        if failing.peek().is_some() {
             md.push_str("\n## Failing requirements\n\n");
-            for line in problems.iter().filter(|l| l.starts_with("FAIL")) {
-                let _ = writeln!(md, "- {line}");
+            for problem in failing {
+                let _ = writeln!(md, "- {problem}");
             }
         }
         for p in &self.profiles {

@@ -114,68 +114,45 @@ pub struct OwnedBus {
     pub interface: String,
 }
 
-/// `controller_status.status`.
-#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct Status {
-    pub bus_off: bool,
-    pub error_passive: bool,
-    pub node_active: bool,
-    pub warning_limit: bool,
-    pub overload: bool,
-    pub bus_idle: bool,
-    pub transceiver_delay: u32,
-    pub ack_errors: u32,
-    pub bit_errors: u32,
-    pub crc_errors: u32,
-    pub form_errors: u32,
-    pub stuff_errors: u32,
-    pub receive_error_counter: u32,
-    pub transmit_error_counter: u32,
-    pub core_running: bool,
+/// `controller_status.status`: the model's [`ControllerStatus`] on the wire,
+/// field for field (serde's remote derive lists the fields once, in `StatusFields`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct Status(#[serde(with = "StatusFields")] pub ControllerStatus);
+
+#[derive(Serialize, Deserialize)]
+#[serde(
+    remote = "ControllerStatus",
+    default = "ControllerStatus::default",
+    deny_unknown_fields
+)]
+struct StatusFields {
+    bus_off: bool,
+    error_passive: bool,
+    node_active: bool,
+    warning_limit: bool,
+    overload: bool,
+    bus_idle: bool,
+    transceiver_delay: u32,
+    ack_errors: u32,
+    bit_errors: u32,
+    crc_errors: u32,
+    form_errors: u32,
+    stuff_errors: u32,
+    receive_error_counter: u32,
+    transmit_error_counter: u32,
+    core_running: bool,
 }
 
 impl From<&ControllerStatus> for Status {
-    fn from(s: &ControllerStatus) -> Self {
-        Status {
-            bus_off: s.bus_off,
-            error_passive: s.error_passive,
-            node_active: s.node_active,
-            warning_limit: s.warning_limit,
-            overload: s.overload,
-            bus_idle: s.bus_idle,
-            transceiver_delay: s.transceiver_delay,
-            ack_errors: s.ack_errors,
-            bit_errors: s.bit_errors,
-            crc_errors: s.crc_errors,
-            form_errors: s.form_errors,
-            stuff_errors: s.stuff_errors,
-            receive_error_counter: s.receive_error_counter,
-            transmit_error_counter: s.transmit_error_counter,
-            core_running: s.core_running,
-        }
+    fn from(status: &ControllerStatus) -> Self {
+        Status(*status)
     }
 }
 
 impl From<&Status> for ControllerStatus {
-    fn from(s: &Status) -> Self {
-        ControllerStatus {
-            bus_off: s.bus_off,
-            error_passive: s.error_passive,
-            node_active: s.node_active,
-            warning_limit: s.warning_limit,
-            overload: s.overload,
-            bus_idle: s.bus_idle,
-            transceiver_delay: s.transceiver_delay,
-            ack_errors: s.ack_errors,
-            bit_errors: s.bit_errors,
-            crc_errors: s.crc_errors,
-            form_errors: s.form_errors,
-            stuff_errors: s.stuff_errors,
-            receive_error_counter: s.receive_error_counter,
-            transmit_error_counter: s.transmit_error_counter,
-            core_running: s.core_running,
-        }
+    fn from(status: &Status) -> Self {
+        status.0
     }
 }
 
@@ -305,5 +282,25 @@ impl From<&Caps> for Capabilities {
             rx_queue_depth: c.rx_queue_depth,
             tx_queue_depth: c.tx_queue_depth,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_status_is_a_flat_object_with_defaults_and_no_unknown_fields() {
+        let status = Status(ControllerStatus {
+            bus_off: true,
+            crc_errors: 7,
+            ..ControllerStatus::default()
+        });
+        let text = serde_json::to_string(&status).unwrap();
+        assert!(text.starts_with("{\"bus_off\":true,") && text.contains("\"crc_errors\":7"));
+        assert_eq!(serde_json::from_str::<Status>(&text).unwrap(), status);
+        let sparse: Status = serde_json::from_str(r#"{"crc_errors": 7, "bus_off": true}"#).unwrap();
+        assert_eq!(sparse, status);
+        assert!(serde_json::from_str::<Status>(r#"{"bus_of": true}"#).is_err());
     }
 }
