@@ -10,6 +10,7 @@ Usage: canopen_crosscheck.py PORT NODE
 """
 import json
 import sys
+import threading
 
 import canopen
 
@@ -108,8 +109,20 @@ def stopped_node_answers_no_sdo():
 
 
 def reset_communication_restores_defaults():
-    node.nmt.state = "RESET COMMUNICATION"  # NMT 0x82
-    node.nmt.wait_for_bootup(timeout=2)
+    # Listen before the command: the node may boot before canopen's
+    # wait_for_bootup starts waiting, and that wait forgets what came before it.
+    booted = threading.Event()
+
+    def on_error_control(can_id, data, timestamp):
+        if data[:1] == b"\x00":
+            booted.set()
+
+    network.subscribe(0x700 + node_id, on_error_control)
+    try:
+        node.nmt.state = "RESET COMMUNICATION"  # NMT 0x82
+        assert booted.wait(2), "no boot-up message (0x700 + node id, 00) within 2 s"
+    finally:
+        network.unsubscribe(0x700 + node_id, on_error_control)
     value = int.from_bytes(node.sdo.upload(0x1017, 0), "little")
     assert value == 0, f"0x1017 reads {value} after reset communication, not the power-on 0"
     return value
