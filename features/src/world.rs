@@ -2,6 +2,7 @@
 //! implementation under test built through the harness, and the bus around it.
 
 use canif_harness::plc::{PlcSide, TaskStimulus};
+use canif_harness::protocol_order::Ordered;
 use canif_harness::{Iut, IutKind};
 use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig};
 use canif_model::exchange::ExchangeMode;
@@ -79,6 +80,9 @@ pub struct CanWorld {
     /// The input image the IUT returned last.
     pub inputs: Vec<u8>,
     pub now: Nanos,
+    /// The latest time any request to the IUT carried: the next one may not be
+    /// earlier (docs/adapter-protocol.md: times are non-decreasing).
+    pub clock: Nanos,
     pub cycle: u64,
     pub bus_blocked: bool,
     /// The frame the controller took but could not finish while the bus was blocked.
@@ -137,7 +141,9 @@ impl CanWorld {
             refused: None,
             plc: None,
             inputs: Vec::new(),
-            now: 0,
+            // The first cycle starts one cycle in, so frames can end before it.
+            now: CYCLE,
+            clock: 0,
             cycle: 0,
             bus_blocked: false,
             in_controller: None,
@@ -168,6 +174,7 @@ impl CanWorld {
         }
         match self.target.iut.build(&self.target.caps, &self.config) {
             Ok(iut) => {
+                let iut: Box<dyn Iut> = Box::new(Ordered::new(iut));
                 let layout = ImageLayout::new(&self.config, self.target.caps.info_data);
                 self.inputs = vec![0; layout.input_size()];
                 self.plc = Some(PlcSide::new(layout, self.exchange_mode));
@@ -218,10 +225,11 @@ impl CanWorld {
         if let Some(status) = self.status.take() {
             iut_said(iut.controller_status(&status))?;
         }
+        self.clock = self.clock.max(self.now);
         self.inputs = iut_said(iut.cycle(&outputs, self.now))?;
         plc.device_cycle_done(&self.inputs);
         let sent_before = self.on_bus.len();
-        let result = self.run_bus();
+        let result = self.run_bus(self.now);
         let out = OutputImage::new_checked(&outputs[..], layout)
             .map(|o| o.header())
             .unwrap_or_default();
@@ -253,9 +261,8 @@ impl CanWorld {
         }
         result?;
         if let (Some(coupler), true) = (self.coupler.as_mut(), self.coupler_alive) {
-            let iut = self.iut.as_mut().expect("started");
-            for (i, frame) in coupler.poll(self.now + CYCLE / 2).into_iter().enumerate() {
-                iut_said(iut.receive(&frame, self.now + CYCLE / 2 + i as u64 * 200))?;
+            for frame in coupler.poll(self.now + CYCLE / 2) {
+                self.receive(frame, self.now + CYCLE / 2)?;
             }
         }
         self.now += CYCLE;
@@ -263,14 +270,21 @@ impl CanWorld {
         Ok(())
     }
 
-    /// Lets every frame the IUT offers go on the bus (an idle, fast bus), up
-    /// to the next cycle; a blocked bus takes none.
-    pub fn run_bus(&mut self) -> Result<(), String> {
+    /// The bus, blocked until now, takes frames again before the coming cycle.
+    pub fn release_bus(&mut self) -> Result<(), String> {
+        self.bus_blocked = false;
+        self.run_bus(self.before_cycle())
+    }
+
+    /// Lets every frame the IUT offers from `from` on go on the bus (an idle,
+    /// fast bus), up to the next cycle; a blocked bus takes none.
+    fn run_bus(&mut self, from: Nanos) -> Result<(), String> {
         let iut = self.iut.as_mut().expect("started");
         if self.bus_blocked {
             // The controller takes the first frame but loses every arbitration.
             if self.in_controller.is_none() {
-                match iut_said(iut.poll_transmit(self.now))? {
+                self.clock = self.clock.max(from);
+                match iut_said(iut.poll_transmit(self.clock))? {
                     Some(Ok(frame)) => self.in_controller = Some(frame),
                     Some(Err(invalid)) => {
                         return Err(format!(
@@ -285,14 +299,15 @@ impl CanWorld {
         }
         if let Some(frame) = self.in_controller.take() {
             self.on_bus.push(frame);
-            self.bus_times.push(self.now);
+            self.bus_times.push(from.max(self.clock));
             iut_said(iut.transmit_complete())?;
         }
-        let mut at = self.now;
+        let mut at = from.max(self.clock);
         for _ in 0..MOST_POLLS_PER_CYCLE {
             if let Some(due) = iut.poll_timeout() {
                 at = at.max(due);
             }
+            self.clock = at;
             match iut_said(iut.poll_transmit(at))? {
                 Some(Ok(frame)) => {
                     self.on_bus.push(frame);
@@ -305,6 +320,7 @@ impl CanWorld {
                             iut_said(iut.receive(&answer, at))?;
                         }
                     }
+                    self.clock = at;
                 }
                 Some(Err(invalid)) => {
                     return Err(format!(
@@ -335,19 +351,32 @@ impl CanWorld {
         if !self.coupler_alive {
             return Ok(());
         }
-        let iut = self.iut.as_mut().expect("started");
-        for (i, frame) in frames.iter().enumerate() {
-            iut_said(iut.receive(frame, self.now + 5_000 + i as u64 * 200))?;
+        for frame in frames {
+            self.receive(frame, self.before_cycle())?;
         }
         Ok(())
+    }
+
+    /// When a frame sent before the coming cycle ends: in the half cycle
+    /// before it, after everything the IUT was told so far.
+    fn before_cycle(&self) -> Nanos {
+        self.now - CYCLE / 2
+    }
+
+    /// The IUT's controller receives `frame`, ending at `earliest` or, when
+    /// the IUT has been told of a later time already, just after that.
+    fn receive(&mut self, frame: Frame, earliest: Nanos) -> Result<Nanos, String> {
+        let end = earliest.max(self.clock);
+        self.clock = end + 200;
+        iut_said(self.iut.as_mut().expect("started").receive(&frame, end))?;
+        Ok(end)
     }
 
     /// A frame from another node ends its reception now (plus a few µs per frame).
     pub fn node_sends(&mut self, frame: Frame) -> Result<(), String> {
         self.start()?;
-        let end = self.now + 10_000 + 1_000 * self.sent_by_nodes.len() as u64 % CYCLE;
+        let end = self.receive(frame, self.before_cycle())?;
         self.sent_by_nodes.push((frame, end));
-        iut_said(self.iut.as_mut().expect("started").receive(&frame, end))?;
         Ok(())
     }
 

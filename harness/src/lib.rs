@@ -33,6 +33,7 @@ pub mod lockstep;
 pub mod outcome;
 mod pair;
 pub mod plc;
+pub mod protocol_order;
 pub mod report;
 pub mod scenario;
 pub mod suite;

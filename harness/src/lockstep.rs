@@ -18,6 +18,7 @@ use crate::iut_kind::IutKind;
 use crate::outcome::{Outcome, ScenarioRun};
 use crate::pair::Pair;
 use crate::plc::{PlcSide, TaskStimulus};
+use crate::protocol_order::Ordered;
 use crate::scenario::{Scenario, Step};
 use crate::trace::TraceWriter;
 
@@ -75,7 +76,9 @@ fn start(
         .bus
         .open(scenario.bit_rates, matches!(kind, IutKind::Exec { .. }))?;
     let iut = match kind.build_on(caps, &scenario.interface, bus.owned_bus().as_ref()) {
-        Ok(iut) => iut,
+        // On a real-time bus the kernel's clock, not the harness, orders the times.
+        Ok(iut) if bus.real_time() => iut,
+        Ok(iut) => Box::new(Ordered::new(iut)),
         Err(BuildError::Refused(reason)) => {
             return Err(RunError::Configuration(format!(
                 "the IUT refuses a configuration the profile allows: {reason}"

@@ -28,6 +28,9 @@ pub struct Pair {
     pub layout: ImageLayout,
     /// The frame both devices handed to their controllers, not yet on the bus.
     pub iut_pending: Option<Frame>,
+    /// The IUT's controller holds a frame, waiting or on the wire, until it
+    /// completes: it is not idle, so it is not polled.
+    iut_busy: bool,
     /// Scenario time.
     pub now: Nanos,
     pub cycle: u64,
@@ -51,6 +54,7 @@ impl Pair {
             layout: model.layout(),
             model,
             iut_pending: None,
+            iut_busy: false,
             now: 0,
             cycle: 0,
             frames: 0,
@@ -90,13 +94,14 @@ impl Pair {
 
     /// Asks both devices for their next frame when the controller is free.
     pub fn poll(&mut self) -> Result<(), Outcome> {
-        if self.iut_pending.is_some() {
+        if self.iut_busy {
             return Ok(());
         }
         let expected = self.model.poll_transmit(self.now);
         let actual = self.iut.poll_transmit(self.now).map_err(iut_broke)?;
         match self.transmit_difference(expected, actual) {
             Ok(frame) => {
+                self.iut_busy = frame.is_some();
                 self.iut_pending = frame;
                 Ok(())
             }
@@ -167,6 +172,7 @@ impl Pair {
     /// A frame ended on the bus, and the IUT's controller learns of it.
     pub fn complete(&mut self, frame: Frame, from_iut: bool, end: Nanos) -> Result<(), Outcome> {
         let told = if from_iut {
+            self.iut_busy = false;
             self.iut.transmit_complete()
         } else {
             self.iut.receive(&frame, end)

@@ -125,8 +125,7 @@ fn one_frame_per_cycle(world: &mut CanWorld, cycles: u32) -> StepResult {
 
 #[when("the bus is released")]
 fn bus_released(world: &mut CanWorld) -> StepResult {
-    world.bus_blocked = false;
-    world.run_bus()
+    world.release_bus()
 }
 
 #[when(
