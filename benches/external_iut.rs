@@ -32,7 +32,10 @@ fn main() {
     let iuts = [
         (
             "soft device in process",
-            IutKind::SoftDevice { faults: vec![] },
+            IutKind::SoftDevice {
+                faults: vec![],
+                choices: vec![],
+            },
         ),
         (
             "examples/c over lib: (C ABI)",

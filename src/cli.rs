@@ -97,6 +97,10 @@ pub struct IutOptions {
     /// Switch on a soft-device fault (repeatable; see `canif faults`).
     #[arg(long)]
     pub fault: Vec<String>,
+    /// Let the soft device take a freedom the documents leave (repeatable; see
+    /// `canif faults`): it must still conform.
+    #[arg(long)]
+    pub choice: Vec<String>,
     /// Let an external IUT run on any CPU. By default it shares the harness's:
     /// the exchange strictly alternates, and on virtual machines a wake-up
     /// across CPUs costs about ten times one on the same CPU.

@@ -175,6 +175,13 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
             for fault in Fault::ALL {
                 outln!(out, "{:<36} {}", fault.name(), fault.description());
             }
+            outln!(
+                out,
+                "\nchoices the documents leave (--choice; the device still conforms):"
+            );
+            for choice in canif_softdevice::Choice::ALL {
+                outln!(out, "{:<36} {}", choice.name(), choice.description());
+            }
             ExitCode::SUCCESS
         }
         Command::Spec { command } => spec::spec(&catalogue, command, out),

@@ -210,6 +210,7 @@ impl CanWorld {
             let stimulus = TaskStimulus {
                 declared_lengths: &self.declared_lengths,
                 set_tx_counter: self.tx_counter_override.take(),
+                ..TaskStimulus::default()
             };
             let report = plc.task(self.cycle, stimulus).map_err(|e| e.to_string())?;
             if let Some(delay) = report.confirmed_after {

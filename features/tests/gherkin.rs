@@ -23,7 +23,10 @@ fn main() {
             let iut = if scenario.model_only {
                 IutKind::Model
             } else {
-                IutKind::SoftDevice { faults: vec![] }
+                IutKind::SoftDevice {
+                    faults: vec![],
+                    choices: vec![],
+                }
             };
             let label = if scenario.model_only {
                 "model"
@@ -58,7 +61,10 @@ fn main() {
             }
             let (path, line) = (scenario.file.clone(), scenario.line);
             let target = Target {
-                iut: IutKind::SoftDevice { faults: vec![] },
+                iut: IutKind::SoftDevice {
+                    faults: vec![],
+                    choices: vec![],
+                },
                 profile: profile.name.clone(),
                 caps: profile.model_capabilities(),
             };

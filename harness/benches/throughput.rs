@@ -14,7 +14,10 @@ use canif_spec::Catalogue;
 
 fn main() {
     let catalogue = Catalogue::embedded().unwrap();
-    let softdevice = IutKind::SoftDevice { faults: vec![] };
+    let softdevice = IutKind::SoftDevice {
+        faults: vec![],
+        choices: vec![],
+    };
 
     // One minute of a 1 Mbit/s bus at full load, checked frame by frame.
     let profile = catalogue.profile("el6751-mdp").unwrap();

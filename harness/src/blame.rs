@@ -56,6 +56,8 @@ pub const RX_SET: &[ReqId] = req_ids![
 ];
 pub const TRANSACTION_NUMBER: &[ReqId] = req_ids!["TN-002", "TN-003"];
 pub const COB_WORD: &[ReqId] = req_ids!["LAY-11-002", "LAY-11-003", "LAY-11-004", "LAY-GEN-003"];
+/// A multi-byte field with its bytes swapped.
+pub const BYTE_ORDER: &[ReqId] = req_ids!["LAY-GEN-003"];
 pub const COB_LOW: &[ReqId] = req_ids!["LAY-29-003", "LAY-GEN-003"];
 pub const COB_RTR: &[ReqId] = req_ids!["LAY-29-004"];
 pub const COB_FORMAT: &[ReqId] = req_ids!["LAY-29-005"];
@@ -68,11 +70,10 @@ pub const TX_MISSING: &[ReqId] = req_ids![
     "HS-TX-006",
     "HS-TX-007",
     "HS-TX-009",
-    "PDX-003",
-    "PDX-005",
 ];
-pub const TX_EXTRA: &[ReqId] =
-    req_ids!["HS-TX-006", "HS-TX-009", "HS-TX-011", "PDX-004", "PDX-005"];
+pub const TX_EXTRA: &[ReqId] = req_ids!["HS-TX-006", "HS-TX-009", "HS-TX-011"];
+/// Distributed Clocks: the first message of a batch before SYNC1 less the jitter.
+pub const SYNC1_EARLY: &[ReqId] = req_ids!["PDX-004", "PDX-005"];
 pub const TX_OTHER_FRAME: &[ReqId] = req_ids!["HS-TX-004", "HS-TX-006", "HS-TX-009"];
 pub const TX_REMOTE: &[ReqId] = req_ids!["LAY-11-003", "LAY-29-004"];
 pub const TX_FORMAT: &[ReqId] = req_ids!["LAY-29-005", "FD-BIT-001"];
@@ -89,6 +90,20 @@ pub const TX_PADDING: &[ReqId] = req_ids!["FD-LEN-005"];
 pub const TX_DATA: &[ReqId] = req_ids!["HS-TX-006", "LAY-GEN-003"];
 pub const TX_INVALID: &[ReqId] = req_ids!["FD-LEN-003", "FD-LEN-004", "ERR-R1", "LAY-GEN-008"];
 pub const CONFIRMATION: &[ReqId] = req_ids!["PDX-001", "PDX-002"];
+/// A batch of nothing was not acknowledged.
+pub const TX_EMPTY_BATCH: &[ReqId] = req_ids!["HS-TX-009"];
+/// A Tx identifier decoded from the wrong bits of the COB ID.
+pub const TX_ID_WORD: &[ReqId] = req_ids!["LAY-11-004"];
+pub const TX_ID_29: &[ReqId] = req_ids!["LAY-29-003"];
+/// Bits 11-28 of a COB ID with bit 31 = 0 taken as part of the identifier.
+pub const TX_ID_RESERVED: &[ReqId] = req_ids!["LAY-29-006"];
+/// The Rx messages sit at another offset of the input image.
+pub const RX_MESSAGES_OFFSET: &[ReqId] = req_ids!["LAY-GEN-005"];
+pub const RX_MESSAGES_OFFSET_TN: &[ReqId] = req_ids!["LAY-GEN-004"];
+/// InfoData sits at another offset of the input image.
+pub const INFO_DATA_OFFSET: &[ReqId] = req_ids!["INFO-008"];
+/// Distributed Clocks: the first message of a batch later than SYNC1 plus the jitter.
+pub const SYNC1_LATE: &[ReqId] = req_ids!["PDX-004"];
 
 /// The requirements of `InfoData[index]`.
 pub fn info_data(index: usize) -> &'static [ReqId] {

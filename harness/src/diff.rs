@@ -45,6 +45,8 @@ pub struct RxState {
     pub before: u16,
     pub plc_released: u16,
     pub fast: bool,
+    /// NoOfTxMessages of the output image the cycle ran on.
+    pub no_of_tx_messages: u16,
 }
 
 /// How an input image is judged against the model's.
@@ -72,18 +74,76 @@ impl InputCheck<'_> {
                 actual: format!("{} bytes", actual.len()),
             });
         };
-        self.header(&e, &a)
-            .or_else(|| self.messages(&e, &a))
+        // The PLC reads NoOfRxMessages and the messages only when
+        // Inputs.RxCounter differs from its Outputs.RxCounter (001 §6): in
+        // Buffered mode they are don't-care otherwise (HS-RX-008).
+        let unread = !self.rx.fast && e.rx_counter() == self.rx.plc_released;
+        self.header(&e, &a, unread)
+            .or_else(|| (!unread).then(|| self.messages(&e, &a)).flatten())
             .or_else(|| self.info_data(&e, &a))
+            .map(|d| self.offset(expected, actual, d))
     }
 
-    fn header(&self, e: &InputImage<&[u8]>, a: &InputImage<&[u8]>) -> Option<Difference> {
+    /// A slot or InfoData difference whose bytes are the model's, shifted:
+    /// the layout put the region at the wrong offset.
+    fn offset(&self, expected: &[u8], actual: &[u8], difference: Difference) -> Difference {
+        let layout = self.layout;
+        let (region, candidates) = if difference.what.starts_with("InfoData") {
+            (
+                layout.info_data_start()..expected.len(),
+                blame::INFO_DATA_OFFSET,
+            )
+        } else if difference.what.starts_with("Inputs.RxMessage") {
+            let start = layout.rx_slot(0).start;
+            let end = layout.rx_slot(layout.rx_slots - 1).end;
+            let candidates = if layout.transaction_number {
+                blame::RX_MESSAGES_OFFSET_TN
+            } else {
+                blame::RX_MESSAGES_OFFSET
+            };
+            (start..end, candidates)
+        } else {
+            return difference;
+        };
+        let shifted = |by: isize| {
+            let pairs = region.clone().filter_map(|i| {
+                let j = i.checked_add_signed(by)?;
+                Some((expected[i], *actual.get(j)?))
+            });
+            let (mut same, mut meaningful) = (true, 0);
+            for (e, a) in pairs {
+                same &= e == a;
+                meaningful += usize::from(e != 0);
+            }
+            same && meaningful >= 1
+        };
+        if [-4, -2, 2, 4].into_iter().any(shifted) {
+            Difference {
+                candidates,
+                what: format!("{} (the region is shifted)", difference.what),
+                ..difference
+            }
+        } else {
+            difference
+        }
+    }
+
+    fn header(
+        &self,
+        e: &InputImage<&[u8]>,
+        a: &InputImage<&[u8]>,
+        unread: bool,
+    ) -> Option<Difference> {
         let (e, a) = (e.header(), a.header());
         let rx = self.rx;
         if e.tx_counter != a.tx_counter {
             return Some(Difference {
                 frames: None,
-                candidates: blame::TX_COUNTER,
+                candidates: if rx.no_of_tx_messages == 0 {
+                    blame::TX_EMPTY_BATCH
+                } else {
+                    blame::TX_COUNTER
+                },
                 what: "Inputs.TxCounter".into(),
                 expected: e.tx_counter.to_string(),
                 actual: a.tx_counter.to_string(),
@@ -112,7 +172,7 @@ impl InputCheck<'_> {
                 actual: a.rx_counter.to_string(),
             });
         }
-        if e.no_of_rx_messages != a.no_of_rx_messages {
+        if !unread && e.no_of_rx_messages != a.no_of_rx_messages {
             return Some(Difference {
                 frames: None,
                 candidates: blame::RX_SET,
@@ -174,7 +234,11 @@ impl InputCheck<'_> {
         Some(if different_frame {
             blame::RX_SET
         } else if message.cob_id.len() == 2 && e.cob_id_word() != a.cob_id_word() {
-            blame::COB_WORD
+            if e.cob_id_word().0.swap_bytes() == a.cob_id_word().0 {
+                blame::BYTE_ORDER
+            } else {
+                blame::COB_WORD
+            }
         } else if message.cob_id.len() == 4 && e.cob_id32() != a.cob_id32() {
             let diff = e.cob_id32().0 ^ a.cob_id32().0;
             if diff & 0x8000_0000 != 0 {
@@ -214,13 +278,23 @@ impl InputCheck<'_> {
 }
 
 /// The requirements of the first property in which a frame handed to the
-/// controller differs from the model's.
-pub fn frame_difference(expected: &Frame, actual: &Frame) -> &'static [ReqId] {
+/// controller differs from the model's; the frame is no real message sent
+/// out of turn, so a different identifier was decoded from the wrong bits of
+/// the Tx message's COB ID (`word`: the 11-bit COB ID word).
+pub fn frame_difference(expected: &Frame, actual: &Frame, word: bool) -> &'static [ReqId] {
     if expected.id != actual.id {
-        if expected.id.raw() == actual.id.raw() {
-            return blame::TX_FORMAT;
-        }
-        return blame::TX_OTHER_FRAME;
+        let (e, a) = (expected.id.raw(), actual.id.raw());
+        return if e == a {
+            blame::TX_FORMAT
+        } else if expected.data() != actual.data() {
+            blame::TX_OTHER_FRAME
+        } else if word {
+            blame::TX_ID_WORD
+        } else if !expected.id.is_extended() && a & 0x7FF == e && a > 0x7FF {
+            blame::TX_ID_RESERVED
+        } else {
+            blame::TX_ID_29
+        };
     }
     if expected.is_remote() != actual.is_remote() {
         return blame::TX_REMOTE;

@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_model::device::Device;
-use canif_softdevice::{Fault, SoftDevice};
+use canif_softdevice::{Choice, Fault, SoftDevice};
 
 use crate::adapter::client::{Configured, ExecIut};
 use crate::adapter::protocol::OwnedBus;
@@ -17,6 +17,8 @@ use crate::iut::{soft_settings, BuildError, Iut, ModelIut, SoftDeviceIut};
 pub enum IutKind {
     SoftDevice {
         faults: Vec<Fault>,
+        /// Freedoms the documents leave: the device still conforms.
+        choices: Vec<Choice>,
     },
     Model,
     /// Another process speaking the adapter protocol (docs/adapter-protocol.md).
@@ -61,11 +63,14 @@ impl IutKind {
                 Device::new(caps, config.clone()).map_err(|e| refused(&e))?,
             ))),
             IutKind::Lib { path } => Ok(Box::new(crate::lib_iut::build(path, caps, config)?)),
-            IutKind::SoftDevice { faults } => {
+            IutKind::SoftDevice { faults, choices } => {
                 let mut device =
                     SoftDevice::new(soft_settings(caps, config)).map_err(|e| refused(&e))?;
                 for fault in faults {
                     device.inject(*fault);
+                }
+                for choice in choices {
+                    device.choose(*choice);
                 }
                 Ok(Box::new(SoftDeviceIut(device)))
             }
@@ -127,17 +132,11 @@ impl IutKind {
     pub fn name(&self) -> String {
         match self {
             IutKind::Model => "model".into(),
-            IutKind::SoftDevice { faults } if faults.is_empty() => "softdevice".into(),
-            IutKind::SoftDevice { faults } => {
-                format!(
-                    "softdevice+{}",
-                    faults
-                        .iter()
-                        .map(|f| f.name())
-                        .collect::<Vec<_>>()
-                        .join("+")
-                )
-            }
+            IutKind::SoftDevice { faults, choices } => std::iter::once("softdevice")
+                .chain(faults.iter().map(|f| f.name()))
+                .chain(choices.iter().map(|c| c.name()))
+                .collect::<Vec<_>>()
+                .join("+"),
             IutKind::Exec { command, .. } => format!("exec:{command}"),
             IutKind::Lib { path } => format!("lib:{}", path.display()),
         }

@@ -17,6 +17,7 @@
 
 pub mod adapter;
 mod blame;
+pub mod bounds;
 pub mod bus;
 pub mod canopen;
 pub mod certificate;

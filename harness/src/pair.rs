@@ -4,12 +4,14 @@
 //! directly.
 
 use canif_model::device::Device;
+use canif_model::exchange::SYNC1_TX_JITTER;
 use canif_model::frame::Frame;
-use canif_model::image::ImageLayout;
+use canif_model::image::{ImageLayout, LengthField};
 use canif_model::Nanos;
 use canif_spec::ReqId;
 
 use crate::blame;
+use crate::bounds::Bounds;
 use crate::diff::{frame_difference, Difference};
 use crate::history::History;
 use crate::iut::{InvalidFrame, Iut};
@@ -31,6 +33,8 @@ pub struct Pair {
     /// The IUT's controller holds a frame, waiting or on the wire, until it
     /// completes: it is not idle, so it is not polled.
     iut_busy: bool,
+    /// Bounds judging (G3) instead of the model's frames, when the scenario asks.
+    pub bounds: Bounds,
     /// Scenario time.
     pub now: Nanos,
     pub cycle: u64,
@@ -55,6 +59,7 @@ impl Pair {
             model,
             iut_pending: None,
             iut_busy: false,
+            bounds: Bounds::default(),
             now: 0,
             cycle: 0,
             frames: 0,
@@ -97,9 +102,48 @@ impl Pair {
         if self.iut_busy {
             return Ok(());
         }
-        let expected = self.model.poll_transmit(self.now);
         let actual = self.iut.poll_transmit(self.now).map_err(iut_broke)?;
-        match self.transmit_difference(expected, actual) {
+        let judged = if self.bounds.is_on() {
+            self.bounds.transmit(actual)
+        } else {
+            // Distributed Clocks: the first message of a batch starts at SYNC1
+            // give or take the jitter (003), and is missing only after it.
+            let now = self.now;
+            let sync1 = self.model.poll_timeout();
+            let expected = match (sync1, &actual) {
+                (Some(due), None) if now < due + SYNC1_TX_JITTER => None,
+                (Some(due), Some(_)) if now + SYNC1_TX_JITTER >= due => {
+                    self.model.poll_transmit(due.max(now))
+                }
+                _ => self.model.poll_transmit(now),
+            };
+            // Only a device that holds the batch's first message for SYNC1
+            // (it has a due time) is late; one that sends the model's held
+            // message too soon is early.
+            let late = sync1.is_some()
+                && expected.is_some()
+                && actual.is_none()
+                && self.iut.poll_timeout().is_some();
+            let held = self.model.send_queue().next().copied();
+            let early = sync1.is_some()
+                && expected.is_none()
+                && matches!((&actual, held), (Some(Ok(a)), Some(h)) if *a == h);
+            self.transmit_difference(expected, actual)
+                .map_err(|d| match (late, early) {
+                    (true, _) => Difference {
+                        candidates: blame::SYNC1_LATE,
+                        what: "first frame of the batch after SYNC1".into(),
+                        ..d
+                    },
+                    (_, true) => Difference {
+                        candidates: blame::SYNC1_EARLY,
+                        what: "first frame of the batch before SYNC1".into(),
+                        ..d
+                    },
+                    _ => d,
+                })
+        };
+        match judged {
             Ok(frame) => {
                 self.iut_busy = frame.is_some();
                 self.iut_pending = frame;
@@ -136,7 +180,11 @@ impl Pair {
                     candidates: if queued_later {
                         blame::TX_OTHER_FRAME
                     } else {
-                        frame_difference(&e, &a)
+                        frame_difference(
+                            &e,
+                            &a,
+                            matches!(self.layout.tx_message.length, LengthField::InCobIdWord),
+                        )
                     },
                     what,
                     expected: e.to_string(),
@@ -167,6 +215,19 @@ impl Pair {
         };
         difference.frames = Some(Box::new(frames));
         Err(difference)
+    }
+
+    /// When the controller must be asked again: the IUT's own due time, or the
+    /// latest the model's SYNC1 allows, whichever comes first.
+    pub fn due(&self) -> Option<Nanos> {
+        let deadline = (!self.bounds.is_on())
+            .then(|| self.model.poll_timeout())
+            .flatten()
+            .map(|t| t + SYNC1_TX_JITTER);
+        [self.iut.poll_timeout(), deadline]
+            .into_iter()
+            .flatten()
+            .min()
     }
 
     /// A frame ended on the bus, and the IUT's controller learns of it.

@@ -6,6 +6,7 @@
 //! PLC through this one type.
 
 use canif_model::client::PlcClient;
+use canif_model::cob_id::CobId32;
 use canif_model::exchange::{ExchangeMode, ProcessDataExchange};
 use canif_model::image::{
     ImageLayout, InputImage, LengthField, MessageError, MessageRepr, OutputImage, SizeError,
@@ -19,6 +20,50 @@ pub struct TaskStimulus<'a> {
     pub declared_lengths: &'a [(u16, u8)],
     /// The PLC writes this TxCounter instead of the sample code's (G1).
     pub set_tx_counter: Option<u16>,
+    /// What the PLC's program writes into the image beyond the sample code:
+    /// unusual or invalid input the device must cope with.
+    pub edits: &'a [OutputEdit],
+    /// The PLC writes this whole output image instead of the sample code's
+    /// (random images: the device's robustness, G3).
+    pub raw_outputs: Option<&'a [u8]>,
+}
+
+/// A field of the output image the PLC's program writes itself, after the
+/// sample code, through the model's views.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OutputEdit {
+    /// NoOfTxMessages (0 is a batch of nothing, HS-TX-009; more than the
+    /// slots is out of range, G3).
+    NoOfTxMessages(u16),
+    /// The length field of a Tx slot, whatever it holds (classic above 8: G3).
+    Length { slot: usize, raw: u16 },
+    /// The 32-bit COB ID of a Tx slot, reserved bits and all (LAY-29-006).
+    CobId { slot: usize, raw: u32 },
+    /// The FD flag byte of a Tx slot (BRS or ESI without EDL: FD-BIT-001).
+    Flags { slot: usize, raw: u8 },
+}
+
+impl OutputEdit {
+    fn apply(self, outputs: &mut OutputImage<&mut [u8]>) {
+        let slot = match self {
+            OutputEdit::NoOfTxMessages(count) => {
+                outputs.set_no_of_tx_messages(count);
+                return;
+            }
+            OutputEdit::Length { slot, .. }
+            | OutputEdit::CobId { slot, .. }
+            | OutputEdit::Flags { slot, .. } => slot,
+        };
+        let Some(mut view) = outputs.tx_message_mut(slot) else {
+            return;
+        };
+        match self {
+            OutputEdit::Length { raw, .. } => view.set_raw_length(raw),
+            OutputEdit::CobId { raw, .. } => view.set_cob_id32(CobId32(raw)),
+            OutputEdit::Flags { raw, .. } => view.set_flags(raw),
+            OutputEdit::NoOfTxMessages(_) => {}
+        }
+    }
 }
 
 /// What one PLC task saw.
@@ -89,7 +134,15 @@ impl PlcSide {
         }
         self.client.task(self.exchange.plc_inputs())?;
         let layout = self.layout;
+        if let Some(raw) = stimulus.raw_outputs {
+            let outputs = self.client.outputs_mut();
+            let n = outputs.len().min(raw.len());
+            outputs[..n].copy_from_slice(&raw[..n]);
+        }
         let mut outputs = OutputImage::new_checked(self.client.outputs_mut(), layout)?;
+        for edit in stimulus.edits {
+            edit.apply(&mut outputs);
+        }
         if !stimulus.declared_lengths.is_empty() {
             declare_lengths(&mut outputs, stimulus.declared_lengths);
         }

@@ -221,7 +221,16 @@ pub fn scenarios(caps: &Capabilities, options: &Options) -> Vec<Scenario> {
             scenario::rx_handshake(&config, seed),
             scenario::rx_overflow(&config),
             scenario::remote_frames(&config),
+            scenario::tx_batch_of_nothing(&config),
+            scenario::tx_batch_beyond_the_slots(&config),
+            scenario::tx_length_out_of_range(&config),
+            scenario::random_output_images(&config, seed),
         ]);
+        if caps.max_slots > config.tx_slots {
+            let mut all = config.clone();
+            (all.tx_slots, all.rx_slots) = (caps.max_slots, caps.max_slots);
+            list.push(scenario::full_slots(&all));
+        }
         if options.counter_wrap {
             list.push(scenario::rx_wrap(&config));
         }
@@ -233,8 +242,13 @@ pub fn scenarios(caps: &Capabilities, options: &Options) -> Vec<Scenario> {
             scenario::tx_batches(&config, seed + 1),
             scenario::rx_handshake(&config, seed + 1),
             scenario::remote_frames(&config),
+            scenario::tx_length_out_of_range(&config),
         ]);
         generated(&mut list, &config, 2);
+    }
+    if caps.ext29 {
+        let config = interface(FrameFormat::Extended29, QueueMode::Standard, caps);
+        list.push(scenario::reserved_cob_id_bits(&config));
     }
     if caps.filters {
         let format = if caps.ext29 {
@@ -267,6 +281,9 @@ pub fn scenarios(caps: &Capabilities, options: &Options) -> Vec<Scenario> {
             scenario::tx_batches(&config, seed + 2),
             scenario::fd_lengths(&config),
             scenario::rx_handshake(&config, seed + 2),
+            scenario::classic_frame_with_fd_bits(&config),
+            scenario::tx_length_out_of_range(&config),
+            scenario::random_output_images(&config, seed + 2),
         ]);
         if caps.info_data {
             list.push(scenario::info_data(&config));
@@ -616,12 +633,15 @@ pub fn profile_for(fault: canif_softdevice::Fault) -> &'static str {
         | FdLength32As36
         | FdPaddingFf
         | BrsEsiSwapped
-        | ReceiveFifoNotReported => "fc532x",
+        | ReceiveFifoNotReported
+        | BrsWithoutEdlSendsFd
+        | InfoDataTwoBytesLate => "fc532x",
         ExtendedFlagMissing
         | TransactionNumberOfFirstFrame
         | TransactionNumberOnHandover
         | TimeStampInMicroseconds
-        | FilterLastMatchWins => "ccat",
+        | FilterLastMatchWins
+        | StandardIdKeepsHighBits => "ccat",
         _ => "el6751-mdp",
     }
 }
@@ -650,6 +670,7 @@ pub fn kill_matrix(
             };
             let kind = IutKind::SoftDevice {
                 faults: vec![fault],
+                choices: vec![],
             };
             let caught = catalogue
                 .profiles

@@ -31,7 +31,10 @@ fn profile_run(catalogue: &Catalogue, name: &str) -> Arc<ProfileRun> {
     let run = Arc::new(run_profile(
         catalogue,
         profile,
-        &IutKind::SoftDevice { faults: vec![] },
+        &IutKind::SoftDevice {
+            faults: vec![],
+            choices: vec![],
+        },
         &options(),
         |_| {},
     ));

@@ -74,6 +74,7 @@ fn scenario_of(cycles: &[Cycle]) -> Scenario {
         time_stamp_tolerance: 0,
         trace: None,
         bus: canif_harness::bus::BusChoice::Sim,
+        judgement: canif_harness::scenario::Judgement::Exact,
         steps: Steps::Scripted(steps),
     }
 }
@@ -95,7 +96,7 @@ proptest! {
     /// Covers: HS-TX-006, HS-RX-007, RXQ-004
     #[test]
     fn the_soft_device_agrees_with_the_model_under_any_traffic(cycles in proptest::collection::vec(cycle(), 1..30)) {
-        let outcome = outcome(&IutKind::SoftDevice { faults: vec![] }, &cycles);
+        let outcome = outcome(&IutKind::SoftDevice { faults: vec![], choices: vec![] }, &cycles);
         prop_assert_eq!(outcome, Outcome::Pass);
     }
 }
@@ -115,6 +116,7 @@ fn a_failure_shrinks_to_a_minimal_run() {
         TestRunner::new_with_rng(config, TestRng::deterministic_rng(RngAlgorithm::ChaCha));
     let faulty = IutKind::SoftDevice {
         faults: vec![Fault::SendsBatchReversed],
+        choices: vec![],
     };
     let result = runner.run(&proptest::collection::vec(cycle(), 1..30), |cycles| {
         prop_assert_eq!(outcome(&faulty, &cycles), Outcome::Pass);
@@ -156,7 +158,10 @@ fn traces_are_pcapng_and_candump() {
     let mut scenario = scenario::fd_lengths(&config);
     scenario.trace = Some((dir.clone(), "fd".into(), 0));
     let run = run_scenario(
-        &IutKind::SoftDevice { faults: vec![] },
+        &IutKind::SoftDevice {
+            faults: vec![],
+            choices: vec![],
+        },
         &Capabilities::everything(),
         &scenario,
         scenario.steps(),

@@ -29,7 +29,10 @@ fn report(profile: &str, faults: Vec<Fault>, seed: u64, gherkin: Vec<GherkinRun>
     let run = run_profile(
         &catalogue,
         profile,
-        &IutKind::SoftDevice { faults },
+        &IutKind::SoftDevice {
+            faults,
+            choices: vec![],
+        },
         &options,
         |_| {},
     );
@@ -110,7 +113,10 @@ fn a_run_that_checked_nothing_does_not_conform() {
     let run = run_profile(
         &catalogue,
         profile,
-        &IutKind::SoftDevice { faults: vec![] },
+        &IutKind::SoftDevice {
+            faults: vec![],
+            choices: vec![],
+        },
         &options,
         |_| {},
     );

@@ -22,10 +22,20 @@ pub enum Fault {
     CobIdWordBigEndian,
     BrsEsiSwapped,
     ReceiveFifoNotReported,
+    ZeroBatchNotAcknowledged,
+    TrustsNoOfTxMessages,
+    BatchCappedAt31,
+    RxCountCappedAt31,
+    StandardIdKeepsHighBits,
+    ClassicLengthUnbounded,
+    BrsWithoutEdlSendsFd,
+    Sync1Late,
+    InfoDataTwoBytesLate,
+    RxMessagesAfterReservedWord,
 }
 
 impl Fault {
-    pub const ALL: [Fault; 20] = [
+    pub const ALL: [Fault; 30] = [
         Fault::AckBeforeAccept,
         Fault::OverwritesUnacknowledgedRx,
         Fault::FdLengthRoundsDown,
@@ -46,6 +56,16 @@ impl Fault {
         Fault::CobIdWordBigEndian,
         Fault::BrsEsiSwapped,
         Fault::ReceiveFifoNotReported,
+        Fault::ZeroBatchNotAcknowledged,
+        Fault::TrustsNoOfTxMessages,
+        Fault::BatchCappedAt31,
+        Fault::RxCountCappedAt31,
+        Fault::StandardIdKeepsHighBits,
+        Fault::ClassicLengthUnbounded,
+        Fault::BrsWithoutEdlSendsFd,
+        Fault::Sync1Late,
+        Fault::InfoDataTwoBytesLate,
+        Fault::RxMessagesAfterReservedWord,
     ];
 
     /// The name used on the command line.
@@ -71,6 +91,16 @@ impl Fault {
             Fault::CobIdWordBigEndian => "cob-id-word-big-endian",
             Fault::BrsEsiSwapped => "brs-esi-swapped",
             Fault::ReceiveFifoNotReported => "receive-fifo-not-reported",
+            Fault::ZeroBatchNotAcknowledged => "zero-batch-not-acknowledged",
+            Fault::TrustsNoOfTxMessages => "trusts-no-of-tx-messages",
+            Fault::BatchCappedAt31 => "batch-capped-at-31",
+            Fault::RxCountCappedAt31 => "rx-count-capped-at-31",
+            Fault::StandardIdKeepsHighBits => "standard-id-keeps-high-bits",
+            Fault::ClassicLengthUnbounded => "classic-length-unbounded",
+            Fault::BrsWithoutEdlSendsFd => "brs-without-edl-sends-fd",
+            Fault::Sync1Late => "sync1-late",
+            Fault::InfoDataTwoBytesLate => "info-data-two-bytes-late",
+            Fault::RxMessagesAfterReservedWord => "rx-messages-after-reserved-word",
         }
     }
 
@@ -97,6 +127,16 @@ impl Fault {
             Fault::CobIdWordBigEndian => "writes the 11-bit COB ID word big-endian",
             Fault::BrsEsiSwapped => "swaps BRS and ESI in received FD messages",
             Fault::ReceiveFifoNotReported => "reports an empty receive FIFO in InfoData",
+            Fault::ZeroBatchNotAcknowledged => "ignores a new TxCounter when NoOfTxMessages is 0 (no acknowledge)",
+            Fault::TrustsNoOfTxMessages => "sends NoOfTxMessages messages even beyond the slots, starting over at slot 0",
+            Fault::BatchCappedAt31 => "takes at most 31 messages of a batch (a 5-bit count)",
+            Fault::RxCountCappedAt31 => "enters at most 31 received messages per cycle (a 5-bit count)",
+            Fault::StandardIdKeepsHighBits => "sends a 29-bit COB ID with bit 31 = 0 as extended when bits 11-28 are set",
+            Fault::ClassicLengthUnbounded => "sends a classic length field above 8 as it is",
+            Fault::BrsWithoutEdlSendsFd => "sends an FD frame when BRS is set without EDL",
+            Fault::Sync1Late => "sends the first message of a batch 2 µs after SYNC1",
+            Fault::InfoDataTwoBytesLate => "places InfoData two bytes after the last Rx message",
+            Fault::RxMessagesAfterReservedWord => "leaves room for a TransactionNumber the interface does not have: Rx messages start at byte 8",
         }
     }
 

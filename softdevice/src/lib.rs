@@ -10,11 +10,13 @@
 
 #![forbid(unsafe_code)]
 
+mod choice;
 mod fault;
 pub mod field;
 mod frame;
 mod settings;
 
+pub use choice::Choice;
 pub use fault::Fault;
 pub use frame::CanFrame;
 pub use settings::{FilterRule, Format, Offer, Queue, Settings, SettingsError};
@@ -178,6 +180,7 @@ impl std::error::Error for ImageSizeError {}
 pub struct SoftDevice {
     settings: Settings,
     faults: Vec<Fault>,
+    choices: Vec<Choice>,
     tx_geo: MsgGeometry,
     rx_geo: MsgGeometry,
     rx_base: usize,
@@ -229,6 +232,7 @@ impl SoftDevice {
             deferred_tx: None,
             controller,
             faults: Vec::new(),
+            choices: Vec::new(),
             settings,
         })
     }
@@ -242,6 +246,17 @@ impl SoftDevice {
 
     fn has(&self, fault: Fault) -> bool {
         self.faults.contains(&fault)
+    }
+
+    /// Takes one of the freedoms the documents leave (the device still conforms).
+    pub fn choose(&mut self, choice: Choice) {
+        if !self.choices.contains(&choice) {
+            self.choices.push(choice);
+        }
+    }
+
+    fn chose(&self, choice: Choice) -> bool {
+        self.choices.contains(&choice)
     }
 
     pub fn output_len(&self) -> usize {
@@ -289,8 +304,17 @@ impl SoftDevice {
             } else {
                 self.recv_fifo.len() as u32
             };
+            let base = self.info_base
+                + if self.has(Fault::InfoDataTwoBytesLate) {
+                    2
+                } else {
+                    0
+                };
             for (i, word) in self.controller.iter().enumerate() {
-                put32(&mut self.input, self.info_base + 4 * i, *word);
+                let at = base + 4 * i;
+                if at + 4 <= self.input.len() {
+                    put32(&mut self.input, at, *word);
+                }
             }
         }
         Ok(&self.input)
@@ -306,8 +330,21 @@ impl SoftDevice {
         if requested == acknowledged {
             return;
         }
-        let mut count = usize::from(get16(output, header::NO_OF_MESSAGES))
-            .min(usize::from(self.settings.tx_slots));
+        let asked = usize::from(get16(output, header::NO_OF_MESSAGES));
+        if asked == 0 && self.has(Fault::ZeroBatchNotAcknowledged) {
+            return;
+        }
+        let slots = usize::from(self.settings.tx_slots);
+        let mut count = if self.has(Fault::TrustsNoOfTxMessages) {
+            asked.min(64)
+        } else if asked > slots && self.chose(Choice::RefusesOversizeBatch) {
+            0
+        } else {
+            asked.min(slots)
+        };
+        if self.has(Fault::BatchCappedAt31) {
+            count = count.min(31);
+        }
         if self.has(Fault::SendsOneMoreThanAsked) {
             count = (count + 1).min(usize::from(self.settings.tx_slots));
         }
@@ -324,6 +361,13 @@ impl SoftDevice {
         put16(&mut self.input, header::TX_COUNTER, requested);
     }
 
+    /// The message in slot `i` (beyond the slots: a device that trusts
+    /// NoOfTxMessages starts over at slot 0).
+    fn tx_slot<'a>(&self, output: &'a [u8], i: usize) -> &'a [u8] {
+        let at = 6 + (i % usize::from(self.settings.tx_slots)) * self.tx_geo.size;
+        &output[at..at + self.tx_geo.size]
+    }
+
     fn copy_batch(&mut self, output: &[u8], now: u64) {
         let count = usize::from(get16(output, header::NO_OF_MESSAGES))
             .min(usize::from(self.settings.tx_slots));
@@ -331,32 +375,48 @@ impl SoftDevice {
     }
 
     fn copy_batch_n(&mut self, output: &[u8], now: u64, count: usize) {
-        let release_at = self.settings.dc_sync1_shift.map_or(0, |shift| now + shift);
+        let late = if self.has(Fault::Sync1Late) {
+            2_000
+        } else if self.chose(Choice::Sync1Jitter) {
+            400
+        } else {
+            0
+        };
+        let release_at = self
+            .settings
+            .dc_sync1_shift
+            .map_or(0, |shift| now + shift + late);
         let mut batch: Vec<TxJob> = (0..count)
-            .map(|i| {
-                let at = 6 + i * self.tx_geo.size;
-                let slot = &output[at..at + self.tx_geo.size];
+            .filter_map(|i| {
+                let slot = self.tx_slot(output, i);
                 let tn = self.tx_geo.tn.map_or(0, |o| get16(slot, o));
-                TxJob {
-                    frame: self.decode_tx(slot),
+                Some(TxJob {
+                    frame: self.decode_tx(slot)?,
                     tn,
-                    release_at: if i == 0 { release_at } else { 0 },
+                    release_at: 0,
                     first_in_batch: i == 0,
-                }
+                })
             })
             .collect();
+        if let Some(first) = batch.first_mut() {
+            first.release_at = release_at;
+            first.first_in_batch = true;
+        }
         if self.has(Fault::SendsBatchReversed) {
             batch.reverse();
         }
         self.send_fifo.extend(batch);
     }
 
-    fn decode_tx(&self, slot: &[u8]) -> CanFrame {
+    /// The frame a Tx slot asks for; `None` when the device drops it (a
+    /// length out of range, with [`Choice::DropsMessageWithBadLength`]).
+    fn decode_tx(&self, slot: &[u8]) -> Option<CanFrame> {
         let g = self.tx_geo;
         let mut frame = CanFrame::default();
         if g.cob_wide {
             let cob = get32(slot, g.cob);
-            frame.extended = cob & 0x8000_0000 != 0;
+            frame.extended = cob & 0x8000_0000 != 0
+                || (self.has(Fault::StandardIdKeepsHighBits) && cob & 0x1FFF_F800 != 0);
             frame.remote = cob & 0x4000_0000 != 0;
             frame.id = if frame.extended {
                 cob & 0x1FFF_FFFF
@@ -381,7 +441,16 @@ impl SoftDevice {
             frame.len = usize::from(slot[o]);
         }
         let flags = g.flags.map_or(0, |o| slot[o]);
-        frame.fd = flags & 1 != 0;
+        let fd_mask = if self.has(Fault::BrsWithoutEdlSendsFd) {
+            3
+        } else {
+            1
+        };
+        frame.fd = flags & fd_mask != 0;
+        let cap = if frame.fd { 64 } else { 8 };
+        if frame.len > cap && self.chose(Choice::DropsMessageWithBadLength) {
+            return None;
+        }
         if frame.fd {
             frame.brs = flags & 2 != 0;
             frame.esi = flags & 4 != 0;
@@ -413,12 +482,18 @@ impl SoftDevice {
             }
             frame.len = wire;
         } else {
-            frame.len = frame.len.min(8);
+            let most = if self.has(Fault::ClassicLengthUnbounded) {
+                15
+            } else {
+                8
+            };
+            frame.len = frame.len.min(most);
             if !frame.remote {
-                frame.data[..frame.len].copy_from_slice(&slot[g.data..g.data + frame.len]);
+                let n = frame.len.min(slot.len() - g.data);
+                frame.data[..n].copy_from_slice(&slot[g.data..g.data + n]);
             }
         }
-        frame
+        Some(frame)
     }
 
     fn receive_side(&mut self, plc_rx_counter: u16) {
@@ -433,6 +508,9 @@ impl SoftDevice {
             return;
         }
         if self.recv_fifo.is_empty() {
+            if !fast && self.chose(Choice::ClearsRxCountWhenIdle) {
+                put16(&mut self.input, header::NO_OF_MESSAGES, 0);
+            }
             if self.has(Fault::RxCounterCountsEmptyCycles) {
                 put16(&mut self.input, header::NO_OF_MESSAGES, 0);
                 let next = self.bump(get16(&self.input, header::RX_COUNTER));
@@ -440,13 +518,16 @@ impl SoftDevice {
             }
             return;
         }
-        let count = self
+        let mut count = self
             .recv_fifo
             .len()
             .min(usize::from(self.settings.rx_slots));
+        if self.has(Fault::RxCountCappedAt31) {
+            count = count.min(31);
+        }
         for i in 0..usize::from(self.settings.rx_slots) {
-            let at = self.rx_base + i * self.rx_geo.size;
-            let size = self.rx_geo.size;
+            let at = self.rx_start() + i * self.rx_geo.size;
+            let size = self.rx_geo.size.min(self.input.len().saturating_sub(at));
             let job = if i < count {
                 self.recv_fifo.pop_front()
             } else {
@@ -454,9 +535,10 @@ impl SoftDevice {
             };
             let slot_bytes = match job {
                 Some(job) => self.encode_rx(&job),
+                None if self.chose(Choice::KeepsStaleRxSlots) => continue,
                 None => vec![0; size],
             };
-            self.input[at..at + size].copy_from_slice(&slot_bytes);
+            self.input[at..at + size].copy_from_slice(&slot_bytes[..size]);
         }
         if fast {
             self.recv_fifo.clear();
@@ -464,6 +546,15 @@ impl SoftDevice {
         put16(&mut self.input, header::NO_OF_MESSAGES, count as u16);
         let next = self.bump(get16(&self.input, header::RX_COUNTER));
         put16(&mut self.input, header::RX_COUNTER, next);
+    }
+
+    /// Where the Rx messages start in the input image.
+    fn rx_start(&self) -> usize {
+        if self.has(Fault::RxMessagesAfterReservedWord) {
+            header::MESSAGES_AFTER_TRANSACTION_NUMBER
+        } else {
+            self.rx_base
+        }
     }
 
     fn encode_rx(&self, job: &RxJob) -> Vec<u8> {

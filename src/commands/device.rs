@@ -18,7 +18,10 @@ pub fn device(stdio: bool, faults: &[String], protocol: u64, bus: Option<&str>) 
         return ExitCode::from(2);
     }
     let kind = match soft_device_faults(faults) {
-        Ok(faults) => IutKind::SoftDevice { faults },
+        Ok(faults) => IutKind::SoftDevice {
+            faults,
+            choices: vec![],
+        },
         Err(code) => return code,
     };
     let build: &Build<'_> = &|caps, config| kind.build(caps, config);

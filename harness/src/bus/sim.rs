@@ -203,7 +203,7 @@ impl Controller for Pair {
         Pair::poll(self)
     }
     fn due(&self) -> Option<Nanos> {
-        self.iut.poll_timeout()
+        Pair::due(self)
     }
     fn ended(&mut self, frame: Frame, own: bool, end: Nanos) -> Result<(), Outcome> {
         self.complete(frame, own, end)

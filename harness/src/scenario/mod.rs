@@ -5,9 +5,11 @@
 
 mod generated;
 mod scripted;
+mod untrusted;
 
 pub use generated::generated;
 pub use scripted::*;
+pub use untrusted::*;
 
 use canif_model::config::{FrameFormat, InterfaceConfig, QueueMode};
 use canif_model::exchange::ExchangeMode;
@@ -19,6 +21,7 @@ use canif_model::Nanos;
 use canif_spec::ReqId;
 
 use crate::bus::BusChoice;
+pub use crate::plc::OutputEdit;
 
 /// One PLC task cycle of stimulus.
 #[derive(Debug, Clone, Default)]
@@ -32,6 +35,24 @@ pub struct Step {
     /// Frames other nodes want to send, ready at this offset into the cycle.
     pub bus: Vec<(Nanos, Frame)>,
     pub status: Option<ControllerStatus>,
+    /// Fields the PLC's program writes itself after the sample code (unusual
+    /// or invalid input).
+    pub edits: Vec<OutputEdit>,
+    /// A whole output image the PLC writes instead of the sample code's.
+    pub raw_outputs: Option<Vec<u8>>,
+}
+
+/// How a scenario judges the IUT.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Judgement {
+    /// Field by field and frame by frame against the model.
+    #[default]
+    Exact,
+    /// Only by the bounds of G3, for input whose treatment the documents leave
+    /// to the implementer: never more frames on the bus than the slots of the
+    /// batches it acknowledged (HS-TX-010), no invalid frame (LAY-GEN-008),
+    /// the image's size kept, and the interface still cycling afterwards.
+    Bounds,
 }
 
 /// A small deterministic generator (xorshift64*), so a seed gives the same run byte for byte.
@@ -97,6 +118,7 @@ pub struct Scenario {
     pub trace: Option<(std::path::PathBuf, String, canif_model::Nanos)>,
     /// The bus it runs on.
     pub bus: BusChoice,
+    pub judgement: Judgement,
     pub steps: Steps,
 }
 
@@ -240,6 +262,7 @@ pub(crate) fn scenario(
         time_stamp_tolerance: 0,
         trace: None,
         bus: BusChoice::Sim,
+        judgement: Judgement::Exact,
         steps,
     }
 }

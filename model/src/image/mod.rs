@@ -21,7 +21,7 @@ mod output;
 
 pub use header::{InputHeader, OutputHeader};
 pub use input::InputImage;
-pub use message::{LengthField, MessageError, MessageLayout, MessageRepr, MessageView};
+pub use message::{flag, LengthField, MessageError, MessageLayout, MessageRepr, MessageView};
 pub use output::OutputImage;
 
 use crate::config::{FrameFormat, InterfaceConfig};
