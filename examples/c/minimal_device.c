@@ -117,7 +117,8 @@ int canif_cycle(void *p, uint64_t now_ns, const uint8_t *outputs, size_t outputs
     if (requested != u16(d->inputs, 0)) {
         size_t count = u16(outputs, 4);
         if (count > d->tx_slots) count = d->tx_slots;
-        size_t busy = d->send.count + (size_t)d->in_flight;
+        /* the frame on the wire has left the queue (HS-TX-012) */
+        size_t busy = d->send.count;
         if (busy == 0 || busy + count <= d->send.depth) {
             for (size_t i = 0; i < count; i++) {
                 size_t at = HEADER + SLOT * i;

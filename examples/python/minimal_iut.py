@@ -39,7 +39,7 @@ class Device:
         requested = u16(outputs, 0)
         if requested != u16(self.inputs, 0):
             count = min(u16(outputs, 4), self.slots_tx)
-            busy = len(self.send_queue) + (1 if self.in_flight else 0)
+            busy = len(self.send_queue)  # the frame on the wire has left the queue (HS-TX-012)
             if busy == 0 or busy + count <= self.tx_depth:
                 for i in range(count):
                     at = 6 + 10 * i

@@ -10,6 +10,7 @@ pub const TX_COUNTER: &[ReqId] = req_ids![
     "HS-TX-005",
     "HS-TX-007",
     "HS-TX-008",
+    "HS-TX-012",
     "FQ-003",
 ];
 /// The device filled a buffer the PLC had not released.
@@ -108,11 +109,12 @@ pub const SYNC1_LATE: &[ReqId] = req_ids!["PDX-004"];
 /// The requirements of `InfoData[index]`.
 pub fn info_data(index: usize) -> &'static [ReqId] {
     match index {
-        0 => req_ids!["INFO-002"],
+        0 => req_ids!["INFO-002", "INFO-009"],
         1 | 2 => req_ids!["INFO-003"],
         3 => req_ids!["INFO-004"],
         4..=6 => req_ids!["INFO-005", "INFO-007"],
-        11 | 15 => req_ids!["INFO-006"],
+        11 => req_ids!["INFO-006", "INFO-009"],
+        15 => req_ids!["INFO-006"],
         _ => req_ids!["INFO-005"],
     }
 }

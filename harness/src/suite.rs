@@ -358,7 +358,7 @@ fn refusal_ids(error: &ConfigError) -> &'static [ReqId] {
         TransactionNumberOnlyExt29 => req_ids!["PROF-005", "TN-004"],
         TimeStampNotOffered => req_ids!["PROF-004", "PROF-008"],
         TimeStampNeedsExt29WithTransactionNumber => req_ids!["PROF-004", "TS-002"],
-        FdStructuresCarryTransactionNumberAndTimeStamp => req_ids!["LAY-FD-001"],
+        FdStructuresCarryTransactionNumberAndTimeStamp => req_ids!["LAY-FD-001", "LAY-FD-004"],
         SlotCount { .. } => req_ids!["PROF-011", "LAY-GEN-007"],
         DistributedClocksNotOffered | DistributedClocksNeedsFastQueue => req_ids!["PDX-005"],
     }
@@ -387,6 +387,7 @@ pub const REFUSAL_IDS: &[ReqId] = req_ids![
     "TN-004",
     "TS-002",
     "LAY-FD-001",
+    "LAY-FD-004",
     "LAY-GEN-007",
     "PDX-005",
 ];

@@ -129,7 +129,7 @@ impl Device {
     /// One CAN interface cycle (003): Tx acceptance, Rx delivery, transaction
     /// number, CAN status. Returns the new input image.
     ///
-    /// Requirements: HS-TX-002..HS-TX-008, HS-RX-001..HS-RX-007, BQ-002, FQ-002,
+    /// Requirements: HS-TX-002..HS-TX-008, HS-TX-012, HS-RX-001..HS-RX-007, BQ-002, FQ-002,
     /// FQ-003, TN-002, TN-003, INFO-001.
     pub fn cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<&[u8], SizeError> {
         let outputs = OutputImage::new_checked(outputs, self.layout)?;
@@ -160,8 +160,9 @@ impl Device {
         }
         // G3: never more than the slots the image has.
         let count = usize::from(outputs.no_of_tx_messages()).min(self.layout.tx_slots);
-        let queued = self.queued_tx();
-        if queued > 0 && queued + count > self.caps.tx_queue_depth {
+        // HS-TX-012: the frame on the wire has left the queue (003).
+        let waiting = self.send_queue.len();
+        if waiting > 0 && waiting + count > self.caps.tx_queue_depth {
             return; // HS-TX-008: not accepted (and not acknowledged) until there is room.
         }
         let not_before = match self.config.synchronization {

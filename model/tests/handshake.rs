@@ -149,6 +149,28 @@ fn a_batch_that_does_not_fit_the_send_queue_waits_unacknowledged() {
     assert_eq!(order, [1, 2, 3, 0x40], "nothing dropped, nothing reordered");
 }
 
+/// Covers: HS-TX-012
+#[test]
+fn the_frame_on_the_wire_has_left_the_send_queue() {
+    let mut caps = caps();
+    caps.tx_queue_depth = 4;
+    let mut device =
+        Device::new(&caps, config(FrameFormat::Base11, QueueMode::Standard, 4)).unwrap();
+    let batch: Vec<_> = (0..4).map(|i| message(std_frame(i, &[]), 0)).collect();
+    device
+        .cycle(&outputs_with(&device, 1, 0, &batch, 4), 0)
+        .unwrap();
+    // Frame 0 goes on the wire: three wait, so one more fits the depth of 4.
+    assert_eq!(device.poll_transmit(0), Some(std_frame(0, &[])));
+    let second = outputs_with(&device, 2, 0, &[message(std_frame(0x40, &[]), 0)], 1);
+    device.cycle(&second, 0).unwrap();
+    assert_eq!(
+        inputs_of(&device).tx_counter(),
+        2,
+        "the frame on the wire does not count against tx_queue_depth"
+    );
+}
+
 /// Covers: HS-TX-010, HS-TX-011
 #[test]
 fn no_more_messages_than_slots_per_cycle() {

@@ -99,7 +99,7 @@ fn time_stamp_is_the_end_of_reception_in_nanoseconds() {
     assert_eq!(stamps, times);
 }
 
-/// Covers: TS-002, PROF-004
+/// Covers: TS-002, PROF-004, LAY-FD-004
 #[test]
 fn time_stamp_only_in_29_bit_mode_with_transaction_number() {
     let caps = caps();

@@ -348,7 +348,8 @@ impl SoftDevice {
         if self.has(Fault::SendsOneMoreThanAsked) {
             count = (count + 1).min(usize::from(self.settings.tx_slots));
         }
-        let busy = self.send_fifo.len() + usize::from(self.on_wire.is_some());
+        // The frame on the wire is no longer in the send queue (003).
+        let busy = self.send_fifo.len();
         if self.has(Fault::AckBeforeAccept) {
             put16(&mut self.input, header::TX_COUNTER, requested);
             self.deferred_tx = Some(requested);

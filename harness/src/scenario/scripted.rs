@@ -78,7 +78,7 @@ pub fn tx_backpressure(config: &InterfaceConfig) -> Scenario {
     let mut scenario = scenario(
         "tx-backpressure",
         config,
-        &["HS-TX-006", "HS-TX-008", "HS-TX-007"],
+        &["HS-TX-006", "HS-TX-008", "HS-TX-007", "HS-TX-012"],
         Steps::Scripted(steps),
     );
     scenario.bit_rates = BitRates {
@@ -378,7 +378,7 @@ pub fn info_data(config: &InterfaceConfig) -> Scenario {
     steps.extend(idle(20));
     let covers = [
         "INFO-001", "INFO-002", "INFO-003", "INFO-004", "INFO-005", "INFO-006", "INFO-007",
-        "INFO-008",
+        "INFO-008", "INFO-009",
     ];
     scenario("info-data", config, &covers, Steps::Scripted(steps))
 }
