@@ -17,15 +17,8 @@ fn python_canopen_available() -> bool {
 }
 
 /// Runs the cross-check against `canif coupler --socketcand 0 [--fault F]`; its exit status and output.
-fn crosscheck(fault: Option<&str>) -> Option<(bool, String)> {
-    if !python_canopen_available() {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "python3 with canopen and python-can is missing in CI (.ci/run installs them)"
-        );
-        eprintln!("SKIPPED the canopen cross-check: python3 -c 'import canopen' fails (pip install canopen python-can; .ci/run does)");
-        return None;
-    }
+/// `canif coupler` as a socketcand server for node 5, and the port it prints.
+fn socketcand_coupler(fault: Option<&str>) -> (std::process::Child, u16) {
     let mut coupler = Command::new(env!("CARGO_BIN_EXE_canif"));
     coupler.args(["coupler", "--socketcand", "0", "--node", "5"]);
     if let Some(fault) = fault {
@@ -39,12 +32,26 @@ fn crosscheck(fault: Option<&str>) -> Option<(bool, String)> {
     BufReader::new(coupler.stdout.take().unwrap())
         .read_line(&mut port)
         .unwrap();
+    let port = port.trim().parse().expect("the coupler prints its port");
+    (coupler, port)
+}
+
+fn crosscheck(fault: Option<&str>) -> Option<(bool, String)> {
+    if !python_canopen_available() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "python3 with canopen and python-can is missing in CI (.ci/run installs them)"
+        );
+        eprintln!("SKIPPED the canopen cross-check: python3 -c 'import canopen' fails (pip install canopen python-can; .ci/run does)");
+        return None;
+    }
+    let (mut coupler, port) = socketcand_coupler(fault);
     let script = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/tests/python/canopen_crosscheck.py"
     );
     let out = Command::new("timeout")
-        .args(["120", "python3", script, port.trim(), "5"])
+        .args(["120", "python3", script, &port.to_string(), "5"])
         .output()
         .expect("python3 runs");
     let _ = coupler.kill();
@@ -89,19 +96,10 @@ fn pythons_canopen_notices_a_coupler_that_does_not_abort() {
 #[test]
 fn the_socketcand_coupler_serves_one_client_after_another() {
     use std::io::Read;
-    let mut coupler = Command::new(env!("CARGO_BIN_EXE_canif"))
-        .args(["coupler", "--socketcand", "0", "--node", "5"])
-        .stdout(Stdio::piped())
-        .spawn()
-        .expect("canif coupler starts");
-    let mut port = String::new();
-    BufReader::new(coupler.stdout.take().unwrap())
-        .read_line(&mut port)
-        .unwrap();
+    let (mut coupler, port) = socketcand_coupler(None);
     for client in 0..3 {
-        let mut stream =
-            std::net::TcpStream::connect(("127.0.0.1", port.trim().parse::<u16>().unwrap()))
-                .unwrap_or_else(|e| panic!("client {client}: {e}"));
+        let mut stream = std::net::TcpStream::connect(("127.0.0.1", port))
+            .unwrap_or_else(|e| panic!("client {client}: {e}"));
         stream
             .set_read_timeout(Some(std::time::Duration::from_secs(5)))
             .unwrap();

@@ -11,16 +11,15 @@ use canif_model::image::{ImageLayout, InputImage, OutputImage};
 use canif_spec::{req_ids, ReqId};
 
 use crate::blame;
-use crate::diff::Difference;
+use crate::diff::{image_size, Difference};
 use crate::iut::Transmit;
 
 /// More frames than the acknowledged slots, or no acknowledge at the end.
 const BEYOND_THE_SLOTS: &[ReqId] = req_ids!["HS-TX-010"];
 
-/// The bounds a scenario's IUT is held to; off, it judges nothing.
+/// The bounds a scenario's IUT is held to.
 #[derive(Debug, Clone, Default)]
 pub struct Bounds {
-    judging: bool,
     /// Frames the acknowledged batches still allow on the bus.
     allowance: usize,
     /// The TxCounter the IUT acknowledged last, and the one the PLC wrote.
@@ -29,17 +28,6 @@ pub struct Bounds {
 }
 
 impl Bounds {
-    pub fn judging() -> Self {
-        Bounds {
-            judging: true,
-            ..Bounds::default()
-        }
-    }
-
-    pub fn is_on(&self) -> bool {
-        self.judging
-    }
-
     /// After a cycle: the image keeps its size, and a batch the IUT has just
     /// acknowledged allows at most the slots' number of frames.
     pub fn cycle(
@@ -49,13 +37,7 @@ impl Bounds {
         actual: &[u8],
     ) -> Option<Difference> {
         let Ok(inputs) = InputImage::new_checked(actual, *layout) else {
-            return Some(Difference {
-                frames: None,
-                candidates: blame::INPUT_IMAGE_SIZE,
-                what: "input image size".into(),
-                expected: format!("{} bytes", layout.input_size()),
-                actual: format!("{} bytes", actual.len()),
-            });
+            return Some(image_size(layout.input_size(), actual.len()));
         };
         let acknowledged = inputs.tx_counter();
         if acknowledged != self.acknowledged {
@@ -96,7 +78,7 @@ impl Bounds {
     /// At the end: the last batch the PLC wrote was acknowledged (the
     /// interface kept cycling).
     pub fn still_cycling(&self) -> Option<Difference> {
-        (self.judging && self.requested != self.acknowledged).then(|| Difference {
+        (self.requested != self.acknowledged).then(|| Difference {
             frames: None,
             candidates: BEYOND_THE_SLOTS,
             what: "Inputs.TxCounter at the end".into(),

@@ -22,6 +22,47 @@ pub struct Difference {
     pub frames: Option<Box<FrameDiff>>,
 }
 
+/// A difference in `region` whose bytes are the model's moved by 2 or 4:
+/// the layout put the region at the wrong offset, which `candidates` name.
+fn shifted(
+    (expected, actual): (&[u8], &[u8]),
+    region: std::ops::Range<usize>,
+    candidates: &'static [ReqId],
+    difference: Difference,
+) -> Difference {
+    let moved_by = |by: isize| {
+        let (mut same, mut meaningful) = (true, 0);
+        for i in region.clone() {
+            let Some(a) = i.checked_add_signed(by).and_then(|j| actual.get(j)) else {
+                continue;
+            };
+            same &= expected[i] == *a;
+            meaningful += usize::from(expected[i] != 0);
+        }
+        same && meaningful > 0
+    };
+    if [-4, -2, 2, 4].into_iter().any(moved_by) {
+        Difference {
+            candidates,
+            what: format!("{} (the region is shifted)", difference.what),
+            ..difference
+        }
+    } else {
+        difference
+    }
+}
+
+/// An input image of the wrong size.
+pub fn image_size(expected: usize, actual: usize) -> Difference {
+    Difference {
+        frames: None,
+        candidates: blame::INPUT_IMAGE_SIZE,
+        what: "input image size".into(),
+        expected: format!("{expected} bytes"),
+        actual: format!("{actual} bytes"),
+    }
+}
+
 /// Bytes as `01 02 0A`.
 pub fn hex(bytes: &[u8]) -> String {
     bytes
@@ -66,66 +107,30 @@ impl InputCheck<'_> {
             InputImage::new_checked(expected, *self.layout),
             InputImage::new_checked(actual, *self.layout),
         ) else {
-            return Some(Difference {
-                frames: None,
-                candidates: blame::INPUT_IMAGE_SIZE,
-                what: "input image size".into(),
-                expected: format!("{} bytes", expected.len()),
-                actual: format!("{} bytes", actual.len()),
-            });
+            return Some(image_size(expected.len(), actual.len()));
         };
         // The PLC reads NoOfRxMessages and the messages only when
         // Inputs.RxCounter differs from its Outputs.RxCounter (001 §6): in
         // Buffered mode they are don't-care otherwise (HS-RX-008).
         let unread = !self.rx.fast && e.rx_counter() == self.rx.plc_released;
-        self.header(&e, &a, unread)
-            .or_else(|| (!unread).then(|| self.messages(&e, &a)).flatten())
-            .or_else(|| self.info_data(&e, &a))
-            .map(|d| self.offset(expected, actual, d))
-    }
-
-    /// A slot or InfoData difference whose bytes are the model's, shifted:
-    /// the layout put the region at the wrong offset.
-    fn offset(&self, expected: &[u8], actual: &[u8], difference: Difference) -> Difference {
         let layout = self.layout;
-        let (region, candidates) = if difference.what.starts_with("InfoData") {
-            (
-                layout.info_data_start()..expected.len(),
-                blame::INFO_DATA_OFFSET,
-            )
-        } else if difference.what.starts_with("Inputs.RxMessage") {
-            let start = layout.rx_slot(0).start;
-            let end = layout.rx_slot(layout.rx_slots - 1).end;
-            let candidates = if layout.transaction_number {
-                blame::RX_MESSAGES_OFFSET_TN
-            } else {
-                blame::RX_MESSAGES_OFFSET
-            };
-            (start..end, candidates)
-        } else {
-            return difference;
-        };
-        let shifted = |by: isize| {
-            let pairs = region.clone().filter_map(|i| {
-                let j = i.checked_add_signed(by)?;
-                Some((expected[i], *actual.get(j)?))
-            });
-            let (mut same, mut meaningful) = (true, 0);
-            for (e, a) in pairs {
-                same &= e == a;
-                meaningful += usize::from(e != 0);
-            }
-            same && meaningful >= 1
-        };
-        if [-4, -2, 2, 4].into_iter().any(shifted) {
-            Difference {
-                candidates,
-                what: format!("{} (the region is shifted)", difference.what),
-                ..difference
-            }
-        } else {
-            difference
-        }
+        let bytes = (expected, actual);
+        self.header(&e, &a, unread)
+            .or_else(|| {
+                let d = if unread { None } else { self.messages(&e, &a) }?;
+                let region = layout.rx_slot(0).start..layout.rx_slot(layout.rx_slots - 1).end;
+                let candidates = if layout.transaction_number {
+                    blame::RX_MESSAGES_OFFSET_TN
+                } else {
+                    blame::RX_MESSAGES_OFFSET
+                };
+                Some(shifted(bytes, region, candidates, d))
+            })
+            .or_else(|| {
+                let d = self.info_data(&e, &a)?;
+                let region = layout.info_data_start()..expected.len();
+                Some(shifted(bytes, region, blame::INFO_DATA_OFFSET, d))
+            })
     }
 
     fn header(

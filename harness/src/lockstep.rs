@@ -54,10 +54,10 @@ pub fn run_scenario(
         bus: bus.as_mut(),
     }
     .run(steps);
-    let result = result.and_then(|cycles| match pair.bounds.still_cycling() {
-        Some(difference) => Err((pair.fail(difference), cycles)),
-        None => Ok(cycles),
-    });
+    let result = match (result, pair.bounds.as_ref().and_then(Bounds::still_cycling)) {
+        (Ok(cycles), Some(stopped)) => Err((pair.fail(stopped), cycles)),
+        (result, _) => result,
+    };
     pair.finish();
     match result {
         Ok(cycles) => run(Outcome::Pass, cycles, pair.frames),
@@ -96,7 +96,7 @@ fn start(
     });
     let mut pair = Pair::new(iut, model, (&scenario.name, &scenario.covers), trace);
     if scenario.judgement == Judgement::Bounds {
-        pair.bounds = Bounds::judging();
+        pair.bounds = Some(Bounds::default());
     }
     Ok((pair, bus))
 }
@@ -181,14 +181,15 @@ impl Lockstep<'_> {
             }
         }
         let outputs = self.plc.outputs().to_vec();
+        let written = OutputImage::new_checked(&outputs[..], layout)
+            .map(|o| o.header())
+            .unwrap_or_default();
         let rx = RxState {
             before: InputImage::new_checked(self.pair.model.inputs(), layout)
                 .map_or(0, |i| i.rx_counter()),
-            plc_released: OutputImage::new_checked(&outputs[..], layout)
-                .map_or(0, |o| o.rx_counter()),
+            plc_released: written.rx_counter,
             fast: scenario.interface.queue == QueueMode::Fast,
-            no_of_tx_messages: OutputImage::new_checked(&outputs[..], layout)
-                .map_or(0, |o| o.no_of_tx_messages()),
+            no_of_tx_messages: written.no_of_tx_messages,
         };
         let expected = match self.pair.model.cycle(&outputs, t) {
             Ok(inputs) => inputs.to_vec(),
@@ -206,8 +207,9 @@ impl Lockstep<'_> {
         self.pair
             .history
             .cycle(layout, (k, self.pair.now), &outputs, &expected, &actual);
-        let difference = match scenario.judgement {
-            Judgement::Exact => {
+        let difference = match self.pair.bounds.as_mut() {
+            Some(bounds) => bounds.cycle(&layout, &outputs, &actual),
+            None => {
                 let history = &self.pair.history;
                 InputCheck {
                     layout: &layout,
@@ -217,7 +219,6 @@ impl Lockstep<'_> {
                 }
                 .compare(&expected, &actual)
             }
-            Judgement::Bounds => self.pair.bounds.cycle(&layout, &outputs, &actual),
         };
         if let Some(difference) = difference {
             return Err(self.pair.fail(difference));

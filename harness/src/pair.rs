@@ -33,8 +33,9 @@ pub struct Pair {
     /// The IUT's controller holds a frame, waiting or on the wire, until it
     /// completes: it is not idle, so it is not polled.
     iut_busy: bool,
-    /// Bounds judging (G3) instead of the model's frames, when the scenario asks.
-    pub bounds: Bounds,
+    /// Bounds judging (G3) instead of the model's frames and images, when
+    /// the scenario asks for it.
+    pub bounds: Option<Bounds>,
     /// Scenario time.
     pub now: Nanos,
     pub cycle: u64,
@@ -59,7 +60,7 @@ impl Pair {
             model,
             iut_pending: None,
             iut_busy: false,
-            bounds: Bounds::default(),
+            bounds: None,
             now: 0,
             cycle: 0,
             frames: 0,
@@ -103,45 +104,24 @@ impl Pair {
             return Ok(());
         }
         let actual = self.iut.poll_transmit(self.now).map_err(iut_broke)?;
-        let judged = if self.bounds.is_on() {
-            self.bounds.transmit(actual)
-        } else {
-            // Distributed Clocks: the first message of a batch starts at SYNC1
-            // give or take the jitter (003), and is missing only after it.
-            let now = self.now;
-            let sync1 = self.model.poll_timeout();
-            let expected = match (sync1, &actual) {
-                (Some(due), None) if now < due + SYNC1_TX_JITTER => None,
-                (Some(due), Some(_)) if now + SYNC1_TX_JITTER >= due => {
-                    self.model.poll_transmit(due.max(now))
-                }
-                _ => self.model.poll_transmit(now),
-            };
-            // Only a device that holds the batch's first message for SYNC1
-            // (it has a due time) is late; one that sends the model's held
-            // message too soon is early.
-            let late = sync1.is_some()
-                && expected.is_some()
-                && actual.is_none()
-                && self.iut.poll_timeout().is_some();
-            let held = self.model.send_queue().next().copied();
-            let early = sync1.is_some()
-                && expected.is_none()
-                && matches!((&actual, held), (Some(Ok(a)), Some(h)) if *a == h);
-            self.transmit_difference(expected, actual)
-                .map_err(|d| match (late, early) {
-                    (true, _) => Difference {
-                        candidates: blame::SYNC1_LATE,
-                        what: "first frame of the batch after SYNC1".into(),
-                        ..d
-                    },
-                    (_, true) => Difference {
-                        candidates: blame::SYNC1_EARLY,
-                        what: "first frame of the batch before SYNC1".into(),
-                        ..d
-                    },
-                    _ => d,
-                })
+        let judged = match self.bounds.as_mut() {
+            Some(bounds) => bounds.transmit(actual),
+            None => {
+                // Distributed Clocks: the first message of a batch starts at
+                // SYNC1 give or take the jitter (003), and is missing only after it.
+                let now = self.now;
+                let sync1 = self.model.poll_timeout();
+                let expected = match (sync1, &actual) {
+                    (Some(due), None) if now < due + SYNC1_TX_JITTER => None,
+                    (Some(due), Some(_)) if now + SYNC1_TX_JITTER >= due => {
+                        self.model.poll_transmit(due.max(now))
+                    }
+                    _ => self.model.poll_transmit(now),
+                };
+                let nothing_sent = actual.is_none();
+                self.transmit_difference(expected, actual)
+                    .map_err(|d| self.at_sync1(sync1.is_some(), nothing_sent, d))
+            }
         };
         match judged {
             Ok(frame) => {
@@ -217,13 +197,40 @@ impl Pair {
         Err(difference)
     }
 
+    /// A Tx difference while the model holds a batch for SYNC1 is a timing
+    /// one (PDX-004) when the IUT holds its first message past the jitter
+    /// (it has a due time of its own) or sends the held message before it.
+    fn at_sync1(&self, held: bool, nothing_sent: bool, d: Difference) -> Difference {
+        let frames = d.frames.as_deref();
+        let (candidates, what) = match frames {
+            _ if !held => return d,
+            Some(FrameDiff {
+                expected: Some(_), ..
+            }) if nothing_sent && self.iut.poll_timeout().is_some() => {
+                (blame::SYNC1_LATE, "first frame of the batch after SYNC1")
+            }
+            Some(FrameDiff {
+                expected: None,
+                actual: Some(sent),
+            }) if self.model.send_queue().next() == Some(sent) => {
+                (blame::SYNC1_EARLY, "first frame of the batch before SYNC1")
+            }
+            _ => return d,
+        };
+        Difference {
+            candidates,
+            what: what.into(),
+            ..d
+        }
+    }
+
     /// When the controller must be asked again: the IUT's own due time, or the
     /// latest the model's SYNC1 allows, whichever comes first.
     pub fn due(&self) -> Option<Nanos> {
-        let deadline = (!self.bounds.is_on())
-            .then(|| self.model.poll_timeout())
-            .flatten()
-            .map(|t| t + SYNC1_TX_JITTER);
+        let deadline = match self.bounds {
+            Some(_) => None,
+            None => self.model.poll_timeout().map(|t| t + SYNC1_TX_JITTER),
+        };
         [self.iut.poll_timeout(), deadline]
             .into_iter()
             .flatten()

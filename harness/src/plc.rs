@@ -9,7 +9,8 @@ use canif_model::client::PlcClient;
 use canif_model::cob_id::CobId32;
 use canif_model::exchange::{ExchangeMode, ProcessDataExchange};
 use canif_model::image::{
-    ImageLayout, InputImage, LengthField, MessageError, MessageRepr, OutputImage, SizeError,
+    ImageLayout, InputImage, LengthField, MessageError, MessageRepr, MessageView, OutputImage,
+    SizeError,
 };
 
 /// What the stimulus asks of the PLC in one task, beyond the sample code.
@@ -45,24 +46,24 @@ pub enum OutputEdit {
 
 impl OutputEdit {
     fn apply(self, outputs: &mut OutputImage<&mut [u8]>) {
-        let slot = match self {
-            OutputEdit::NoOfTxMessages(count) => {
-                outputs.set_no_of_tx_messages(count);
-                return;
-            }
-            OutputEdit::Length { slot, .. }
-            | OutputEdit::CobId { slot, .. }
-            | OutputEdit::Flags { slot, .. } => slot,
-        };
-        let Some(mut view) = outputs.tx_message_mut(slot) else {
-            return;
-        };
         match self {
-            OutputEdit::Length { raw, .. } => view.set_raw_length(raw),
-            OutputEdit::CobId { raw, .. } => view.set_cob_id32(CobId32(raw)),
-            OutputEdit::Flags { raw, .. } => view.set_flags(raw),
-            OutputEdit::NoOfTxMessages(_) => {}
+            OutputEdit::NoOfTxMessages(count) => outputs.set_no_of_tx_messages(count),
+            OutputEdit::Length { slot, raw } => edit_slot(outputs, slot, |v| v.set_raw_length(raw)),
+            OutputEdit::CobId { slot, raw } => {
+                edit_slot(outputs, slot, |v| v.set_cob_id32(CobId32(raw)))
+            }
+            OutputEdit::Flags { slot, raw } => edit_slot(outputs, slot, |v| v.set_flags(raw)),
         }
+    }
+}
+
+fn edit_slot(
+    outputs: &mut OutputImage<&mut [u8]>,
+    slot: usize,
+    edit: impl FnOnce(&mut MessageView<&mut [u8]>),
+) {
+    if let Some(mut view) = outputs.tx_message_mut(slot) {
+        edit(&mut view);
     }
 }
 

@@ -118,9 +118,9 @@ fn counters_wrap_from_ffff_to_zero() {
     assert_eq!(rig.inputs().rx_counter(), 1);
 }
 
-/// Covers: HS-TX-008
-#[test]
-fn a_batch_that_does_not_fit_the_send_queue_waits_unacknowledged() {
+/// A device whose send queue holds 4 messages, after a batch of 4 (ids 0-3)
+/// was accepted.
+fn four_accepted_of_a_queue_of_four() -> Device {
     let mut caps = caps();
     caps.tx_queue_depth = 4;
     let mut device =
@@ -129,6 +129,13 @@ fn a_batch_that_does_not_fit_the_send_queue_waits_unacknowledged() {
     device
         .cycle(&outputs_with(&device, 1, 0, &batch, 4), 0)
         .unwrap();
+    device
+}
+
+/// Covers: HS-TX-008
+#[test]
+fn a_batch_that_does_not_fit_the_send_queue_waits_unacknowledged() {
+    let mut device = four_accepted_of_a_queue_of_four();
     assert_eq!(inputs_of(&device).tx_counter(), 1);
     let second = outputs_with(&device, 2, 0, &[message(std_frame(0x40, &[]), 0)], 1);
     device.cycle(&second, 0).unwrap();
@@ -152,14 +159,7 @@ fn a_batch_that_does_not_fit_the_send_queue_waits_unacknowledged() {
 /// Covers: HS-TX-012
 #[test]
 fn the_frame_on_the_wire_has_left_the_send_queue() {
-    let mut caps = caps();
-    caps.tx_queue_depth = 4;
-    let mut device =
-        Device::new(&caps, config(FrameFormat::Base11, QueueMode::Standard, 4)).unwrap();
-    let batch: Vec<_> = (0..4).map(|i| message(std_frame(i, &[]), 0)).collect();
-    device
-        .cycle(&outputs_with(&device, 1, 0, &batch, 4), 0)
-        .unwrap();
+    let mut device = four_accepted_of_a_queue_of_four();
     // Frame 0 goes on the wire: three wait, so one more fits the depth of 4.
     assert_eq!(device.poll_transmit(0), Some(std_frame(0, &[])));
     let second = outputs_with(&device, 2, 0, &[message(std_frame(0x40, &[]), 0)], 1);

@@ -395,7 +395,7 @@ impl SoftDevice {
                     frame: self.decode_tx(slot)?,
                     tn,
                     release_at: 0,
-                    first_in_batch: i == 0,
+                    first_in_batch: false,
                 })
             })
             .collect();

@@ -13,7 +13,7 @@ use canif_spec::ReqId;
 use super::generated::random_frame;
 use super::{scenario, Rng, Scenario, Step, Steps};
 
-fn message(frame: Frame, transaction_number: u16) -> MessageRepr {
+pub(super) fn message(frame: Frame, transaction_number: u16) -> MessageRepr {
     MessageRepr {
         transaction_number,
         frame,
@@ -21,11 +21,11 @@ fn message(frame: Frame, transaction_number: u16) -> MessageRepr {
     }
 }
 
-fn std(id: u16, data: &[u8]) -> Frame {
+pub(super) fn std(id: u16, data: &[u8]) -> Frame {
     Frame::classic(CanId::Standard(id), data).unwrap()
 }
 
-fn idle(cycles: usize) -> Vec<Step> {
+pub(super) fn idle(cycles: usize) -> Vec<Step> {
     vec![Step::default(); cycles]
 }
 

@@ -11,15 +11,8 @@ use canif_model::image::{flag, ImageLayout, MessageRepr};
 use canif_spec::ReqId;
 
 use super::generated::random_frame;
+use super::scripted::{idle, message, std};
 use super::{exercisable, scenario, Judgement, OutputEdit, Rng, Scenario, Step, Steps};
-
-fn message(frame: Frame, transaction_number: u16) -> MessageRepr {
-    MessageRepr {
-        transaction_number,
-        frame,
-        time_stamp: 0,
-    }
-}
 
 /// A batch the sample code writes, `count` random frames.
 fn batch(rng: &mut Rng, config: &InterfaceConfig, count: usize, tn: &mut u16) -> Vec<MessageRepr> {
@@ -37,11 +30,18 @@ fn batch(rng: &mut Rng, config: &InterfaceConfig, count: usize, tn: &mut u16) ->
 const DRAIN: usize = 400;
 
 fn drain(steps: &mut Vec<Step>, rng: &mut Rng, config: &InterfaceConfig, tn: &mut u16) {
-    steps.push(Step {
-        send: batch(rng, config, 1, tn),
+    steps.push(edited(batch(rng, config, 1, tn), Vec::new()));
+    steps.extend(idle(DRAIN));
+}
+
+/// A cycle in which the PLC's program sends `send` and then changes the
+/// image with `edits`.
+fn edited(send: Vec<MessageRepr>, edits: Vec<OutputEdit>) -> Step {
+    Step {
+        send,
+        edits,
         ..Step::default()
-    });
-    steps.extend(std::iter::repeat_with(Step::default).take(DRAIN));
+    }
 }
 
 /// A scenario judged by the bounds of G3 alone: its pass is evidence for
@@ -70,18 +70,15 @@ pub fn tx_batch_of_nothing(config: &InterfaceConfig) -> Scenario {
     let mut steps = Vec::new();
     for round in 0..6 {
         let nothing = round % 2 == 0;
-        steps.push(Step {
-            send: batch(&mut rng, config, 2, &mut tn),
-            edits: if nothing {
-                vec![OutputEdit::NoOfTxMessages(0)]
-            } else {
-                Vec::new()
-            },
-            ..Step::default()
-        });
-        steps.extend(std::iter::repeat_with(Step::default).take(4));
+        let edits = if nothing {
+            vec![OutputEdit::NoOfTxMessages(0)]
+        } else {
+            Vec::new()
+        };
+        steps.push(edited(batch(&mut rng, config, 2, &mut tn), edits));
+        steps.extend(idle(4));
     }
-    steps.extend(std::iter::repeat_with(Step::default).take(20));
+    steps.extend(idle(20));
     let covers = ["HS-TX-002", "HS-TX-007", "HS-TX-009"];
     scenario(
         "tx-batch-of-nothing",
@@ -99,12 +96,12 @@ pub fn tx_batch_beyond_the_slots(config: &InterfaceConfig) -> Scenario {
     let mut tn = 0;
     let mut steps = Vec::new();
     for count in [slots as u16 + 1, 32, 33, 255, 0x8000, 0xFFFF] {
-        steps.push(Step {
-            send: batch(&mut rng, config, slots, &mut tn),
-            edits: vec![OutputEdit::NoOfTxMessages(count.max(slots as u16 + 1))],
-            ..Step::default()
-        });
-        steps.extend(std::iter::repeat_with(Step::default).take(10));
+        let beyond = OutputEdit::NoOfTxMessages(count.max(slots as u16 + 1));
+        steps.push(edited(
+            batch(&mut rng, config, slots, &mut tn),
+            vec![beyond],
+        ));
+        steps.extend(idle(10));
     }
     drain(&mut steps, &mut rng, config, &mut tn);
     bounded("tx-batch-beyond-the-slots", config, &["HS-TX-010"], steps)
@@ -134,12 +131,8 @@ pub fn tx_length_out_of_range(config: &InterfaceConfig) -> Scenario {
                 raw: 0x4000_0000 | 0x123,
             });
         }
-        steps.push(Step {
-            send: batch(&mut rng, config, slots, &mut tn),
-            edits,
-            ..Step::default()
-        });
-        steps.extend(std::iter::repeat_with(Step::default).take(10));
+        steps.push(edited(batch(&mut rng, config, slots, &mut tn), edits));
+        steps.extend(idle(10));
     }
     drain(&mut steps, &mut rng, config, &mut tn);
     let covers = ["LAY-GEN-008", "FD-LEN-006", "LAY-FD-003", "HS-TX-010"];
@@ -191,14 +184,10 @@ pub fn reserved_cob_id_bits(config: &InterfaceConfig) -> Scenario {
                 OutputEdit::CobId { slot, raw }
             })
             .collect();
-        steps.push(Step {
-            send,
-            edits,
-            ..Step::default()
-        });
-        steps.extend(std::iter::repeat_with(Step::default).take(5));
+        steps.push(edited(send, edits));
+        steps.extend(idle(5));
     }
-    steps.extend(std::iter::repeat_with(Step::default).take(20));
+    steps.extend(idle(20));
     scenario(
         "reserved-cob-id-bits",
         config,
@@ -220,23 +209,16 @@ pub fn classic_frame_with_fd_bits(config: &InterfaceConfig) -> Scenario {
             .map(|i| {
                 tn = tn.wrapping_add(1);
                 let id = 0x300 + 8 * k as u16 + i;
-                message(
-                    Frame::classic(CanId::Standard(id), &[k as u8, i as u8]).unwrap(),
-                    tn,
-                )
+                message(std(id, &[k as u8, i as u8]), tn)
             })
             .collect();
         let edits = (0..send.len())
             .map(|slot| OutputEdit::Flags { slot, raw: bits })
             .collect();
-        steps.push(Step {
-            send,
-            edits,
-            ..Step::default()
-        });
-        steps.extend(std::iter::repeat_with(Step::default).take(5));
+        steps.push(edited(send, edits));
+        steps.extend(idle(5));
     }
-    steps.extend(std::iter::repeat_with(Step::default).take(20));
+    steps.extend(idle(20));
     scenario(
         "classic-frame-with-fd-bits",
         config,
@@ -274,9 +256,9 @@ pub fn full_slots(config: &InterfaceConfig) -> Scenario {
             plc_busy: true,
             ..Step::default()
         }));
-        steps.extend(std::iter::repeat_with(Step::default).take(30));
+        steps.extend(idle(30));
     }
-    steps.extend(std::iter::repeat_with(Step::default).take(60));
+    steps.extend(idle(60));
     let covers = [
         "HS-TX-009",
         "HS-TX-011",

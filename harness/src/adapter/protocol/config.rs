@@ -73,35 +73,41 @@ pub enum Action {
     Reject,
 }
 
-/// `configure.capabilities`: what the profile offers.
+/// `configure.capabilities`: what the profile offers, the model's
+/// [`Capabilities`] on the wire field for field (serde's remote derive lists
+/// the fields once, in `CapsFields`).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Caps {
+#[serde(transparent)]
+pub struct Caps(#[serde(with = "CapsFields")] pub Capabilities);
+
+#[derive(Serialize, Deserialize)]
+#[serde(remote = "Capabilities", deny_unknown_fields)]
+struct CapsFields {
     #[serde(default)]
-    pub base11: bool,
+    base11: bool,
     #[serde(default)]
-    pub ext29: bool,
+    ext29: bool,
     #[serde(default)]
-    pub fd: bool,
+    fd: bool,
     #[serde(default)]
-    pub fast_queue: bool,
+    fast_queue: bool,
     #[serde(default)]
-    pub optimized_queue: bool,
+    optimized_queue: bool,
     #[serde(default)]
-    pub transaction_number: bool,
+    transaction_number: bool,
     #[serde(default)]
-    pub transaction_number_only_ext29: bool,
+    transaction_number_only_ext29: bool,
+    #[serde(default, rename = "timestamp")]
+    time_stamp: bool,
     #[serde(default)]
-    pub timestamp: bool,
+    filters: bool,
     #[serde(default)]
-    pub filters: bool,
+    info_data: bool,
     #[serde(default)]
-    pub info_data: bool,
-    #[serde(default)]
-    pub distributed_clocks: bool,
-    pub max_slots: u8,
-    pub rx_queue_depth: usize,
-    pub tx_queue_depth: usize,
+    distributed_clocks: bool,
+    max_slots: u8,
+    rx_queue_depth: usize,
+    tx_queue_depth: usize,
 }
 
 /// `configure.bus`: a SocketCAN interface an external IUT opens itself; its
@@ -244,44 +250,14 @@ impl Config {
 }
 
 impl From<&Capabilities> for Caps {
-    fn from(c: &Capabilities) -> Self {
-        Caps {
-            base11: c.base11,
-            ext29: c.ext29,
-            fd: c.fd,
-            fast_queue: c.fast_queue,
-            optimized_queue: c.optimized_queue,
-            transaction_number: c.transaction_number,
-            transaction_number_only_ext29: c.transaction_number_only_ext29,
-            timestamp: c.time_stamp,
-            filters: c.filters,
-            info_data: c.info_data,
-            distributed_clocks: c.distributed_clocks,
-            max_slots: c.max_slots,
-            rx_queue_depth: c.rx_queue_depth,
-            tx_queue_depth: c.tx_queue_depth,
-        }
+    fn from(caps: &Capabilities) -> Self {
+        Caps(caps.clone())
     }
 }
 
 impl From<&Caps> for Capabilities {
-    fn from(c: &Caps) -> Self {
-        Capabilities {
-            base11: c.base11,
-            ext29: c.ext29,
-            fd: c.fd,
-            fast_queue: c.fast_queue,
-            optimized_queue: c.optimized_queue,
-            transaction_number: c.transaction_number,
-            transaction_number_only_ext29: c.transaction_number_only_ext29,
-            time_stamp: c.timestamp,
-            filters: c.filters,
-            info_data: c.info_data,
-            distributed_clocks: c.distributed_clocks,
-            max_slots: c.max_slots,
-            rx_queue_depth: c.rx_queue_depth,
-            tx_queue_depth: c.tx_queue_depth,
-        }
+    fn from(caps: &Caps) -> Self {
+        caps.0.clone()
     }
 }
 
