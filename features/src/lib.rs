@@ -11,7 +11,7 @@ pub mod steps;
 pub mod world;
 
 pub use catalogue::{scenarios, ScenarioInfo};
-pub use world::{set_target, CanWorld, Target};
+pub use world::{set_target, CanWorld, Target, Witness};
 
 mod embedded {
     include!(concat!(env!("OUT_DIR"), "/features.rs"));
@@ -59,24 +59,53 @@ impl cucumber::Parser<Vec<cucumber::gherkin::Feature>> for Embedded {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum ScenarioOutcome {
     Passed,
-    /// Cucumber's report of the failing step.
-    Failed(String),
+    /// Cucumber's report of the failing step, and the requirement families its
+    /// failed check witnesses (empty: every tag of the scenario).
+    Failed {
+        report: String,
+        witness: Witness,
+    },
     /// The IUT itself broke (could not start, broke the protocol): not a non-conformance.
     Error(String),
+}
+
+impl ScenarioOutcome {
+    fn failed(report: String) -> Self {
+        ScenarioOutcome::Failed {
+            report,
+            witness: &[],
+        }
+    }
+
+    /// The tags a failure blames: those of its witness's families, or every
+    /// tag when the witness names none of them.
+    pub fn blamed(witness: Witness, tags: &[String]) -> Vec<String> {
+        let narrowed: Vec<String> = tags
+            .iter()
+            .filter(|tag| witness.iter().any(|family| tag.starts_with(family)))
+            .cloned()
+            .collect();
+        if narrowed.is_empty() {
+            tags.to_vec()
+        } else {
+            narrowed
+        }
+    }
 }
 
 /// Runs the scenario at `line` of `file` against `target`.
 pub fn run_scenario(file: &str, line: usize, target: Target) -> ScenarioOutcome {
     let Some(feature) = catalogue::feature(file).and_then(|f| catalogue::only(f, line)) else {
-        return ScenarioOutcome::Failed(format!("no scenario at {file}:{line}"));
+        return ScenarioOutcome::failed(format!("no scenario at {file}:{line}"));
     };
     // What cucumber's own parser does after reading a file: fill in the outline.
     let feature = match cucumber::feature::Ext::expand_examples(feature) {
         Ok(feature) => feature,
-        Err(error) => return ScenarioOutcome::Failed(format!("{file}:{line}: {error}")),
+        Err(error) => return ScenarioOutcome::failed(format!("{file}:{line}: {error}")),
     };
     set_target(target);
     let _ = world::take_iut_error();
+    let _ = world::take_witness();
     let captured = Captured::default();
     let writer =
         writer::Basic::new(captured.clone(), Coloring::Never, Verbosity::ShowWorld).summarized();
@@ -94,9 +123,12 @@ pub fn run_scenario(file: &str, line: usize, target: Target) -> ScenarioOutcome 
     if let Some(error) = world::take_iut_error() {
         ScenarioOutcome::Error(format!("the IUT broke: {error}\n{output}"))
     } else if result.execution_has_failed() || stats.failed > 0 || result.parsing_errors() > 0 {
-        ScenarioOutcome::Failed(output)
+        ScenarioOutcome::Failed {
+            report: output,
+            witness: world::take_witness(),
+        }
     } else if stats.passed == 0 {
-        ScenarioOutcome::Failed(format!("no scenario ran at line {line} (skipped steps mean a step has no definition):\n{output}"))
+        ScenarioOutcome::failed(format!("no scenario ran at line {line} (skipped steps mean a step has no definition):\n{output}"))
     } else {
         ScenarioOutcome::Passed
     }

@@ -25,6 +25,22 @@ thread_local! {
     /// Set when the IUT itself broke (could not start, broke the protocol):
     /// the scenario's verdict is then `error`, not `fail`.
     static IUT_ERROR: RefCell<Option<String>> = const { RefCell::new(None) };
+    /// The requirement families the failed check of the last scenario witnesses.
+    static WITNESS: RefCell<Witness> = const { RefCell::new(&[]) };
+}
+
+/// Requirement families (id prefixes such as `HS-RX-`) a check witnesses: when
+/// it fails, the scenario blames only its tags of these families.
+pub type Witness = &'static [&'static str];
+
+/// Takes the witness of the last scenario's failed check on this thread
+/// (empty when the failure was not a check that names one).
+pub fn take_witness() -> Witness {
+    WITNESS.with(|w| std::mem::take(&mut *w.borrow_mut()))
+}
+
+pub(crate) fn record_witness(witness: Witness) {
+    WITNESS.with(|w| *w.borrow_mut() = witness);
 }
 
 /// Takes the IUT error of the last scenario on this thread, if any.

@@ -74,7 +74,7 @@ fn every_fault_is_caught_by_a_scenario() {
                 };
                 matches!(
                     run_scenario(&s.file, s.line, target),
-                    ScenarioOutcome::Failed(_)
+                    ScenarioOutcome::Failed { .. }
                 )
             })
             .map(|s| format!("{}:{}", s.file, s.line))
@@ -91,6 +91,46 @@ fn every_fault_is_caught_by_a_scenario() {
         }
     }
     assert!(uncaught.is_empty(), "no scenario catches: {uncaught:?}");
+}
+
+/// A failing scenario blames the tags of the field that differs, not every
+/// tag: a counter that does not wrap breaks HS-RX-005 in the scenario tagged
+/// HS-RX-005 and HS-TX-005 (harness/tests/self_check.rs names the same set
+/// for the lockstep).
+#[test]
+fn a_failing_check_blames_only_the_tags_it_witnesses() {
+    let scenario = scenarios()
+        .unwrap()
+        .into_iter()
+        .find(|s| s.name == "RxCounter wraps from 65535 to 0")
+        .expect("the wrap scenario of rx-handshake.feature");
+    assert_eq!(scenario.requirements, ["HS-RX-005", "HS-TX-005"]);
+    let target = Target {
+        iut: IutKind::SoftDevice {
+            faults: vec![Fault::CounterDoesNotWrap],
+            choices: vec![],
+        },
+        profile: "el6751-mdp".into(),
+        caps: canif_model::config::Capabilities::everything(),
+    };
+    match run_scenario(&scenario.file, scenario.line, target) {
+        ScenarioOutcome::Failed { witness, report } => assert_eq!(
+            ScenarioOutcome::blamed(witness, &scenario.requirements),
+            ["HS-RX-005"],
+            "{report}"
+        ),
+        other => panic!("expected a failure, got {other:?}"),
+    }
+}
+
+/// A failure whose check names no family of the scenario's tags (or no
+/// family at all) blames every tag: never less than was exercised.
+#[test]
+fn a_witness_outside_the_tags_blames_every_tag() {
+    let tags = vec!["FLT-001".to_string(), "HS-RX-004".to_string()];
+    assert_eq!(ScenarioOutcome::blamed(&["HS-RX-"], &tags), ["HS-RX-004"]);
+    assert_eq!(ScenarioOutcome::blamed(&["TS-"], &tags), tags);
+    assert_eq!(ScenarioOutcome::blamed(&[], &tags), tags);
 }
 
 /// A scenario against an IUT that hangs is an error, not a failure.

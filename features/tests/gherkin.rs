@@ -79,7 +79,7 @@ fn main() {
 fn outcome(outcome: ScenarioOutcome) -> Result<(), Failed> {
     match outcome {
         ScenarioOutcome::Passed => Ok(()),
-        ScenarioOutcome::Failed(report) => Err(Failed::from(report)),
+        ScenarioOutcome::Failed { report, .. } => Err(Failed::from(report)),
         ScenarioOutcome::Error(report) => Err(Failed::from(format!("error: {report}"))),
     }
 }

@@ -113,10 +113,12 @@ pub struct ScenarioRun {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum GherkinOutcome {
     Pass,
-    /// `step` is the failing step's line; `report` is cucumber's whole account.
+    /// `step` is the failing step's line; `report` is cucumber's whole account;
+    /// `blamed` the scenario's tags the failed check witnesses.
     Fail {
         step: String,
         report: String,
+        blamed: Vec<String>,
     },
     /// The implementation broke: not a non-conformance.
     Error(String),

@@ -404,8 +404,9 @@ pub fn run_features(kind: &IutKind, plan: &Plan) -> Vec<(String, GherkinRun)> {
         let started = std::time::Instant::now();
         let outcome = match canif_features::run_scenario(&scenario.file, scenario.line, target) {
             canif_features::ScenarioOutcome::Passed => GherkinOutcome::Pass,
-            canif_features::ScenarioOutcome::Failed(report) => GherkinOutcome::Fail {
+            canif_features::ScenarioOutcome::Failed { report, witness } => GherkinOutcome::Fail {
                 step: failing_step(&report),
+                blamed: canif_features::ScenarioOutcome::blamed(witness, &scenario.requirements),
                 report,
             },
             canif_features::ScenarioOutcome::Error(report) => GherkinOutcome::Error(report),

@@ -10,6 +10,8 @@ mod when;
 
 use canif_model::frame::CanId;
 
+use crate::world::Witness;
+
 pub(crate) type StepResult = Result<(), String>;
 
 pub(crate) fn num(text: &str) -> u32 {
@@ -49,6 +51,20 @@ pub(crate) fn check(condition: bool, message: impl FnOnce() -> String) -> StepRe
     } else {
         Err(message())
     }
+}
+
+/// [`check`], and when it fails the scenario blames only its tags of the
+/// `witness` families: a wrong RxCounter in a filter scenario is a handshake
+/// finding, not a filter one.
+pub(crate) fn check_as(
+    witness: Witness,
+    condition: bool,
+    message: impl FnOnce() -> String,
+) -> StepResult {
+    if !condition {
+        crate::world::record_witness(witness);
+    }
+    check(condition, message)
 }
 
 // ---------------------------------------------------------------- Given

@@ -67,15 +67,20 @@ impl ProfileReport {
     }
 }
 
-/// A Gherkin scenario as a check: a failure blames the scenario's tags.
+/// A Gherkin scenario as a check: it covers the scenario's tags, and a
+/// failure blames those its failed check witnesses.
 fn gherkin_check(run: &GherkinRun) -> Check {
     Check {
         evidence: Evidence::Gherkin(run.id.clone()),
         covers: run.requirements.clone(),
         result: match &run.outcome {
             GherkinOutcome::Pass => CheckResult::Pass,
-            GherkinOutcome::Fail { step, report } => CheckResult::Fail(Finding {
-                requirements: run.requirements.clone(),
+            GherkinOutcome::Fail {
+                step,
+                report,
+                blamed,
+            } => CheckResult::Fail(Finding {
+                requirements: blamed.clone(),
                 cause: step.clone(),
                 details: report.clone(),
                 failure: None,
