@@ -30,17 +30,18 @@ pub fn run_scenario(
     scenario: &Scenario,
     steps: impl Iterator<Item = Step>,
 ) -> ScenarioRun {
-    let run = |outcome, cycles, frames| ScenarioRun {
+    let run = |outcome, cycles, (frames, tolerated)| ScenarioRun {
         scenario: scenario.name.clone(),
         covers: scenario.covers.clone(),
         outcome,
         cycles,
         frames_checked: frames,
+        tolerated,
         elapsed: std::time::Duration::ZERO,
     };
     let (mut pair, mut bus) = match start(kind, caps, scenario) {
         Ok(started) => started,
-        Err(error) => return run(Outcome::Error(error), 0, 0),
+        Err(error) => return run(Outcome::Error(error), 0, (0, 0)),
     };
     let result = Lockstep {
         scenario,
@@ -60,8 +61,8 @@ pub fn run_scenario(
     };
     pair.finish();
     match result {
-        Ok(cycles) => run(Outcome::Pass, cycles, pair.frames),
-        Err((outcome, cycle)) => run(outcome, cycle, pair.frames),
+        Ok(cycles) => run(Outcome::Pass, cycles, (pair.frames, pair.tolerated)),
+        Err((outcome, cycle)) => run(outcome, cycle, (pair.frames, pair.tolerated)),
     }
 }
 
@@ -223,6 +224,7 @@ impl Lockstep<'_> {
         if let Some(difference) = difference {
             return Err(self.pair.fail(difference));
         }
+        self.pair.tolerated += u64::from(expected != actual);
         self.plc.device_cycle_done(&actual);
         // The checker judges the images; what the PLC read is not kept (bounded memory).
         drop(self.plc.take_received());

@@ -105,6 +105,10 @@ pub struct ScenarioRun {
     pub outcome: Outcome,
     pub cycles: u64,
     pub frames_checked: u64,
+    /// Cycles and polls in which the IUT differed from the model only where
+    /// the documents leave it open (don't-care bytes, the SYNC1 jitter, the
+    /// bounds of G3): what its pass tolerated.
+    pub tolerated: u64,
     /// Wall time the scenario took.
     pub elapsed: std::time::Duration,
 }

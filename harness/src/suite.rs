@@ -434,6 +434,7 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
                                         ),
                                         cycles: checked,
                                         frames_checked: 0,
+                                        tolerated: 0,
                                         elapsed: std::time::Duration::ZERO,
                                     };
                                 }
@@ -470,6 +471,7 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
                                     outcome: Outcome::Fail(Box::new(failure)),
                                     cycles: checked,
                                     frames_checked: 0,
+                                    tolerated: 0,
                                     elapsed: std::time::Duration::ZERO,
                                 };
                             }
@@ -485,6 +487,7 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
         outcome: Outcome::Pass,
         cycles: checked,
         frames_checked: 0,
+        tolerated: 0,
         elapsed: std::time::Duration::ZERO,
     }
 }
@@ -556,6 +559,7 @@ pub fn run_profile(
                 outcome: Outcome::Error(RunError::Skipped(after.clone())),
                 cycles: 0,
                 frames_checked: 0,
+                tolerated: 0,
                 elapsed: std::time::Duration::ZERO,
             },
             None if crate::interrupt::requested() => break,
