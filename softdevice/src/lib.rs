@@ -259,16 +259,8 @@ impl SoftDevice {
         self.choices.contains(&choice)
     }
 
-    pub fn output_len(&self) -> usize {
+    fn output_len(&self) -> usize {
         6 + usize::from(self.settings.tx_slots) * self.tx_geo.size
-    }
-
-    pub fn input_len(&self) -> usize {
-        self.input.len()
-    }
-
-    pub fn inputs(&self) -> &[u8] {
-        &self.input
     }
 
     fn bump(&self, counter: u16) -> u16 {
