@@ -267,3 +267,47 @@ fn runs_check_real_traffic() {
         result.frames_checked()
     );
 }
+
+/// The command line names faults and choices (`--fault`, `--choice`,
+/// `canif faults`): each name is its own, kebab-case, found again by
+/// `from_name`, and each comes with a description of its own.
+#[test]
+fn every_fault_and_choice_has_a_name_and_a_description_of_its_own() {
+    let kebab = |name: &str| {
+        !name.is_empty()
+            && name.split('-').all(|word| {
+                !word.is_empty()
+                    && word
+                        .chars()
+                        .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit())
+            })
+    };
+    let faults: Vec<(&str, &str)> = Fault::ALL
+        .iter()
+        .map(|f| (f.name(), f.description()))
+        .collect();
+    let choices: Vec<(&str, &str)> = Choice::ALL
+        .iter()
+        .map(|c| (c.name(), c.description()))
+        .collect();
+    for fault in Fault::ALL {
+        assert_eq!(Fault::from_name(fault.name()), Some(fault));
+    }
+    for choice in Choice::ALL {
+        assert_eq!(Choice::from_name(choice.name()), Some(choice));
+    }
+    let all: Vec<(&str, &str)> = faults.into_iter().chain(choices).collect();
+    let names: std::collections::BTreeSet<&str> = all.iter().map(|(n, _)| *n).collect();
+    let descriptions: std::collections::BTreeSet<&str> = all.iter().map(|(_, d)| *d).collect();
+    assert_eq!(names.len(), all.len(), "a name is used twice: {all:?}");
+    assert_eq!(descriptions.len(), all.len(), "a description is used twice");
+    for (name, description) in &all {
+        assert!(kebab(name), "not a kebab-case name: {name:?}");
+        assert!(
+            description.len() > 20,
+            "{name}: no real description: {description:?}"
+        );
+    }
+    assert_eq!(Fault::from_name("no-such-fault"), None);
+    assert_eq!(Choice::from_name("no-such-choice"), None);
+}
