@@ -11,7 +11,7 @@ pub mod steps;
 pub mod world;
 
 pub use catalogue::{scenarios, ScenarioInfo};
-pub use world::{set_target, CanWorld, Target, Witness};
+pub use world::{set_target, CanWorld, Target};
 
 mod embedded {
     include!(concat!(env!("OUT_DIR"), "/features.rs"));
@@ -20,6 +20,7 @@ mod embedded {
 use std::io;
 use std::sync::{Arc, Mutex};
 
+use canif_spec::ReqId;
 use cucumber::writer::Stats as _;
 use cucumber::writer::{self, Coloring, Verbosity};
 use cucumber::{World as _, WriterExt as _};
@@ -59,11 +60,11 @@ impl cucumber::Parser<Vec<cucumber::gherkin::Feature>> for Embedded {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum ScenarioOutcome {
     Passed,
-    /// Cucumber's report of the failing step, and the requirement families its
-    /// failed check witnesses (empty: every tag of the scenario).
+    /// Cucumber's report of the failing step, and the requirements its failed
+    /// check witnesses (empty: every tag of the scenario).
     Failed {
         report: String,
-        witness: Witness,
+        witness: Vec<ReqId>,
     },
     /// The IUT itself broke (could not start, broke the protocol): not a non-conformance.
     Error(String),
@@ -73,22 +74,7 @@ impl ScenarioOutcome {
     fn failed(report: String) -> Self {
         ScenarioOutcome::Failed {
             report,
-            witness: &[],
-        }
-    }
-
-    /// The tags a failure blames: those of its witness's families, or every
-    /// tag when the witness names none of them.
-    pub fn blamed(witness: Witness, tags: &[String]) -> Vec<String> {
-        let narrowed: Vec<String> = tags
-            .iter()
-            .filter(|tag| witness.iter().any(|family| tag.starts_with(family)))
-            .cloned()
-            .collect();
-        if narrowed.is_empty() {
-            tags.to_vec()
-        } else {
-            narrowed
+            witness: Vec::new(),
         }
     }
 }

@@ -10,6 +10,7 @@ use canif_model::frame::Frame;
 use canif_model::image::{ImageLayout, InputImage, MessageRepr, OutputImage};
 use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
+use canif_spec::ReqId;
 use std::cell::RefCell;
 
 /// Who the scenario runs against; set by the runner before each run.
@@ -25,22 +26,18 @@ thread_local! {
     /// Set when the IUT itself broke (could not start, broke the protocol):
     /// the scenario's verdict is then `error`, not `fail`.
     static IUT_ERROR: RefCell<Option<String>> = const { RefCell::new(None) };
-    /// The requirement families the failed check of the last scenario witnesses.
-    static WITNESS: RefCell<Witness> = const { RefCell::new(&[]) };
+    /// The requirements the failed check of the last scenario witnesses.
+    static WITNESS: RefCell<Vec<ReqId>> = const { RefCell::new(Vec::new()) };
 }
 
-/// Requirement families (id prefixes such as `HS-RX-`) a check witnesses: when
-/// it fails, the scenario blames only its tags of these families.
-pub type Witness = &'static [&'static str];
-
-/// Takes the witness of the last scenario's failed check on this thread
-/// (empty when the failure was not a check that names one).
-pub fn take_witness() -> Witness {
+/// Takes the requirements the last scenario's failed check witnesses on this
+/// thread (empty when the failure was not a check that names them).
+pub fn take_witness() -> Vec<ReqId> {
     WITNESS.with(|w| std::mem::take(&mut *w.borrow_mut()))
 }
 
-pub(crate) fn record_witness(witness: Witness) {
-    WITNESS.with(|w| *w.borrow_mut() = witness);
+pub(crate) fn record_witness(witness: &[&[ReqId]]) {
+    WITNESS.with(|w| *w.borrow_mut() = witness.concat());
 }
 
 /// Takes the IUT error of the last scenario on this thread, if any.

@@ -1,5 +1,6 @@
 //! Which requirements a difference in each place of the interface can break.
-//! The scenario's own list narrows them to what it exercises.
+//! The scenario's own list narrows them to what it exercises; a Gherkin check
+//! names the same sets for the fields it reads.
 
 use canif_spec::{req_ids, ReqId};
 
@@ -129,6 +130,23 @@ pub fn narrow(covers: &[ReqId], candidates: &[ReqId]) -> Vec<ReqId> {
         .collect();
     if narrowed.is_empty() {
         candidates.to_vec()
+    } else {
+        narrowed
+    }
+}
+
+/// The tags a failed Gherkin check blames: those among the requirements it
+/// `witnessed`, or every tag when none is. Unlike [`narrow`] it never goes
+/// past the tags: a step fails on what the whole scenario set up, so outside
+/// them nothing says which requirement broke.
+pub fn narrow_tags(tags: &[String], witnessed: &[ReqId]) -> Vec<String> {
+    let narrowed: Vec<String> = tags
+        .iter()
+        .filter(|tag| witnessed.iter().any(|id| id == *tag))
+        .cloned()
+        .collect();
+    if narrowed.is_empty() {
+        tags.to_vec()
     } else {
         narrowed
     }

@@ -16,7 +16,7 @@
 #![forbid(unsafe_code)]
 
 pub mod adapter;
-mod blame;
+pub mod blame;
 pub mod bounds;
 pub mod bus;
 pub mod canopen;

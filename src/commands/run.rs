@@ -406,7 +406,7 @@ pub fn run_features(kind: &IutKind, plan: &Plan) -> Vec<(String, GherkinRun)> {
             canif_features::ScenarioOutcome::Passed => GherkinOutcome::Pass,
             canif_features::ScenarioOutcome::Failed { report, witness } => GherkinOutcome::Fail {
                 step: failing_step(&report),
-                blamed: canif_features::ScenarioOutcome::blamed(witness, &scenario.requirements),
+                blamed: canif_harness::blame::narrow_tags(&scenario.requirements, &witness),
                 report,
             },
             canif_features::ScenarioOutcome::Error(report) => GherkinOutcome::Error(report),

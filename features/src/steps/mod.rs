@@ -10,7 +10,7 @@ mod when;
 
 use canif_model::frame::CanId;
 
-use crate::world::Witness;
+use canif_spec::ReqId;
 
 pub(crate) type StepResult = Result<(), String>;
 
@@ -53,9 +53,12 @@ pub(crate) fn check(condition: bool, message: impl FnOnce() -> String) -> StepRe
     }
 }
 
-/// [`check`], and when it fails the scenario blames only its tags of the
-/// `witness` families: a wrong RxCounter in a filter scenario is a handshake
-/// finding, not a filter one.
+/// The blame sets of the fields a check reads (`canif_harness::blame`).
+pub(crate) type Witness<'a> = &'a [&'static [ReqId]];
+
+/// [`check`], and when it fails the scenario blames only its tags among the
+/// `witness` sets (`canif_harness::blame::narrow_tags`): a wrong RxCounter in
+/// a filter scenario is a handshake finding, not a filter one.
 pub(crate) fn check_as(
     witness: Witness,
     condition: bool,

@@ -1,5 +1,6 @@
 //! What the bus, the PLC and the images must show.
 
+use canif_harness::blame;
 use canif_harness::diff::hex;
 use canif_model::dlc;
 use canif_model::frame::FrameKind;
@@ -7,74 +8,96 @@ use cucumber::then;
 
 use crate::world::CanWorld;
 
-use super::{bytes, check, check_as, num, StepResult};
+use super::{bytes, check, check_as, num, StepResult, Witness};
 
-// What each kind of check witnesses, as requirement families (id prefixes).
-// A failing scenario blames only its tags of the failed check's families, or
-// all its tags when none of them is of those families. ERR- (the rulings on
-// the documents' errors) is in each: a ruling is judged by the field it fixes.
+// What each kind of check witnesses: the blame sets of the harness
+// (canif_harness::blame) for the fields the check reads. A failing scenario
+// blames only its tags among them, or all its tags when none is.
 
 /// Inputs.TxCounter: the acknowledgement of a batch, when it comes and
-/// whether it fits the queue (not the order on the bus: HS-TX-004/006/011).
-const TX_ACKNOWLEDGEMENT: &[&str] = &[
-    "HS-TX-001",
-    "HS-TX-002",
-    "HS-TX-003",
-    "HS-TX-005",
-    "HS-TX-007",
-    "HS-TX-008",
-    "HS-TX-009",
-    "HS-TX-012",
-    "BQ-",
-    "FQ-",
-    "ERR-",
-];
+/// whether it fits the queue (not the order on the bus).
+const TX_ACKNOWLEDGEMENT: Witness = &[blame::TX_COUNTER, blame::TX_EMPTY_BATCH];
 /// What the bus carries: which messages of which batches, in what order, how
-/// many per cycle, when, and with which identifier (not when the batch was
-/// acknowledged: HS-TX-007).
-const TX_PATH: &[&str] = &[
-    "HS-TX-002",
-    "HS-TX-003",
-    "HS-TX-004",
-    "HS-TX-005",
-    "HS-TX-006",
-    "HS-TX-008",
-    "HS-TX-009",
-    "HS-TX-010",
-    "HS-TX-011",
-    "HS-TX-012",
-    "BQ-",
-    "FQ-",
-    "PDX-",
-    "TIM-",
-    "TN-",
-    "LAY-11-",
-    "LAY-29-",
-    "LAY-FD-",
-    "FD-",
-    "ERR-",
+/// many per cycle, when, and with which identifier, length and flags.
+const TX_PATH: Witness = &[
+    blame::TX_MISSING,
+    blame::TX_EXTRA,
+    blame::TX_OTHER_FRAME,
+    blame::TX_DATA,
+    blame::TX_REMOTE,
+    blame::TX_FORMAT,
+    blame::TX_ID_WORD,
+    blame::TX_ID_29,
+    blame::TX_ID_RESERVED,
+    blame::TX_LENGTH,
+    blame::TX_FD_FLAGS,
+    blame::SYNC1_EARLY,
+    blame::SYNC1_LATE,
 ];
 /// Inputs.RxCounter, NoOfRxMessages and what the PLC received: the Rx
-/// handshake, the Rx queue and its overflow, the filters and the layouts.
-const RX_PATH: &[&str] = &[
-    "HS-RX-", "RXQ-", "FLT-", "BQ-", "LAY-11-", "LAY-29-", "LAY-FD-", "FD-", "ERR-",
+/// handshake, the Rx queue, the filters and the message layouts.
+const RX_PATH: Witness = &[
+    blame::RX_UNRELEASED,
+    blame::RX_EMPTY_DELIVERY,
+    blame::RX_ADMISSION,
+    blame::RX_WITHHELD_FAST,
+    blame::RX_WITHHELD,
+    blame::RX_COUNTING,
+    blame::RX_SET,
+    blame::COB_WORD,
+    blame::COB_LOW,
+    blame::COB_RTR,
+    blame::COB_FORMAT,
+    blame::LENGTH,
+    blame::FLAGS,
 ];
 /// The transaction number and when the PLC saw its confirmation.
-const TRANSACTION: &[&str] = &["TN-", "HS-TX-", "PDX-", "ERR-"];
+const TRANSACTION: Witness = &[blame::TRANSACTION_NUMBER, blame::CONFIRMATION];
 /// Which identifier format and RTR a frame or message has.
-const ID_FORMAT: &[&str] = &["LAY-11-", "LAY-29-", "LAY-FD-", "ERR-"];
+const ID_FORMAT: Witness = &[
+    blame::COB_WORD,
+    blame::COB_LOW,
+    blame::COB_RTR,
+    blame::COB_FORMAT,
+    blame::TX_REMOTE,
+    blame::TX_FORMAT,
+    blame::TX_ID_WORD,
+    blame::TX_ID_29,
+];
 /// Lengths, DLCs and padding.
-const LENGTH: &[&str] = &["FD-LEN-", "LAY-GEN-", "LAY-FD-", "ERR-"];
+const LENGTH: Witness = &[
+    blame::LENGTH,
+    blame::TX_LENGTH,
+    blame::TX_PADDING,
+    blame::TX_INVALID,
+];
 /// EDL, BRS and ESI.
-const FD_BITS: &[&str] = &["FD-BIT-", "FD-", "LAY-FD-", "ERR-"];
+const FD_BITS: Witness = &[blame::FLAGS, blame::TX_FD_FLAGS, blame::TX_FORMAT];
 /// Time stamps of received messages.
-const TIME_STAMPS: &[&str] = &["TS-", "ERR-"];
-/// Bytes of the images and their sizes.
-const LAYOUT: &[&str] = &["LAY-", "PROF-", "INFO-", "FD-", "ERR-"];
-/// InfoData.
-const INFO_DATA: &[&str] = &["INFO-", "ERR-"];
+const TIME_STAMPS: Witness = &[blame::TIME_STAMP];
+/// The bytes of a message in the image: every field of it, and where the
+/// messages start.
+const MESSAGE_BYTES: Witness = &[
+    blame::COB_WORD,
+    blame::COB_LOW,
+    blame::COB_RTR,
+    blame::COB_FORMAT,
+    blame::LENGTH,
+    blame::FLAGS,
+    blame::TIME_STAMP,
+    blame::BYTE_ORDER,
+    blame::RX_MESSAGES_OFFSET,
+    blame::RX_MESSAGES_OFFSET_TN,
+];
+/// The sizes of the images and where their regions start.
+const IMAGE_SIZES: Witness = &[
+    blame::INPUT_IMAGE_SIZE,
+    blame::RX_MESSAGES_OFFSET,
+    blame::RX_MESSAGES_OFFSET_TN,
+    blame::INFO_DATA_OFFSET,
+];
 /// When the first frame of a cycle starts.
-const SEND_TIME: &[&str] = &["PDX-", "TIM-", "ERR-"];
+const SEND_TIME: Witness = &[blame::SYNC1_EARLY, blame::SYNC1_LATE];
 
 #[then(regex = r"^Inputs\.(TxCounter|RxCounter|NoOfRxMessages|TransactionNumber) is (\d+)$")]
 fn input_field(world: &mut CanWorld, field: String, value: u32) -> StepResult {
@@ -342,7 +365,7 @@ fn rx_message_bytes(world: &mut CanWorld, slot: usize, expected: String) -> Step
     let image = world.input_image();
     let message = image.rx_message(slot).ok_or("no such slot")?;
     let actual = &message.as_bytes()[..wanted.len()];
-    check_as(LAYOUT, actual == wanted, || {
+    check_as(MESSAGE_BYTES, actual == wanted, || {
         format!(
             "Inputs.RxMessage[{slot}] begins with {}, expected {}",
             hex(actual),
@@ -366,7 +389,7 @@ fn image_sizes(
         layout.info_data_start()
     };
     check_as(
-        LAYOUT,
+        IMAGE_SIZES,
         layout.output_size() == outputs && actual == inputs,
         || {
             format!(
@@ -389,7 +412,7 @@ fn configuration(world: &mut CanWorld, verdict: String) -> StepResult {
 #[then(regex = r"^InfoData\[(\d+)\] is (0x[0-9A-Fa-f]+|\d+)$")]
 fn info_data(world: &mut CanWorld, index: usize, value: String) -> StepResult {
     let actual = world.input_image().info_data(index).ok_or("no InfoData")?;
-    check_as(INFO_DATA, actual == num(&value), || {
+    check_as(&[blame::info_data(index)], actual == num(&value), || {
         format!("InfoData[{index}] = 0x{actual:X}, expected {value}")
     })
 }
