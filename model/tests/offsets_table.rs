@@ -15,17 +15,6 @@ const BEGIN: &str =
     "<!-- image offsets: generated from the model by model/tests/offsets_table.rs -->";
 const END: &str = "<!-- end of image offsets -->";
 
-/// Every message structure an interface can have, in the manual's order.
-const MESSAGES: [&MessageLayout; 7] = [
-    &MessageLayout::BASE11,
-    &MessageLayout::BASE11_TN,
-    &MessageLayout::EXT29,
-    &MessageLayout::EXT29_TN,
-    &MessageLayout::EXT29_TS,
-    &MessageLayout::FD_TX,
-    &MessageLayout::FD_RX,
-];
-
 /// The interface kinds: (name, format, transaction number, time stamp).
 const INTERFACES: [(&str, FrameFormat, bool, bool); 6] = [
     ("11-bit", FrameFormat::Base11, false, false),
@@ -132,7 +121,7 @@ fn message_rows(out: &mut String) {
          | COB ID | Data | TimeStamp |\n|---|---|---|---|---|---|---|---|\n",
     );
     let optional = |field: &Option<Field>| field.as_ref().map_or("—".to_string(), range);
-    for message in MESSAGES {
+    for message in MessageLayout::ALL {
         let length = match &message.length {
             LengthField::InCobIdWord => "bits 0–3 of the COB ID word".to_string(),
             LengthField::Word(field) => format!("{} (UINT)", range(field)),

@@ -13,16 +13,6 @@ use canif_model::image::{LengthField, MessageLayout, MessageRepr, MessageView};
 use common::*;
 use proptest::prelude::*;
 
-const LAYOUTS: [&MessageLayout; 7] = [
-    &MessageLayout::BASE11,
-    &MessageLayout::BASE11_TN,
-    &MessageLayout::EXT29,
-    &MessageLayout::EXT29_TN,
-    &MessageLayout::EXT29_TS,
-    &MessageLayout::FD_TX,
-    &MessageLayout::FD_RX,
-];
-
 fn arb_id(extended_allowed: bool) -> BoxedStrategy<CanId> {
     if extended_allowed {
         prop_oneof![
@@ -83,7 +73,12 @@ fn arb_message(layout: &'static MessageLayout) -> BoxedStrategy<MessageRepr> {
 }
 
 fn arb_layout_and_message() -> impl Strategy<Value = (&'static MessageLayout, MessageRepr)> {
-    (0..LAYOUTS.len()).prop_flat_map(|i| (Just(LAYOUTS[i]), arb_message(LAYOUTS[i])))
+    (0..MessageLayout::ALL.len()).prop_flat_map(|i| {
+        (
+            Just(MessageLayout::ALL[i]),
+            arb_message(MessageLayout::ALL[i]),
+        )
+    })
 }
 
 fn seq_frame(seq: u32) -> Frame {
@@ -102,8 +97,8 @@ proptest! {
 
     /// Covers: LAY-GEN-008, FD-LEN-006
     #[test]
-    fn decoding_any_bytes_never_panics_and_stays_in_bounds(layout in 0..LAYOUTS.len(), bytes in proptest::collection::vec(any::<u8>(), 78)) {
-        let layout = LAYOUTS[layout];
+    fn decoding_any_bytes_never_panics_and_stays_in_bounds(layout in 0..MessageLayout::ALL.len(), bytes in proptest::collection::vec(any::<u8>(), 78)) {
+        let layout = MessageLayout::ALL[layout];
         let view = MessageView::new_checked(&bytes[..layout.size], layout).unwrap();
         let _ = MessageRepr::parse(&view);
         let (message, _) = MessageRepr::parse_clamped(&view);

@@ -117,6 +117,17 @@ impl MessageLayout {
         size: 78,
     };
 
+    /// Every message structure an interface can have, in the manual's order.
+    pub const ALL: [&'static MessageLayout; 7] = [
+        &MessageLayout::BASE11,
+        &MessageLayout::BASE11_TN,
+        &MessageLayout::EXT29,
+        &MessageLayout::EXT29_TN,
+        &MessageLayout::EXT29_TS,
+        &MessageLayout::FD_TX,
+        &MessageLayout::FD_RX,
+    ];
+
     fn max_data(&self) -> usize {
         self.data.len()
     }
