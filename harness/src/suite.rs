@@ -177,7 +177,11 @@ impl ProfileRun {
     }
 }
 
-fn interface(format: FrameFormat, queue: QueueMode, caps: &Capabilities) -> InterfaceConfig {
+pub(crate) fn interface(
+    format: FrameFormat,
+    queue: QueueMode,
+    caps: &Capabilities,
+) -> InterfaceConfig {
     let mut config = InterfaceConfig::new(format, 8.min(caps.max_slots));
     config.queue = queue;
     let tn_allowed = caps.transaction_number
@@ -407,10 +411,22 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
                     vec![],
                     vec![FilterRow::accept_range(0x100, 0x1FF)],
                     vec![FilterRow::accept_range(0x200, 0x100)],
+                    // The edges of FLT-010: one identifier, all 29 bits, and
+                    // code/mask rows at and beyond them.
+                    vec![
+                        FilterRow::accept_range(0x123, 0x123),
+                        FilterRow::accept_range(0, 0x1FFF_FFFF),
+                        FilterRow::accept_code_mask(0x1FFF_FFFF, 0),
+                    ],
+                    vec![FilterRow::accept_code_mask(0x2000_0000, 0)],
+                    vec![FilterRow::accept_code_mask(0x2000_0000, 0x2000_0000)],
                 ] {
-                    for slots in [0u8, 1, 32, 33] {
+                    for (tx_slots, rx_slots) in
+                        [(0u8, 0u8), (1, 1), (32, 32), (33, 33), (8, 33), (0, 8)]
+                    {
                         for dc in [false, true] {
-                            let mut config = InterfaceConfig::new(format, slots);
+                            let mut config = InterfaceConfig::new(format, tx_slots);
+                            config.rx_slots = rx_slots;
                             config.queue = queue;
                             config.transaction_number = tn;
                             config.time_stamp = ts;
@@ -450,7 +466,7 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
                                     cycle: 0,
                                     time: 0,
                                     what: format!(
-                                        "configuration {} with {slots} slots",
+                                        "configuration {} with {tx_slots} Tx and {rx_slots} Rx slots",
                                         describe(&config)
                                     ),
                                     expected: match expected {

@@ -32,14 +32,3 @@ impl Default for CanFrame {
         }
     }
 }
-
-impl CanFrame {
-    /// The bytes on the wire (none for a remote frame).
-    pub fn payload(&self) -> &[u8] {
-        if self.remote {
-            &[]
-        } else {
-            &self.data[..self.len.min(64)]
-        }
-    }
-}
