@@ -24,6 +24,10 @@ pub struct Cli {
 pub enum IutArg {
     SoftDevice,
     Model,
+    /// The reference client of 001 §6 (`--side plc`).
+    Reference,
+    /// The independent soft client, with `--fault` its client faults (`--side plc`).
+    SoftClient,
     /// `exec:COMMAND`: a process speaking the adapter protocol.
     Exec(String),
     /// `lib:PATH`: a shared library built against include/canif.h.
@@ -34,6 +38,8 @@ fn iut_arg(text: &str) -> Result<IutArg, String> {
     match text {
         "softdevice" => Ok(IutArg::SoftDevice),
         "model" => Ok(IutArg::Model),
+        "reference" => Ok(IutArg::Reference),
+        "softclient" => Ok(IutArg::SoftClient),
         _ => match (text.strip_prefix("exec:"), text.strip_prefix("lib:")) {
             (Some(command), _) if !command.trim().is_empty() => {
                 Ok(IutArg::Exec(command.to_string()))
@@ -41,7 +47,11 @@ fn iut_arg(text: &str) -> Result<IutArg, String> {
             (Some(_), _) => Err("exec: needs a command, e.g. exec:'python3 my_iut.py'".into()),
             (_, Some(path)) if !path.is_empty() => Ok(IutArg::Lib(PathBuf::from(path))),
             (_, Some(_)) => Err("lib: needs a path, e.g. lib:./libdevice.so".into()),
-            _ => Err("use softdevice, model, exec:'COMMAND' or lib:PATH".into()),
+            _ => Err(
+                "use softdevice, model, exec:'COMMAND' or lib:PATH (device side), \
+                 reference or softclient (--side plc)"
+                    .into(),
+            ),
         },
     }
 }
@@ -86,15 +96,18 @@ fn seconds(text: &str) -> Result<f64, String> {
 /// Which implementation, and how an external one is run.
 #[derive(Args, Debug, Clone)]
 pub struct IutOptions {
-    /// softdevice (the built-in soft EL6751), model (the reference itself),
-    /// exec:'COMMAND' (a process speaking the adapter protocol), or lib:PATH (a
-    /// shared library built against include/canif.h).
-    #[arg(long, default_value = "softdevice", value_parser = iut_arg)]
-    pub iut: IutArg,
+    /// Device side: softdevice (the built-in soft EL6751, the default), model
+    /// (the reference itself), exec:'COMMAND' (a process speaking the adapter
+    /// protocol), or lib:PATH (a shared library built against include/canif.h).
+    /// PLC side: reference (the reference client, the default) or softclient
+    /// (the independent client; --fault picks it).
+    #[arg(long, value_parser = iut_arg)]
+    pub iut: Option<IutArg>,
     /// How long an external IUT may take to answer one request, in ms.
     #[arg(long, default_value_t = 5000, value_parser = clap::value_parser!(u64).range(1..=600_000))]
     pub timeout_ms: u64,
-    /// Switch on a soft-device fault (repeatable; see `canif faults`).
+    /// Switch on a soft-device fault, or with --side plc a soft-client fault
+    /// (repeatable; see `canif faults`).
     #[arg(long)]
     pub fault: Vec<String>,
     /// Let the soft device take a freedom the documents leave (repeatable; see
@@ -128,6 +141,15 @@ pub struct RealTimeOptions {
     /// state (real CAN FD controllers), so the scenarios' ESI bits are left out.
     #[arg(long)]
     pub esi_from_controller: bool,
+}
+
+/// Which side of the interface is under test.
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SideArg {
+    /// The device (EL6751, FC51xx, CCAT, FC532x or what behaves like one).
+    Device,
+    /// The PLC-side client that fills and reads the image.
+    Plc,
 }
 
 /// Which suite `canif run` runs.
@@ -171,6 +193,14 @@ pub enum Command {
         /// What to check: the CAN interface, or a CANopen node.
         #[arg(long, value_enum, default_value = "interface")]
         suite: Suite,
+        /// Which side is under test: the device, or a PLC-side client (the
+        /// harness then plays the device, the master and the application).
+        #[arg(long, value_enum, default_value = "device")]
+        side: SideArg,
+        /// With --side plc: only these EtherCAT master models (repeatable; see
+        /// `canif faults`); all by default.
+        #[arg(long, value_name = "NAME")]
+        master: Vec<String>,
         /// `sim` (the simulated bus, virtual time) or `socketcan:IFACE` (a Linux
         /// SocketCAN interface, real time; `socketcan:IUT_IFACE,OTHER_IFACE` for
         /// two controllers on one bus).

@@ -23,8 +23,8 @@ use canif_softdevice::Fault;
 use canif_spec::Catalogue;
 use clap::Parser;
 
-use cli::{Cli, Command, ListCommand, Suite};
-use commands::{certify, device, run, spec, tools};
+use cli::{Cli, Command, ListCommand, SideArg, Suite};
+use commands::{certify, device, plc, run, spec, tools};
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
@@ -75,6 +75,8 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
             trace_epoch,
             node,
             coupler_fault,
+            side,
+            master,
         } => {
             let bus = run::bus_choice(&bus, &real_time);
             let selection = canif_harness::Selection {
@@ -97,6 +99,35 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                 Ok(p) => p,
                 Err(code) => return Ok(code),
             };
+            if side == SideArg::Plc {
+                if !bus.is_sim() {
+                    eprintln!("--side plc runs on the simulated bus only (the kernel lane's client run is not built yet)");
+                    return Ok(ExitCode::from(2));
+                }
+                let kind = match commands::resolve_client(&iut) {
+                    Ok(kind) => kind,
+                    Err(code) => return Ok(code),
+                };
+                let masters = match plc::masters(&master) {
+                    Ok(masters) => masters,
+                    Err(code) => return Ok(code),
+                };
+                let plan = plc::PlcPlan {
+                    profiles,
+                    options: canif_harness::client::suite::ClientOptions {
+                        seed,
+                        counter_wrap: !no_counter_wrap,
+                        masters,
+                        selection,
+                    },
+                    product: product.product(),
+                };
+                return Ok(plc::run(&catalogue, &kind, &plan, &report));
+            }
+            if !master.is_empty() {
+                eprintln!("--master applies to --side plc");
+                return Ok(ExitCode::from(2));
+            }
             let started = std::time::SystemTime::now()
                 .duration_since(std::time::UNIX_EPOCH)
                 .unwrap_or_default();
@@ -181,6 +212,17 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
             );
             for choice in canif_softdevice::Choice::ALL {
                 outln!(out, "{:<36} {}", choice.name(), choice.description());
+            }
+            outln!(
+                out,
+                "\nclient faults (--side plc --fault; the soft client):"
+            );
+            for fault in canif_harness::client::faulty::ClientFault::ALL {
+                outln!(out, "{:<36} {}", fault.name(), fault.description());
+            }
+            outln!(out, "\nmaster models (--side plc --master):");
+            for master in canif_harness::client::master::Master::ALL {
+                outln!(out, "{:<36} {}", master.name, master.description());
             }
             ExitCode::SUCCESS
         }

@@ -6,6 +6,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use canif_spec::Side;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use ssh_key::{HashAlg, LineEnding, PrivateKey, PublicKey, SshSig};
@@ -50,7 +51,7 @@ pub struct Certificate {
     pub product: Option<Product>,
     pub profiles: Vec<String>,
     pub seed: u64,
-    pub side: String,
+    pub side: Side,
     pub suite: SuiteKind,
     pub totals: TotalsEntry,
     /// Keyed `profile::REQ-ID`.
@@ -73,7 +74,7 @@ impl Certificate {
             product: m.product.clone(),
             profiles: report.profiles.iter().map(|p| p.profile.clone()).collect(),
             seed: m.seed,
-            side: m.side.clone(),
+            side: m.side,
             suite: m.suite,
             totals: TotalsEntry::of(&report.totals()),
             verdicts: report
@@ -217,7 +218,7 @@ pub fn html(certificate: &Certificate, catalogue: &canif_spec::Catalogue) -> Str
                 esc(&p.name),
                 esc(&p.version)
             )),
-        side = esc(&certificate.side),
+        side = esc(certificate.side.as_str()),
         profiles = esc(&certificate.profiles.join(", ")),
         date = esc(&certificate.date),
         version = esc(&certificate.canif_version),

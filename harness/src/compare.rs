@@ -77,7 +77,11 @@ pub fn mismatches(base: &ReportFile, new: &ReportFile) -> Vec<String> {
         base.meta.iut.clone(),
         new.meta.iut.clone(),
     );
-    differs("side", base.meta.side.clone(), new.meta.side.clone());
+    differs(
+        "side",
+        base.meta.side.to_string(),
+        new.meta.side.to_string(),
+    );
     differs(
         "suite",
         format!("{:?}", base.meta.suite),

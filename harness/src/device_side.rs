@@ -29,6 +29,8 @@ pub struct Ended {
 pub struct DeviceSide {
     device: ModelController,
     bus: SimBus,
+    caps: Capabilities,
+    config: InterfaceConfig,
 }
 
 #[derive(Debug)]
@@ -84,13 +86,28 @@ impl DeviceSide {
     ) -> Result<Self, ConfigError> {
         Ok(DeviceSide {
             device: ModelController {
-                device: Device::new(caps, config)?,
+                device: Device::new(caps, config.clone())?,
                 now: 0,
                 pending: None,
                 ended: Vec::new(),
             },
             bus: SimBus::new(bit_rates),
+            caps: caps.clone(),
+            config,
         })
+    }
+
+    /// The device goes INIT → OP: its counters, queues and the frame it was
+    /// about to send are gone; the bus and the other nodes go on.
+    pub fn restart(&mut self) -> Result<(), ConfigError> {
+        self.device.device = Device::new(&self.caps, self.config.clone())?;
+        self.device.pending = None;
+        Ok(())
+    }
+
+    /// Messages the device received and has not entered in the image.
+    pub fn queued_rx(&self) -> usize {
+        self.device.device.queued_rx()
     }
 
     pub fn layout(&self) -> ImageLayout {

@@ -21,6 +21,7 @@ pub mod bounds;
 pub mod bus;
 pub mod canopen;
 pub mod certificate;
+pub mod client;
 pub mod compare;
 pub mod device_side;
 pub mod diff;

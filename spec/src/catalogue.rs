@@ -31,6 +31,35 @@ pub enum Verification {
     Inspection,
 }
 
+/// Which side of the interface a requirement binds: the device (EL6751,
+/// FC51xx, CCAT, FC532x and what behaves like them) or the PLC-side client
+/// that fills and reads the image.
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, Hash, PartialOrd, Ord, Deserialize, serde::Serialize,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum Side {
+    #[default]
+    Device,
+    Plc,
+}
+
+impl Side {
+    /// As the command line and the reports spell it.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Side::Device => "device",
+            Side::Plc => "plc",
+        }
+    }
+}
+
+impl std::fmt::Display for Side {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
 /// Where a statement comes from.
 #[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -69,6 +98,9 @@ pub struct Requirement {
     /// Which file it was loaded from (not in the YAML).
     #[serde(skip)]
     pub file: String,
+    /// The side its area binds (not in the requirement's YAML: the area's `side`).
+    #[serde(skip)]
+    pub side: Side,
     /// The line of its `id:` (not in the YAML).
     #[serde(skip)]
     pub line: usize,
@@ -92,6 +124,9 @@ impl Requirement {
 pub struct Area {
     pub area: String,
     pub title: String,
+    /// The side the area's requirements bind; `device` when left out.
+    #[serde(default)]
+    pub side: Side,
     pub requirements: Vec<Requirement>,
     #[serde(skip)]
     pub file: String,
@@ -416,6 +451,7 @@ impl Catalogue {
                     let mut from = 1;
                     for requirement in &mut area.requirements {
                         requirement.file = path.clone();
+                        requirement.side = area.side;
                         requirement.line = lines
                             .find(&format!("id: {}", requirement.id), from)
                             .unwrap_or(0);

@@ -18,7 +18,8 @@ mod profile;
 mod req_id;
 
 pub use catalogue::{
-    Area, Capability, Catalogue, Requirement, Ruling, Source, SourceDocument, Status, Verification,
+    Area, Capability, Catalogue, Requirement, Ruling, Side, Source, SourceDocument, Status,
+    Verification,
 };
 pub use error::{SpecError, SpecErrors};
 pub use profile::Profile;

@@ -144,7 +144,12 @@ pub fn canopen_suite(
     run: &CanopenRun,
     report_dir: &std::path::Path,
 ) -> ExitCode {
-    if iut.iut != crate::cli::IutArg::SoftDevice || !iut.fault.is_empty() {
+    if iut
+        .iut
+        .as_ref()
+        .is_some_and(|i| *i != crate::cli::IutArg::SoftDevice)
+        || !iut.fault.is_empty()
+    {
         eprintln!("--suite canopen checks a CANopen node (the simulated coupler, or a node on --bus), not an interface IUT: --iut and --fault do not apply (--coupler-fault does)");
         return ExitCode::from(2);
     }

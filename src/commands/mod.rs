@@ -2,12 +2,15 @@
 
 pub mod certify;
 pub mod device;
+pub mod plc;
 pub mod run;
 pub mod spec;
 pub mod tools;
 
 use std::process::ExitCode;
 
+use canif_harness::client::faulty::ClientFault;
+use canif_harness::client::suite::ClientKind;
 use canif_harness::IutKind;
 use canif_softdevice::{Choice, Fault};
 
@@ -42,7 +45,8 @@ fn soft_device_choices(names: &[String]) -> Result<Vec<Choice>, ExitCode> {
 /// The IUT named on the command line, or the exit code of a usage error.
 pub fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
     let choices = soft_device_choices(&iut.choice)?;
-    if !choices.is_empty() && !matches!(iut.iut, IutArg::SoftDevice) {
+    let arg = iut.iut.clone().unwrap_or(IutArg::SoftDevice);
+    if !choices.is_empty() && !matches!(arg, IutArg::SoftDevice) {
         eprintln!("--choice applies to the soft device only");
         return Err(ExitCode::from(2));
     }
@@ -55,7 +59,7 @@ pub fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
             Err(ExitCode::from(2))
         }
     };
-    Ok(match &iut.iut {
+    Ok(match &arg {
         IutArg::Exec(command) => {
             only_soft(&chosen)?;
             IutKind::Exec {
@@ -76,5 +80,50 @@ pub fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
             only_soft(&chosen)?;
             IutKind::Model
         }
+        IutArg::Reference | IutArg::SoftClient => {
+            eprintln!("--iut reference and softclient are PLC-side clients: add --side plc");
+            return Err(ExitCode::from(2));
+        }
     })
+}
+
+/// The client named on the command line for `--side plc`, or the exit code
+/// of a usage error. A fault without `--iut` picks the soft client.
+pub fn resolve_client(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
+    let faults: Vec<ClientFault> = iut
+        .fault
+        .iter()
+        .map(|name| {
+            ClientFault::from_name(name).ok_or_else(|| {
+                eprintln!("unknown client fault `{name}`; `canif faults` lists them");
+                ExitCode::from(2)
+            })
+        })
+        .collect::<Result<_, _>>()?;
+    if faults.len() > 1 {
+        eprintln!("--side plc: one --fault at a time (the soft client has one defect)");
+        return Err(ExitCode::from(2));
+    }
+    if !iut.choice.is_empty() {
+        eprintln!("--choice applies to the soft device only");
+        return Err(ExitCode::from(2));
+    }
+    match (&iut.iut, faults.first()) {
+        (None | Some(IutArg::SoftClient), fault) if fault.is_some() || iut.iut.is_some() => {
+            Ok(ClientKind::Faulty(fault.copied()))
+        }
+        (None | Some(IutArg::Reference), None) => Ok(ClientKind::Reference),
+        (Some(IutArg::Reference), Some(_)) => {
+            eprintln!("--fault applies to the soft client (--iut softclient), not the reference");
+            Err(ExitCode::from(2))
+        }
+        (Some(other), _) => {
+            eprintln!(
+                "--side plc runs a client: --iut reference or softclient, not {other:?} \
+                 (clients over the adapter protocol and the C ABI are not built yet)"
+            );
+            Err(ExitCode::from(2))
+        }
+        (None, Some(_)) => unreachable!("a fault without --iut is the soft client"),
+    }
 }

@@ -302,6 +302,15 @@ pub fn execute(catalogue: &Catalogue, kind: &IutKind, plan: &Plan) -> RunReport 
                     .filter(|(p, _)| *p == profile.name)
                     .flat_map(|(_, s)| s.requirements.iter().cloned()),
             );
+            let plc_side = catalogue
+                .requirements()
+                .filter(|r| r.side == canif_spec::Side::Plc)
+                .map(|r| {
+                    (
+                        r.id.clone(),
+                        "a PLC-side requirement: exercised by `canif run --side plc`".to_string(),
+                    )
+                });
             let reach = Reach {
                 elsewhere: node_ids
                     .iter()
@@ -313,6 +322,7 @@ pub fn execute(catalogue: &Catalogue, kind: &IutKind, plan: &Plan) -> RunReport 
                                 .into(),
                         )
                     })
+                    .chain(plc_side)
                     .collect(),
                 here,
                 left_out: if left_out.is_empty() && interrupted {
@@ -508,11 +518,49 @@ pub fn self_check(catalogue: &Catalogue, seed: u64) -> ExitCode {
         );
     }
     println!(
-        "\n{} of {} faults caught",
+        "\n{} of {} device faults caught",
         rows.len() - uncaught,
         rows.len()
     );
-    ExitCode::from(u8::from(uncaught > 0))
+    let clients = canif_harness::client::suite::kill_matrix(
+        catalogue,
+        &canif_harness::client::suite::ClientOptions {
+            counter_wrap: false,
+            ..canif_harness::client::suite::ClientOptions::new(seed)
+        },
+        |fault| eprintln!("running client fault {fault} on every profile"),
+    );
+    let mut clients_uncaught = 0;
+    println!("\n| client fault | caught on | requirements that failed |\n|---|---|---|");
+    for row in &clients {
+        let caught = row.caught.iter().filter(|(_, ids)| !ids.is_empty()).count();
+        let mut ids: Vec<&str> = row
+            .caught
+            .iter()
+            .flat_map(|(_, ids)| ids.iter().map(String::as_str))
+            .collect();
+        ids.sort();
+        ids.dedup();
+        if caught == 0 {
+            clients_uncaught += 1;
+        }
+        println!(
+            "| {} | {caught}/{} profiles | {} |",
+            row.fault,
+            row.caught.len(),
+            if ids.is_empty() {
+                "NOT CAUGHT".to_string()
+            } else {
+                ids.join(", ")
+            }
+        );
+    }
+    println!(
+        "\n{} of {} client faults caught",
+        clients.len() - clients_uncaught,
+        clients.len()
+    );
+    ExitCode::from(u8::from(uncaught + clients_uncaught > 0))
 }
 
 /// The bus as the report names it.

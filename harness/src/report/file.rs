@@ -4,7 +4,7 @@
 
 use std::collections::BTreeMap;
 
-use canif_spec::Catalogue;
+use canif_spec::{Catalogue, Side};
 use serde::{Deserialize, Serialize};
 
 use super::RunReport;
@@ -46,8 +46,11 @@ pub struct RunMeta {
     pub seed: u64,
     /// What was left out and why, when the run is not complete.
     pub left_out: Option<String>,
-    /// `device` (the PLC side is issue 13's).
-    pub side: String,
+    /// Which side of the interface was under test.
+    pub side: Side,
+    /// The EtherCAT master models a PLC-side run used (none on the device side).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub masters: Vec<String>,
     /// Seconds since the Unix epoch when the run started.
     pub started_unix: u64,
     pub suite: SuiteKind,
@@ -67,7 +70,8 @@ impl RunMeta {
             product: None,
             seed,
             left_out: None,
-            side: "device".into(),
+            side: Side::Device,
+            masters: Vec::new(),
             started_unix: std::time::SystemTime::now()
                 .duration_since(std::time::UNIX_EPOCH)
                 .map_or(0, |d| d.as_secs()),

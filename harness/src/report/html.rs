@@ -35,6 +35,14 @@ impl RunReport {
                 }),
             ),
             ("side / suite", format!("{} / {:?}", m.side, m.suite)),
+            (
+                "master models",
+                if m.masters.is_empty() {
+                    "not applicable (device side)".into()
+                } else {
+                    m.masters.join(", ")
+                },
+            ),
             ("bus", m.bus.clone()),
             ("seed", m.seed.to_string()),
             ("started", utc(m.started_unix)),

@@ -19,13 +19,18 @@ impl RunReport {
     pub fn provenance(&self) -> String {
         let m = &self.meta;
         format!(
-            "IUT `{}`{} ({} side, {:?} suite) on {}, seed {}, started {}, canif {} ({}), catalogue SHA-256 `{}`, {} ms",
+            "IUT `{}`{} ({} side, {:?} suite{}) on {}, seed {}, started {}, canif {} ({}), catalogue SHA-256 `{}`, {} ms",
             m.iut,
             m.product
                 .as_ref()
                 .map_or(String::new(), |p| format!(" — {} {}", p.name, p.version)),
             m.side,
             m.suite,
+            if m.masters.is_empty() {
+                String::new()
+            } else {
+                format!(", masters {}", m.masters.join(", "))
+            },
             m.bus,
             m.seed,
             utc(m.started_unix),

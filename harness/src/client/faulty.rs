@@ -1,0 +1,342 @@
+//! Deliberately faulty clients, each breaking the client requirements the
+//! way code in the field does (000 §6's samples as printed, ruling R5; the
+//! variants the PLC side's issue names), so the suite proves it notices. A
+//! client here is written against the image views independently of the
+//! reference client; with no fault it must conform too.
+
+use std::collections::VecDeque;
+use std::fmt;
+
+use canif_model::config::QueueMode;
+use canif_model::frame::{CanId, Frame};
+use canif_model::handshake;
+use canif_model::image::{ImageLayout, InputImage, MessageRepr, MessageView, OutputImage};
+
+use super::{Client, IutError, TaskAnswer, TaskIo};
+
+/// One deliberate defect of a client.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ClientFault {
+    SendSample000,
+    DecodeOverNoOfTxMessages,
+    OwnRxCounter,
+    TxCounterPlusOne,
+    WritesBeforeAcknowledge,
+    ReadsAllSlots,
+    IgnoresWrap,
+    OneBasedSlots,
+    NoBoundOnNoOfRxMessages,
+    AcknowledgesAfterFirstMessage,
+    TransactionNumberZero,
+    DropsRtr,
+    FastQueueRereads,
+    IgnoresExtendedFlag,
+    NoOfTxMessagesIsTheSlotCount,
+    RestartReadsAllSlots,
+    IgnoresRxCounterZero,
+}
+
+impl ClientFault {
+    pub const ALL: [ClientFault; 17] = [
+        ClientFault::SendSample000,
+        ClientFault::DecodeOverNoOfTxMessages,
+        ClientFault::OwnRxCounter,
+        ClientFault::TxCounterPlusOne,
+        ClientFault::WritesBeforeAcknowledge,
+        ClientFault::ReadsAllSlots,
+        ClientFault::IgnoresWrap,
+        ClientFault::OneBasedSlots,
+        ClientFault::NoBoundOnNoOfRxMessages,
+        ClientFault::AcknowledgesAfterFirstMessage,
+        ClientFault::TransactionNumberZero,
+        ClientFault::DropsRtr,
+        ClientFault::FastQueueRereads,
+        ClientFault::IgnoresExtendedFlag,
+        ClientFault::NoOfTxMessagesIsTheSlotCount,
+        ClientFault::RestartReadsAllSlots,
+        ClientFault::IgnoresRxCounterZero,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ClientFault::SendSample000 => "send-sample-000",
+            ClientFault::DecodeOverNoOfTxMessages => "decode-over-no-of-tx-messages",
+            ClientFault::OwnRxCounter => "own-rx-counter",
+            ClientFault::TxCounterPlusOne => "tx-counter-plus-one",
+            ClientFault::WritesBeforeAcknowledge => "writes-before-acknowledge",
+            ClientFault::ReadsAllSlots => "reads-all-slots",
+            ClientFault::IgnoresWrap => "ignores-wrap",
+            ClientFault::OneBasedSlots => "one-based-slots",
+            ClientFault::NoBoundOnNoOfRxMessages => "no-bound-on-no-of-rx-messages",
+            ClientFault::AcknowledgesAfterFirstMessage => "acknowledges-after-first-message",
+            ClientFault::TransactionNumberZero => "transaction-number-zero",
+            ClientFault::DropsRtr => "drops-rtr",
+            ClientFault::FastQueueRereads => "fast-queue-rereads",
+            ClientFault::IgnoresExtendedFlag => "ignores-extended-flag",
+            ClientFault::NoOfTxMessagesIsTheSlotCount => "no-of-tx-messages-is-the-slot-count",
+            ClientFault::RestartReadsAllSlots => "restart-reads-all-slots",
+            ClientFault::IgnoresRxCounterZero => "ignores-rx-counter-zero",
+        }
+    }
+
+    pub fn description(self) -> &'static str {
+        match self {
+            ClientFault::SendSample000 => {
+                "000 §6's send sample as printed: loops 0 to NumberOfMessagesToSend, one slot too many"
+            }
+            ClientFault::DecodeOverNoOfTxMessages => {
+                "000 §6's 11-bit decode sample as printed: reads NoOfTxMessages messages, not NoOfRxMessages"
+            }
+            ClientFault::OwnRxCounter => {
+                "acknowledges Rx by incrementing a counter of its own instead of copying Inputs.RxCounter"
+            }
+            ClientFault::TxCounterPlusOne => {
+                "Outputs.TxCounter := Outputs.TxCounter + 1 (000 §6) with Outputs the buffer the master hands it, not resynchronised from Inputs.TxCounter"
+            }
+            ClientFault::WritesBeforeAcknowledge => {
+                "writes a new batch whenever it has messages, without waiting for the acknowledge"
+            }
+            ClientFault::ReadsAllSlots => "reads every Rx slot instead of NoOfRxMessages",
+            ClientFault::IgnoresWrap => {
+                "compares the counters with > and increments without the wrap at 0xFFFF"
+            }
+            ClientFault::OneBasedSlots => "numbers the Tx and Rx slots from 1",
+            ClientFault::NoBoundOnNoOfRxMessages => {
+                "reads NoOfRxMessages messages even when there are fewer slots"
+            }
+            ClientFault::AcknowledgesAfterFirstMessage => {
+                "acknowledges after reading only the first message of a batch"
+            }
+            ClientFault::TransactionNumberZero => "writes transaction number 0 into every Tx message",
+            ClientFault::DropsRtr => "writes remote frames as data frames (the RTR bit lost)",
+            ClientFault::FastQueueRereads => {
+                "with the Fast CAN Queue never writes Outputs.RxCounter, so it reads the same batch again"
+            }
+            ClientFault::IgnoresExtendedFlag => {
+                "decodes Rx messages without the 29-bit flag (every identifier as 11 bits)"
+            }
+            ClientFault::NoOfTxMessagesIsTheSlotCount => {
+                "writes NoOfTxMessages = the Tx slots, however many messages it wrote"
+            }
+            ClientFault::RestartReadsAllSlots => {
+                "after a PLC restart reads every Rx slot once, to be sure nothing is missed"
+            }
+            ClientFault::IgnoresRxCounterZero => {
+                "takes Inputs.RxCounter = 0 for a device with nothing yet, so it never acknowledges a restarted device"
+            }
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<ClientFault> {
+        ClientFault::ALL.into_iter().find(|f| f.name() == name)
+    }
+}
+
+impl fmt::Display for ClientFault {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A client with at most one fault.
+pub struct FaultyClient {
+    layout: ImageLayout,
+    queue: QueueMode,
+    fault: Option<ClientFault>,
+    /// The whole output image as this program keeps it.
+    image: Vec<u8>,
+    to_send: VecDeque<MessageRepr>,
+    own_rx_counter: u16,
+    /// No task has run since the program started.
+    started: bool,
+}
+
+impl FaultyClient {
+    pub fn new(layout: ImageLayout, queue: QueueMode, fault: Option<ClientFault>) -> Self {
+        FaultyClient {
+            layout,
+            queue,
+            fault,
+            image: vec![0; layout.output_size()],
+            to_send: VecDeque::new(),
+            own_rx_counter: 0,
+            started: true,
+        }
+    }
+
+    fn has(&self, fault: ClientFault) -> bool {
+        self.fault == Some(fault)
+    }
+
+    /// The slot a program means by index `n`.
+    fn slot(&self, n: usize) -> usize {
+        n + usize::from(self.has(ClientFault::OneBasedSlots))
+    }
+
+    fn read(&mut self, inputs: &[u8], delivered: &mut Vec<MessageRepr>) -> Result<(), IutError> {
+        let layout = self.layout;
+        let image = InputImage::new_checked(&inputs[..layout.input_size()], layout)
+            .map_err(|e| IutError(e.to_string()))?;
+        let outputs = OutputImage::new_checked(&self.image[..], layout)
+            .map_err(|e| IutError(e.to_string()))?;
+        let (seen, mine, tx_count) = (
+            image.rx_counter(),
+            outputs.rx_counter(),
+            outputs.no_of_tx_messages(),
+        );
+        let fresh = match self.fault {
+            Some(ClientFault::IgnoresWrap) => seen > mine,
+            Some(ClientFault::IgnoresRxCounterZero) => seen != 0 && seen != mine,
+            _ => handshake::new_messages(mine, seen),
+        };
+        let first = std::mem::take(&mut self.started);
+        if !fresh {
+            return Ok(());
+        }
+        let count = match self.fault {
+            Some(ClientFault::DecodeOverNoOfTxMessages) => usize::from(tx_count),
+            Some(ClientFault::ReadsAllSlots) => layout.rx_slots,
+            Some(ClientFault::RestartReadsAllSlots) if first => layout.rx_slots,
+            Some(ClientFault::NoBoundOnNoOfRxMessages) => usize::from(image.no_of_rx_messages()),
+            Some(ClientFault::AcknowledgesAfterFirstMessage) => {
+                usize::from(image.no_of_rx_messages()).min(1)
+            }
+            _ => usize::from(image.no_of_rx_messages()).min(layout.rx_slots),
+        };
+        for n in 0..count {
+            // Where slot n lies in the master's memory, whether or not it is
+            // one of the image's slots: a C driver would read it all the same.
+            let range = layout.rx_slot(self.slot(n));
+            let Some(bytes) = inputs.get(range) else {
+                break;
+            };
+            let view = MessageView::new_checked(bytes, layout.rx_message)
+                .map_err(|e| IutError(e.to_string()))?;
+            let mut message = MessageRepr::parse_clamped(&view).0;
+            if self.has(ClientFault::IgnoresExtendedFlag) {
+                if let CanId::Extended(raw) = message.frame.id {
+                    message.frame.id = CanId::Standard((raw & 0x7FF) as u16);
+                }
+            }
+            delivered.push(message);
+        }
+        let fault = self.fault;
+        let mut outputs = OutputImage::new_checked(&mut self.image[..], layout)
+            .map_err(|e| IutError(e.to_string()))?;
+        match fault {
+            Some(ClientFault::OwnRxCounter) => {
+                let own = handshake::next(self.own_rx_counter);
+                outputs.set_rx_counter(own);
+                self.own_rx_counter = own;
+            }
+            Some(ClientFault::FastQueueRereads) if self.queue == QueueMode::Fast => {}
+            _ => outputs.set_rx_counter(seen),
+        }
+        Ok(())
+    }
+
+    fn write(&mut self, inputs: &[u8], buffer: &mut [u8]) -> Result<(), IutError> {
+        let layout = self.layout;
+        let image = InputImage::new_checked(&inputs[..layout.input_size()], layout)
+            .map_err(|e| IutError(e.to_string()))?;
+        let mine = OutputImage::new_checked(&self.image[..], layout)
+            .map_err(|e| IutError(e.to_string()))?
+            .tx_counter();
+        let ready = match self.fault {
+            Some(ClientFault::WritesBeforeAcknowledge) => true,
+            _ => handshake::ready_to_send(mine, image.tx_counter()),
+        };
+        if !ready || self.to_send.is_empty() {
+            return Ok(());
+        }
+        let count = self.to_send.len().min(layout.tx_slots);
+        // 000's loop runs to NumberOfMessagesToSend inclusive.
+        let written = count + usize::from(self.has(ClientFault::SendSample000));
+        for n in 0..written {
+            let message = if n < count {
+                self.to_send.pop_front()
+            } else {
+                self.to_send.front().copied()
+            };
+            let Some(mut message) = message.or(Some(MessageRepr {
+                transaction_number: 0,
+                frame: Frame::classic(CanId::Standard(0), &[]).expect("an empty frame"),
+                time_stamp: 0,
+            })) else {
+                break;
+            };
+            if self.has(ClientFault::TransactionNumberZero) {
+                message.transaction_number = 0;
+            }
+            if self.has(ClientFault::DropsRtr) && message.frame.is_remote() {
+                let zeros = [0u8; 8];
+                message.frame =
+                    Frame::classic(message.frame.id, &zeros[..usize::from(message.frame.len())])
+                        .expect("a remote frame asks at most 8 bytes");
+            }
+            let range = layout.tx_slot(self.slot(n));
+            let size = self.image.len();
+            // A slot past the image lands in what the master maps behind it.
+            let target: &mut [u8] = if range.end <= size {
+                &mut self.image[range]
+            } else if let Some(behind) = buffer.get_mut(range) {
+                behind
+            } else {
+                break;
+            };
+            let mut view = MessageView::new_checked(target, layout.tx_message)
+                .map_err(|e| IutError(e.to_string()))?;
+            message
+                .emit(&mut view)
+                .map_err(|e| IutError(e.to_string()))?;
+        }
+        let mut outputs = OutputImage::new_checked(&mut self.image[..], layout)
+            .map_err(|e| IutError(e.to_string()))?;
+        let declared = match self.fault {
+            Some(ClientFault::NoOfTxMessagesIsTheSlotCount) => layout.tx_slots,
+            _ => count,
+        };
+        outputs.set_no_of_tx_messages(declared as u16);
+        let next = match self.fault {
+            Some(ClientFault::IgnoresWrap) => image.tx_counter().saturating_add(1),
+            Some(ClientFault::TxCounterPlusOne | ClientFault::WritesBeforeAcknowledge) => {
+                handshake::next(mine)
+            }
+            _ => handshake::next(image.tx_counter()),
+        };
+        outputs.set_tx_counter(next);
+        Ok(())
+    }
+}
+
+impl Client for FaultyClient {
+    fn task(&mut self, io: TaskIo<'_>) -> Result<TaskAnswer, IutError> {
+        let layout = self.layout;
+        if io.inputs.len() < layout.input_size() || io.outputs.len() < layout.output_size() {
+            return Err(IutError(
+                "the images handed to the client are too short".into(),
+            ));
+        }
+        let size = layout.output_size();
+        if self.has(ClientFault::TxCounterPlusOne) {
+            // The program's Outputs are the buffer the master hands it.
+            self.image.copy_from_slice(&io.outputs[..size]);
+        }
+        let mut answer = TaskAnswer::default();
+        for (index, request) in io.requests.iter().enumerate() {
+            let mut scratch = vec![0u8; layout.tx_message.size];
+            let fits = MessageView::new_checked(&mut scratch[..], layout.tx_message)
+                .ok()
+                .is_some_and(|mut view| request.emit(&mut view).is_ok());
+            if fits {
+                self.to_send.push_back(*request);
+            } else {
+                answer.refused.push(index);
+            }
+        }
+        self.read(io.inputs, &mut answer.delivered)?;
+        self.write(io.inputs, io.outputs)?;
+        io.outputs[..size].copy_from_slice(&self.image);
+        Ok(answer)
+    }
+}

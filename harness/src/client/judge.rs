@@ -1,0 +1,636 @@
+//! The client requirements (`spec/requirements/client.yaml`, rulings P1–P5),
+//! judged task by task from what the harness sees: the input image the task
+//! was handed, the output image it left, what it delivered to its
+//! application, the batches the device entered and the frames the device
+//! sent. Pure: the rig feeds it, time is the task's number.
+
+use std::collections::VecDeque;
+
+use canif_model::config::QueueMode;
+use canif_model::frame::Frame;
+use canif_model::handshake;
+use canif_model::image::{ImageLayout, InputImage, MessageRepr, OutputImage};
+use canif_spec::{req_ids, ReqId};
+
+use super::master::NEIGHBOUR_PATTERN;
+
+pub const TX_REQUEST: &[ReqId] = req_ids!["CL-TX-001"];
+pub const TX_UNTOUCHED: &[ReqId] = req_ids!["CL-TX-002"];
+pub const TX_ONCE: &[ReqId] = req_ids!["CL-TX-003"];
+pub const TX_ENCODING: &[ReqId] = req_ids!["CL-TX-004"];
+pub const TX_COUNT: &[ReqId] = req_ids!["CL-TX-005"];
+pub const RX_ACKNOWLEDGE: &[ReqId] = req_ids!["CL-RX-001"];
+pub const RX_ONCE: &[ReqId] = req_ids!["CL-RX-002"];
+pub const RX_DECODING: &[ReqId] = req_ids!["CL-RX-003"];
+pub const IMAGE_BOUNDS: &[ReqId] = req_ids!["CL-IMG-001"];
+pub const FAST_QUEUE: &[ReqId] = req_ids!["CL-FQ-001"];
+pub const PLC_RESTART: &[ReqId] = req_ids!["CL-RST-001"];
+pub const DEVICE_RESTART: &[ReqId] = req_ids!["CL-RST-002"];
+pub const TRANSACTION_NUMBERS: &[ReqId] = req_ids!["CL-TN-001"];
+
+/// What a client did wrong, before the rig adds where.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Breach {
+    pub requirements: &'static [ReqId],
+    pub what: String,
+    pub expected: String,
+    pub actual: String,
+}
+
+fn breach(
+    requirements: &'static [ReqId],
+    what: impl Into<String>,
+    expected: impl Into<String>,
+    actual: impl Into<String>,
+) -> Result<(), Breach> {
+    Err(Breach {
+        requirements,
+        what: what.into(),
+        expected: expected.into(),
+        actual: actual.into(),
+    })
+}
+
+/// A batch the device entered in the input image.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct RxBatch {
+    counter: u16,
+    messages: VecDeque<MessageRepr>,
+    /// The client was handed an image showing it (in a task it ran).
+    shown: bool,
+}
+
+/// A batch the client wrote and the device has not acknowledged in its view.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct TxBatch {
+    counter: u16,
+    count: u16,
+    slots: Vec<u8>,
+}
+
+/// One task as the judge sees it.
+#[derive(Debug, Clone, Copy)]
+pub struct TaskSeen<'a> {
+    /// The input image the task was handed (without the neighbour bytes).
+    pub inputs: &'a [u8],
+    /// The output image the device held before the task.
+    pub before: &'a [u8],
+    /// The output buffer the task left, neighbour bytes behind.
+    pub after: &'a [u8],
+    /// The requests the client took (those it refused are left out).
+    pub accepted: &'a [MessageRepr],
+    pub delivered: &'a [MessageRepr],
+}
+
+/// The judge of one client run.
+#[derive(Debug, Clone)]
+pub struct Judge {
+    layout: ImageLayout,
+    queue: QueueMode,
+    /// Accepted requests, in order.
+    requests: Vec<MessageRepr>,
+    /// How many of them the client handed over in batches.
+    batched: usize,
+    /// The transaction number the client wrote for each request handed over.
+    numbers: Vec<u16>,
+    /// How many of them reached the bus.
+    sent: usize,
+    /// Frames the device may send once more (a device restart re-takes the
+    /// batch in the image, G1).
+    may_repeat: VecDeque<Frame>,
+    pending: Option<TxBatch>,
+    /// Batches the device entered and the client has not delivered, oldest first.
+    rx: VecDeque<RxBatch>,
+    /// The batch delivered last, to tell a duplicate from a wrong message.
+    last_delivered: Option<RxBatch>,
+    /// The device's RxCounter after its last cycle.
+    device_rx_counter: u16,
+    /// The RxCounter of the last input image the client was handed.
+    seen_rx_counter: u16,
+    /// P3: the one batch a restarted client may deliver again or drop.
+    restart_batch: Option<u16>,
+    /// The first task after a PLC restart.
+    restarted: bool,
+    /// A device restart happened at this task, and requests were waiting.
+    device_restart: Option<u64>,
+    /// A device restart happened in this run.
+    device_restarted: bool,
+}
+
+impl Judge {
+    pub fn new(layout: ImageLayout, queue: QueueMode) -> Self {
+        Judge {
+            layout,
+            queue,
+            requests: Vec::new(),
+            batched: 0,
+            numbers: Vec::new(),
+            sent: 0,
+            may_repeat: VecDeque::new(),
+            pending: None,
+            rx: VecDeque::new(),
+            last_delivered: None,
+            device_rx_counter: 0,
+            seen_rx_counter: 0,
+            restart_batch: None,
+            restarted: false,
+            device_restart: None,
+            device_restarted: false,
+        }
+    }
+
+    /// The device's RxCounter after its last cycle.
+    pub fn device_rx_counter(&self) -> u16 {
+        self.device_rx_counter
+    }
+
+    /// Requests accepted and not yet handed over (what a restart loses).
+    pub fn waiting(&self) -> usize {
+        self.requests.len() - self.batched
+    }
+
+    /// The device's cycle left this input image.
+    pub fn device_cycle(&mut self, inputs: &[u8]) {
+        let Ok(image) = InputImage::new_checked(inputs, self.layout) else {
+            return;
+        };
+        let counter = image.rx_counter();
+        if counter == self.device_rx_counter {
+            return;
+        }
+        self.device_rx_counter = counter;
+        let count = usize::from(image.no_of_rx_messages()).min(self.layout.rx_slots);
+        let messages = (0..count)
+            .filter_map(|slot| image.rx_message(slot))
+            .map(|view| MessageRepr::parse_clamped(&view).0)
+            .collect();
+        self.rx.push_back(RxBatch {
+            counter,
+            messages,
+            shown: false,
+        });
+    }
+
+    /// The device sent a frame on the bus.
+    pub fn device_sent(&mut self, frame: &Frame) -> Result<(), Breach> {
+        if self.requests.get(self.sent).map(|r| &r.frame) == Some(frame) {
+            self.sent += 1;
+            return Ok(());
+        }
+        if self.may_repeat.front() == Some(frame) {
+            self.may_repeat.pop_front();
+            return Ok(());
+        }
+        let expected = match self.requests.get(self.sent) {
+            Some(next) => format!("request #{} {}", self.sent, next.frame),
+            None => "no frame (every request was sent)".into(),
+        };
+        let what = if self.requests[..self.sent].iter().any(|r| r.frame == *frame) {
+            "a frame sent twice"
+        } else if self.requests[self.sent..].iter().any(|r| r.frame == *frame) {
+            "a frame sent out of order"
+        } else {
+            "a frame the application never asked for"
+        };
+        breach(TX_ONCE, what, expected, frame.to_string())
+    }
+
+    /// The PLC restarted: its program and what it had not handed over are
+    /// gone, and its last batch too if the device had not seen it yet (the
+    /// device's last cycle saw Outputs.TxCounter `device_saw`).
+    pub fn plc_restarted(&mut self, device_saw: u16) {
+        let unseen = self.pending.as_ref().filter(|p| p.counter != device_saw);
+        if let Some(pending) = unseen {
+            self.batched -= usize::from(pending.count);
+            self.numbers.truncate(self.batched);
+        }
+        self.requests.truncate(self.batched);
+        self.restarted = true;
+        self.restart_batch = Some(self.seen_rx_counter);
+        // What it had handed over may still be in the image: the device takes
+        // the next change of the counter as a batch (G1), and the new program
+        // starts without a pending batch.
+        self.pending = None;
+    }
+
+    /// The device restarted at `task`: what it had accepted and not sent is
+    /// lost, and it takes the batch in the output image once more. Of the
+    /// batches it had entered, the client can still see those up to the one
+    /// with RxCounter `visible` (the master read it already); the others are lost.
+    pub fn device_restarted(&mut self, task: u64, outputs: &[u8], visible: u16) {
+        self.sent = self.batched;
+        self.may_repeat = OutputImage::new_checked(outputs, self.layout)
+            .map(|image| {
+                let count = usize::from(image.no_of_tx_messages()).min(self.layout.tx_slots);
+                (0..count)
+                    .filter_map(|slot| image.tx_message(slot))
+                    .map(|view| MessageRepr::parse_clamped(&view).0.frame)
+                    .collect()
+            })
+            .unwrap_or_default();
+        let keep = self
+            .rx
+            .iter()
+            .position(|b| b.counter == visible)
+            .map_or(0, |at| at + 1);
+        self.rx.truncate(keep);
+        self.device_rx_counter = 0;
+        self.pending = None;
+        self.device_restart = Some(task);
+        self.device_restarted = true;
+    }
+
+    /// One task the client ran.
+    pub fn task(&mut self, task: u64, seen: TaskSeen<'_>, deadline: u64) -> Result<(), Breach> {
+        let layout = self.layout;
+        let size = layout.output_size();
+        if seen.after[size..].iter().any(|b| *b != NEIGHBOUR_PATTERN) {
+            return breach(
+                IMAGE_BOUNDS,
+                "the bytes behind the output image",
+                format!("untouched ({NEIGHBOUR_PATTERN:02X} …)"),
+                "written",
+            );
+        }
+        if seen.delivered.len() > layout.rx_slots {
+            return breach(
+                IMAGE_BOUNDS,
+                "messages read in one task",
+                format!("at most the {} Rx slots", layout.rx_slots),
+                seen.delivered.len().to_string(),
+            );
+        }
+        let inputs = InputImage::new_checked(seen.inputs, layout).map_err(size_breach)?;
+        let before = OutputImage::new_checked(seen.before, layout).map_err(size_breach)?;
+        let after = OutputImage::new_checked(&seen.after[..size], layout).map_err(size_breach)?;
+        self.requests.extend_from_slice(seen.accepted);
+        self.judge_rx(&inputs, &before, &after, seen.delivered)?;
+        self.judge_tx(&inputs, &before, &after)?;
+        if let Some(restart) = self.device_restart {
+            if self.pending.is_some() || self.waiting() == 0 {
+                self.device_restart = None;
+            } else if task > restart + deadline {
+                return breach(
+                    DEVICE_RESTART,
+                    "a new batch after the device restart",
+                    format!("within {deadline} tasks of task {restart}"),
+                    format!("none by task {task}, {} requests waiting", self.waiting()),
+                );
+            }
+        }
+        self.restarted = false;
+        Ok(())
+    }
+
+    fn judge_rx(
+        &mut self,
+        inputs: &InputImage<&[u8]>,
+        before: &OutputImage<&[u8]>,
+        after: &OutputImage<&[u8]>,
+        delivered: &[MessageRepr],
+    ) -> Result<(), Breach> {
+        let counter = inputs.rx_counter();
+        let fresh = counter != self.seen_rx_counter;
+        self.seen_rx_counter = counter;
+        if fresh {
+            self.skip_unshown(counter)?;
+        }
+        let restart_batch = self.restart_batch.take();
+        let mut delivered = delivered;
+        // P3: a restarted client may deliver the batch it finds once more.
+        if let (Some(again), Some(last)) = (restart_batch, &self.last_delivered) {
+            let n = last.messages.len();
+            if last.counter == again
+                && delivered.len() >= n
+                && delivered[..n].iter().eq(last.messages.iter())
+            {
+                delivered = &delivered[n..];
+            }
+        }
+        for message in delivered {
+            // P3 allows one batch; more is the restart's fault.
+            self.take_delivered(message)
+                .map_err(|breach| match restart_batch {
+                    Some(_) => Breach {
+                        requirements: PLC_RESTART,
+                        ..breach
+                    },
+                    None => breach,
+                })?;
+        }
+        if self.queue != QueueMode::Fast && after.rx_counter() != before.rx_counter() {
+            if after.rx_counter() != counter {
+                return breach(
+                    RX_ACKNOWLEDGE,
+                    "Outputs.RxCounter",
+                    format!("Inputs.RxCounter {counter}"),
+                    after.rx_counter().to_string(),
+                );
+            }
+            let undelivered = self.rx.front().is_some_and(|b| b.counter == counter);
+            if undelivered && restart_batch.is_none() {
+                return breach(
+                    RX_ACKNOWLEDGE,
+                    "messages read before the acknowledge",
+                    format!("NoOfRxMessages = {}", inputs.no_of_rx_messages()),
+                    format!(
+                        "{} left unread",
+                        self.rx.front().map_or(0, |b| b.messages.len())
+                    ),
+                );
+            }
+            if undelivered {
+                self.rx.pop_front(); // P3: dropped once
+            }
+        }
+        Ok(())
+    }
+
+    /// The client sees RxCounter `counter`: batches before it it never saw.
+    fn skip_unshown(&mut self, counter: u16) -> Result<(), Breach> {
+        let Some(at) = self.rx.iter().position(|b| b.counter == counter) else {
+            return Ok(());
+        };
+        for batch in self.rx.drain(..at).collect::<Vec<_>>() {
+            let lost_with_restart = self.restart_batch == Some(batch.counter);
+            match self.queue {
+                QueueMode::Fast if batch.shown && !lost_with_restart => {
+                    return breach(
+                        FAST_QUEUE,
+                        format!("the messages of RxCounter {}", batch.counter),
+                        "read in the task that saw the new RxCounter",
+                        format!("{} never delivered", batch.messages.len()),
+                    )
+                }
+                QueueMode::Fast => {} // P4: a missed task cycle loses them
+                _ if lost_with_restart => {}
+                _ => {
+                    return breach(
+                        RX_ONCE,
+                        format!("the messages of RxCounter {}", batch.counter),
+                        "delivered before the next batch",
+                        format!("{} never delivered", batch.messages.len()),
+                    )
+                }
+            }
+        }
+        if let Some(front) = self.rx.front_mut() {
+            front.shown = true;
+        }
+        Ok(())
+    }
+
+    fn take_delivered(&mut self, message: &MessageRepr) -> Result<(), Breach> {
+        let expected = self.rx.front().and_then(|b| b.messages.front()).copied();
+        if expected.as_ref() == Some(message) {
+            let batch = self.rx.front_mut().expect("a front message has a batch");
+            let repr = batch.messages.pop_front().expect("checked above");
+            let done = batch.messages.is_empty();
+            let entry = self.last_delivered.get_or_insert_with(|| RxBatch {
+                counter: batch.counter,
+                messages: VecDeque::new(),
+                shown: true,
+            });
+            if entry.counter != batch.counter {
+                *entry = RxBatch {
+                    counter: batch.counter,
+                    messages: VecDeque::new(),
+                    shown: true,
+                };
+            }
+            entry.messages.push_back(repr);
+            if done {
+                self.rx.pop_front();
+            }
+            return Ok(());
+        }
+        let described = expected.map_or("no message (all were delivered)".into(), |m| {
+            m.frame.to_string()
+        });
+        let again = self
+            .last_delivered
+            .as_ref()
+            .is_some_and(|b| b.messages.contains(message));
+        let later = self
+            .rx
+            .iter()
+            .flat_map(|b| b.messages.iter())
+            .any(|m| m == message);
+        let (ids, what) = match (again, later, expected) {
+            (true, _, _) if self.queue == QueueMode::Fast => {
+                (FAST_QUEUE, "a message delivered twice")
+            }
+            (true, _, _) => (RX_ONCE, "a message delivered twice"),
+            (_, true, _) => (RX_ONCE, "a message delivered out of order"),
+            (_, _, None) => (RX_ONCE, "a message the device never entered"),
+            _ => (
+                RX_DECODING,
+                "a message decoded otherwise than the device wrote it",
+            ),
+        };
+        breach(ids, what, described, format!("{}", message.frame))
+    }
+
+    fn judge_tx(
+        &mut self,
+        inputs: &InputImage<&[u8]>,
+        before: &OutputImage<&[u8]>,
+        after: &OutputImage<&[u8]>,
+    ) -> Result<(), Breach> {
+        if self
+            .pending
+            .as_ref()
+            .is_some_and(|p| p.counter == inputs.tx_counter())
+        {
+            self.pending = None;
+        }
+        let changed = after.tx_counter() != before.tx_counter();
+        if let Some(pending) = &self.pending {
+            let now = tx_batch(after);
+            if now != *pending {
+                let what = if changed {
+                    "a new batch before the last was acknowledged"
+                } else {
+                    "the Tx messages or NoOfTxMessages of an unacknowledged batch"
+                };
+                return breach(
+                    TX_UNTOUCHED,
+                    what,
+                    format!("TxCounter {} unchanged", pending.counter),
+                    format!("TxCounter {}, NoOfTxMessages {}", now.counter, now.count),
+                );
+            }
+            return Ok(());
+        }
+        if !changed {
+            return Ok(());
+        }
+        let count = after.no_of_tx_messages();
+        if self.restarted && count == 0 {
+            return Ok(()); // a restarted program's first image: a batch of nothing
+        }
+        if !handshake::ready_to_send(before.tx_counter(), inputs.tx_counter()) && !self.restarted {
+            return breach(
+                TX_REQUEST,
+                "a new batch while the counters differ",
+                format!(
+                    "Outputs.TxCounter {} = Inputs.TxCounter {}",
+                    before.tx_counter(),
+                    inputs.tx_counter()
+                ),
+                "a new batch",
+            );
+        }
+        let next = handshake::next(inputs.tx_counter());
+        if after.tx_counter() != next {
+            return breach(
+                TX_REQUEST,
+                "Outputs.TxCounter of a new batch",
+                format!("Inputs.TxCounter + 1 = {next}"),
+                after.tx_counter().to_string(),
+            );
+        }
+        if usize::from(count) > self.layout.tx_slots {
+            return breach(
+                TX_COUNT,
+                "NoOfTxMessages",
+                format!("at most the {} Tx slots", self.layout.tx_slots),
+                count.to_string(),
+            );
+        }
+        let mut numbers = Vec::new();
+        for slot in 0..usize::from(count) {
+            let view = after.tx_message(slot).expect("slot within the slots");
+            let request = self.requests.get(self.batched + slot);
+            let written = MessageRepr::parse(&view);
+            match (written, request) {
+                (Ok(written), Some(request)) if written.frame == request.frame => {
+                    numbers.push(written.transaction_number)
+                }
+                (_, None) => {
+                    return breach(
+                        TX_COUNT,
+                        format!("Tx message {slot}"),
+                        format!("{} requests to send", self.requests.len() - self.batched),
+                        format!("NoOfTxMessages {count}"),
+                    )
+                }
+                (written, Some(request)) => {
+                    let sent_before = written.as_ref().is_ok_and(|w| {
+                        self.requests[..self.batched + slot]
+                            .iter()
+                            .any(|r| r.frame == w.frame)
+                    });
+                    let actual = match &written {
+                        Ok(w) => w.frame.to_string(),
+                        Err(e) => e.to_string(),
+                    };
+                    let ids = if sent_before { TX_ONCE } else { TX_ENCODING };
+                    return breach(
+                        ids,
+                        format!("Tx message {slot}"),
+                        request.frame.to_string(),
+                        actual,
+                    );
+                }
+            }
+        }
+        if self.layout.transaction_number {
+            self.judge_numbers(&numbers)?;
+        }
+        self.numbers.extend(numbers);
+        self.batched += usize::from(count);
+        self.pending = Some(tx_batch(after));
+        Ok(())
+    }
+
+    /// CL-TN-001: numbers other than 0, unique among the messages in flight.
+    fn judge_numbers(&self, numbers: &[u16]) -> Result<(), Breach> {
+        let in_flight = &self.numbers[self.sent.min(self.batched)..];
+        for (slot, number) in numbers.iter().enumerate() {
+            if *number == 0 || in_flight.contains(number) || numbers[..slot].contains(number) {
+                return breach(
+                    TRANSACTION_NUMBERS,
+                    format!("the transaction number of Tx message {slot}"),
+                    "not 0 and not carried by another message in flight",
+                    number.to_string(),
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// After the last task: what never arrived. `device_queued_rx`: messages
+    /// the device received and has not entered in the image.
+    pub fn finish(&self, device_queued_rx: usize) -> Result<(), Breach> {
+        // What a device restart left stuck is the restart's (CL-RST-002).
+        self.finish_unblamed(device_queued_rx)
+            .map_err(|breach| match self.device_restarted {
+                true => Breach {
+                    requirements: DEVICE_RESTART,
+                    ..breach
+                },
+                false => breach,
+            })
+    }
+
+    fn finish_unblamed(&self, device_queued_rx: usize) -> Result<(), Breach> {
+        if self.sent < self.requests.len() {
+            return breach(
+                TX_ONCE,
+                "frames the application asked to send",
+                format!("all {} on the bus", self.requests.len()),
+                format!(
+                    "{} never sent ({} handed over)",
+                    self.requests.len() - self.sent,
+                    self.batched
+                ),
+            );
+        }
+        if self.queue != QueueMode::Fast && device_queued_rx > 0 {
+            return breach(
+                RX_ACKNOWLEDGE,
+                "messages the device received",
+                "entered in the image once the client acknowledged the last batch",
+                format!("{device_queued_rx} still waiting in the device: no acknowledge"),
+            );
+        }
+        let undelivered: usize = self
+            .rx
+            .iter()
+            .filter(|b| b.shown || self.queue != QueueMode::Fast)
+            .map(|b| b.messages.len())
+            .sum();
+        if undelivered > 0 {
+            return breach(
+                RX_ONCE,
+                "messages the device entered",
+                "all delivered",
+                format!("{undelivered} never delivered"),
+            );
+        }
+        Ok(())
+    }
+}
+
+fn tx_batch(image: &OutputImage<&[u8]>) -> TxBatch {
+    let count = image.no_of_tx_messages();
+    let slots = (0..usize::from(count))
+        .filter_map(|slot| image.tx_message(slot))
+        .flat_map(|view| view.as_bytes().to_vec())
+        .collect();
+    TxBatch {
+        counter: image.tx_counter(),
+        count,
+        slots,
+    }
+}
+
+fn size_breach(error: canif_model::image::SizeError) -> Breach {
+    Breach {
+        requirements: IMAGE_BOUNDS,
+        what: "the image size".into(),
+        expected: error.expected.to_string(),
+        actual: error.actual.to_string(),
+    }
+}

@@ -1,0 +1,106 @@
+//! The PLC side under test: a client of the CAN interface (a soft-PLC
+//! function block, an EtherCAT master's driver) that fills the output image
+//! and reads the input image once per task. The harness plays the device (the
+//! reference model on the simulated bus), the master between them
+//! ([`master`]) and the application above the client, and judges every task
+//! against the client requirements (`spec/requirements/client.yaml`, rulings
+//! P1–P5).
+//!
+//! The arrows run one way: `suite` → `rig` → `master`, `judge`, `application`,
+//! [`crate::device_side`]; `rig` → [`Client`] (the reference of `canif_model::client`,
+//! the faulty clients of `faulty`).
+
+pub mod application;
+pub mod faulty;
+pub mod judge;
+pub mod master;
+pub mod rig;
+pub mod suite;
+
+use canif_model::client::PlcClient;
+use canif_model::image::{ImageLayout, MessageRepr};
+
+pub use crate::error::IutError;
+
+/// What a client sees in one PLC task.
+///
+/// Both images sit inside the master's process image: `inputs` and `outputs`
+/// start at the interface's first byte and run on into whatever the master
+/// maps behind it (other devices' data). A client that reads or writes past
+/// the interface's size (`ImageLayout::input_size`, `output_size`) touches
+/// those bytes, as a C driver would; the harness fills them with a pattern
+/// and judges what a client does with them (P5).
+#[derive(Debug)]
+pub struct TaskIo<'a> {
+    /// The input image as the master delivers it to this task.
+    pub inputs: &'a [u8],
+    /// The output buffer the master hands this task (its content depends on
+    /// the master: the client's last image, zeros, or an older image); what
+    /// the client leaves in it is sent to the device.
+    pub outputs: &'a mut [u8],
+    /// The application's send requests since the last task, in order.
+    pub requests: &'a [MessageRepr],
+}
+
+/// What a client answers after one task.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct TaskAnswer {
+    /// Messages the client read from the interface and handed to its
+    /// application in this task, in order.
+    pub delivered: Vec<MessageRepr>,
+    /// The requests of this task (by index) the client reports it cannot send.
+    pub refused: Vec<usize>,
+}
+
+/// A PLC-side client under test. Every call can fail with an [`IutError`]:
+/// the client itself broke, which is an `error` verdict, never a failure.
+pub trait Client {
+    /// One PLC task.
+    fn task(&mut self, io: TaskIo<'_>) -> Result<TaskAnswer, IutError>;
+}
+
+/// The reference client of 001 §6 (ruling R5) as a client under test: it
+/// keeps its own output image and writes the whole of it every task, so it
+/// conforms whatever buffer the master hands it.
+pub struct ReferenceClient {
+    layout: ImageLayout,
+    client: PlcClient,
+}
+
+impl ReferenceClient {
+    pub fn new(layout: ImageLayout) -> Self {
+        ReferenceClient {
+            layout,
+            client: PlcClient::new(layout),
+        }
+    }
+}
+
+impl Client for ReferenceClient {
+    fn task(&mut self, io: TaskIo<'_>) -> Result<TaskAnswer, IutError> {
+        let mut refused = Vec::new();
+        for (index, request) in io.requests.iter().enumerate() {
+            if self.client.send(*request).is_err() {
+                refused.push(index);
+            }
+        }
+        let (inputs, outputs) = (
+            io.inputs.get(..self.layout.input_size()),
+            io.outputs.get_mut(..self.layout.output_size()),
+        );
+        let (Some(inputs), Some(outputs)) = (inputs, outputs) else {
+            return Err(IutError(
+                "the images handed to the client are too short".into(),
+            ));
+        };
+        let written = self
+            .client
+            .task(inputs)
+            .map_err(|e| IutError(format!("the reference client: {e}")))?;
+        outputs.copy_from_slice(written);
+        Ok(TaskAnswer {
+            delivered: self.client.take_received(),
+            refused,
+        })
+    }
+}

@@ -1,0 +1,271 @@
+//! One client scenario, driven task by task: the single place where the
+//! device side, the master, the application and the client under test meet.
+//! Every task is judged as it ends; the first breach ends the scenario.
+
+use std::collections::VecDeque;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+use canif_model::config::{Capabilities, Synchronization};
+use canif_model::image::{ImageLayout, InputImage, MessageRepr, OutputImage};
+use canif_model::Nanos;
+
+use super::application::{ClientScenario, Event};
+use super::judge::{Breach, Judge, TaskSeen};
+use super::master::{Master, MasterRun};
+use super::{Client, IutError, TaskIo};
+use crate::device_side::DeviceSide;
+use crate::error::RunError;
+use crate::iut::BuildError;
+use crate::outcome::{Failure, Outcome, ScenarioRun};
+
+/// The CAN interface cycle of every client scenario.
+pub const CYCLE: Nanos = 1_000_000;
+
+/// Tasks of history a failure shows.
+const CONTEXT: usize = 8;
+
+/// Builds a fresh client for an image (at the start and at each PLC restart).
+pub type BuildClient<'a> = dyn Fn(ImageLayout) -> Result<Box<dyn Client>, BuildError> + 'a;
+
+/// Where a run is, for the failure it may end in.
+struct Tracker {
+    task: u64,
+    time: Nanos,
+    context: VecDeque<String>,
+}
+
+impl Tracker {
+    fn failure(&self, scenario: &str, breach: Breach) -> Failure {
+        Failure {
+            requirements: breach.requirements.to_vec(),
+            scenario: scenario.to_string(),
+            cycle: self.task,
+            time: self.time,
+            what: breach.what,
+            expected: breach.expected,
+            actual: breach.actual,
+            context: self.context.iter().cloned().collect(),
+            timeline: Vec::new(),
+            frames: None,
+        }
+    }
+
+    fn note(&mut self, line: String) {
+        if self.context.len() == CONTEXT {
+            self.context.pop_front();
+        }
+        self.context.push_back(line);
+    }
+}
+
+/// What ended a run early.
+enum Stop {
+    Breach(Breach),
+    Error(RunError),
+}
+
+impl From<Breach> for Stop {
+    fn from(breach: Breach) -> Self {
+        Stop::Breach(breach)
+    }
+}
+
+/// Runs `scenario` under `master` against the clients `build` makes.
+pub fn run(
+    caps: &Capabilities,
+    scenario: &ClientScenario,
+    master: Master,
+    build: &BuildClient<'_>,
+) -> ScenarioRun {
+    let started = std::time::Instant::now();
+    let name = format!("{} under {}", scenario.name, master.name);
+    let mut tracker = Tracker {
+        task: 0,
+        time: 0,
+        context: VecDeque::new(),
+    };
+    let mut counts = (0u64, 0u64); // (tasks, frames checked)
+    let result = drive(caps, scenario, master, build, &mut tracker, &mut counts);
+    let outcome = match result {
+        Ok(()) => Outcome::Pass,
+        Err(Stop::Breach(breach)) => Outcome::Fail(Box::new(tracker.failure(&name, breach))),
+        Err(Stop::Error(error)) => Outcome::Error(error),
+    };
+    ScenarioRun {
+        scenario: name,
+        covers: scenario.covers.clone(),
+        outcome,
+        cycles: counts.0,
+        frames_checked: counts.1,
+        tolerated: 0,
+        elapsed: started.elapsed(),
+    }
+}
+
+fn drive(
+    caps: &Capabilities,
+    scenario: &ClientScenario,
+    master: Master,
+    build: &BuildClient<'_>,
+    tracker: &mut Tracker,
+    counts: &mut (u64, u64),
+) -> Result<(), Stop> {
+    let mut config = scenario.config.clone();
+    if master.distributed_clocks {
+        config.synchronization = Synchronization::DistributedClocks {
+            sync1_shift: CYCLE / 2,
+        };
+    }
+    let configuration =
+        |e: canif_model::config::ConfigError| Stop::Error(RunError::Configuration(e.to_string()));
+    let mut device =
+        DeviceSide::new(caps, config.clone(), scenario.bit_rates).map_err(configuration)?;
+    let layout = device.layout();
+    let built =
+        |layout| build(layout).map_err(|e| Stop::Error(RunError::Iut(IutError(e.to_string()))));
+    let mut client = built(layout)?;
+    let mut exchange = MasterRun::new(master, layout);
+    let mut judge = Judge::new(layout, config.queue);
+    let per_cycle = master.tasks_per_cycle();
+    let period = CYCLE / per_cycle;
+    let deadline = 2 * per_cycle + 2 * master.confirmation_tasks();
+    let mut events = scenario.events.iter().peekable();
+    let mut requests: Vec<MessageRepr> = Vec::new();
+    let (mut overstate, mut device_saw) = (false, 0u16);
+    for task in 0..scenario.cycles * per_cycle {
+        let time = task * period;
+        (tracker.task, tracker.time) = (task, time);
+        while let Some((_, event)) = events.next_if(|(cycle, _)| cycle * per_cycle <= task) {
+            match event {
+                Event::Send(message) => requests.push(*message),
+                Event::Arrive(frame) => device.schedule(time + period / 4, *frame),
+                Event::OverstateRxCount => overstate = true,
+                Event::PlcRestart => {
+                    client = built(layout)?;
+                    exchange.client_restarted();
+                    judge.plc_restarted(device_saw);
+                    tracker.note(format!("task {task}: the PLC restarts"));
+                }
+                Event::DeviceRestart => {
+                    device.restart().map_err(configuration)?;
+                    exchange.device_restarted();
+                    let visible = InputImage::new_checked(exchange.task_input_image(), layout)
+                        .map_or(0, |i| i.rx_counter());
+                    judge.device_restarted(task, exchange.device_outputs(), visible);
+                    tracker.note(format!("task {task}: the device restarts"));
+                }
+            }
+        }
+        for ended in device
+            .run_until(time)
+            .map_err(|e| Stop::Error(RunError::Bus(e)))?
+        {
+            if ended.from_device {
+                judge.device_sent(&ended.frame)?;
+                counts.1 += 1;
+            }
+        }
+        if exchange.client_runs() {
+            let mut buffer = exchange.output_buffer();
+            let inputs = exchange.task_inputs().to_vec();
+            let asked = std::mem::take(&mut requests);
+            let answer = catch_unwind(AssertUnwindSafe(|| {
+                client.task(TaskIo {
+                    inputs: &inputs,
+                    outputs: &mut buffer,
+                    requests: &asked,
+                })
+            }))
+            .unwrap_or_else(|panic| Err(IutError(panic_message(&panic))))
+            .map_err(|e| Stop::Error(RunError::Iut(e)))?;
+            let accepted: Vec<MessageRepr> = asked
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| !answer.refused.contains(i))
+                .map(|(_, m)| *m)
+                .collect();
+            tracker.note(describe_task(
+                task,
+                layout,
+                &inputs,
+                &buffer,
+                &answer.delivered,
+            ));
+            judge.task(
+                task,
+                TaskSeen {
+                    inputs: exchange.task_input_image(),
+                    before: exchange.device_outputs(),
+                    after: &buffer,
+                    accepted: &accepted,
+                    delivered: &answer.delivered,
+                },
+                deadline,
+            )?;
+            counts.1 += answer.delivered.len() as u64;
+            exchange.client_wrote(&buffer[..layout.output_size()]);
+        } else {
+            tracker.note(format!("task {task}: overrun, the client does not run"));
+        }
+        exchange.end_task(|outputs| -> Result<Vec<u8>, Stop> {
+            device_saw = OutputImage::new_checked(outputs, layout).map_or(0, |o| o.tx_counter());
+            let mut inputs = device
+                .cycle(outputs)
+                .map_err(|e| Stop::Error(RunError::Harness(e.to_string())))?
+                .to_vec();
+            if overstate && overstated(&mut inputs, layout, judge.device_rx_counter()) {
+                overstate = false;
+            }
+            judge.device_cycle(&inputs);
+            Ok(inputs)
+        })?;
+        counts.0 += 1;
+    }
+    judge.finish(device.queued_rx())?;
+    Ok(())
+}
+
+/// Sets NoOfRxMessages = 0xFFFF if the device just entered a new batch.
+fn overstated(inputs: &mut [u8], layout: ImageLayout, last_counter: u16) -> bool {
+    let Ok(mut image) = InputImage::new_checked(inputs, layout) else {
+        return false;
+    };
+    if image.rx_counter() == last_counter {
+        return false;
+    }
+    image.set_no_of_rx_messages(0xFFFF);
+    true
+}
+
+fn describe_task(
+    task: u64,
+    layout: ImageLayout,
+    inputs: &[u8],
+    outputs: &[u8],
+    delivered: &[MessageRepr],
+) -> String {
+    let inputs = InputImage::new_checked(&inputs[..layout.input_size()], layout);
+    let outputs = OutputImage::new_checked(&outputs[..layout.output_size()], layout);
+    match (inputs, outputs) {
+        (Ok(i), Ok(o)) => format!(
+            "task {task}: inputs Tx {} Rx {} n {} | outputs Tx {} Rx {} n {} | delivered {}",
+            i.tx_counter(),
+            i.rx_counter(),
+            i.no_of_rx_messages(),
+            o.tx_counter(),
+            o.rx_counter(),
+            o.no_of_tx_messages(),
+            delivered.len()
+        ),
+        _ => format!("task {task}"),
+    }
+}
+
+fn panic_message(panic: &Box<dyn std::any::Any + Send>) -> String {
+    let text = panic
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| panic.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "a panic".into());
+    format!("the client panicked: {text}")
+}

@@ -1,0 +1,220 @@
+//! One profile's run of a PLC-side client: every interface the profile
+//! offers, every life cycle under every master, and a verdict per client
+//! requirement. The mirror of [`crate::suite`] for the other side.
+
+use std::collections::BTreeMap;
+
+use canif_model::config::{Capabilities, QueueMode};
+use canif_model::image::ImageLayout;
+use canif_spec::{Catalogue, Profile, ReqId, Side};
+
+use super::application::{self, ClientScenario};
+use super::faulty::{ClientFault, FaultyClient};
+use super::master::Master;
+use super::{rig, Client, ReferenceClient};
+use crate::iut::BuildError;
+use crate::outcome::{Outcome, ScenarioRun};
+use crate::suite::{ProfileRun, Selection};
+use crate::verdict::{self, Reach};
+
+/// The client under test, as the harness builds it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ClientKind {
+    /// The reference client of 001 §6 (`canif_model::client`).
+    Reference,
+    /// The independent client of [`super::faulty`], with at most one fault.
+    Faulty(Option<ClientFault>),
+}
+
+impl ClientKind {
+    pub fn name(&self) -> String {
+        match self {
+            ClientKind::Reference => "reference client".into(),
+            ClientKind::Faulty(None) => "soft client".into(),
+            ClientKind::Faulty(Some(fault)) => format!("soft client with fault {fault}"),
+        }
+    }
+
+    /// A fresh client for an interface.
+    pub fn build(
+        &self,
+        layout: ImageLayout,
+        queue: QueueMode,
+    ) -> Result<Box<dyn Client>, BuildError> {
+        Ok(match self {
+            ClientKind::Reference => Box::new(ReferenceClient::new(layout)),
+            ClientKind::Faulty(fault) => Box::new(FaultyClient::new(layout, queue, *fault)),
+        })
+    }
+}
+
+/// What a client run runs.
+#[derive(Debug, Clone)]
+pub struct ClientOptions {
+    pub seed: u64,
+    /// Include the 65,600-cycle counter wrap.
+    pub counter_wrap: bool,
+    /// The master models (all by default).
+    pub masters: Vec<Master>,
+    pub selection: Selection,
+}
+
+impl ClientOptions {
+    pub fn new(seed: u64) -> Self {
+        ClientOptions {
+            seed,
+            counter_wrap: true,
+            masters: Master::ALL.to_vec(),
+            selection: Selection::default(),
+        }
+    }
+}
+
+/// The masters a profile's device can work with (Distributed Clocks only
+/// where it offers them).
+pub fn masters_for(caps: &Capabilities, options: &ClientOptions) -> Vec<Master> {
+    options
+        .masters
+        .iter()
+        .copied()
+        .filter(|m| !m.distributed_clocks || caps.distributed_clocks)
+        .collect()
+}
+
+/// Every scenario of a profile, each with the master it runs under.
+pub fn scenarios(caps: &Capabilities, options: &ClientOptions) -> Vec<(ClientScenario, Master)> {
+    let mut list = Vec::new();
+    for (n, config) in application::interfaces(caps).iter().enumerate() {
+        for master in masters_for(caps, options) {
+            // DC works only with the Fast CAN Queue (PDX-005).
+            if master.distributed_clocks && config.queue != QueueMode::Fast {
+                continue;
+            }
+            let wrap = options.counter_wrap && n == 0;
+            for scenario in application::scenarios(config, master, options.seed, wrap) {
+                list.push((scenario, master));
+            }
+        }
+    }
+    list
+}
+
+/// The name a scenario runs under.
+pub fn run_name(scenario: &ClientScenario, master: Master) -> String {
+    format!("{} under {}", scenario.name, master.name)
+}
+
+/// Every client requirement a run on these capabilities exercises.
+pub fn checked_ids(caps: &Capabilities, options: &ClientOptions) -> Vec<String> {
+    let mut ids: Vec<String> = scenarios(caps, options)
+        .into_iter()
+        .flat_map(|(s, _)| s.covers)
+        .map(|id| id.to_string())
+        .collect();
+    ids.sort();
+    ids.dedup();
+    ids
+}
+
+/// Runs every scenario of a profile against a client and judges each requirement.
+pub fn run_profile(
+    catalogue: &Catalogue,
+    profile: &Profile,
+    kind: &ClientKind,
+    options: &ClientOptions,
+    mut progress: impl FnMut(&ScenarioRun),
+) -> ProfileRun {
+    let caps = profile.model_capabilities();
+    let mut runs = Vec::new();
+    for (scenario, master) in scenarios(&caps, options) {
+        let name = run_name(&scenario, master);
+        if !options
+            .selection
+            .admits(&name, scenario.covers.iter().map(ReqId::as_str))
+        {
+            continue;
+        }
+        if crate::interrupt::requested() {
+            break;
+        }
+        let queue = scenario.config.queue;
+        let build = |layout| kind.build(layout, queue);
+        let run = rig::run(&caps, &scenario, master, &build);
+        progress(&run);
+        runs.push(run);
+    }
+    let failures = runs
+        .iter()
+        .filter_map(|run| match &run.outcome {
+            Outcome::Fail(failure) => Some(failure.as_ref().clone()),
+            _ => None,
+        })
+        .collect();
+    let mut run = ProfileRun {
+        profile: profile.name.clone(),
+        runs,
+        failures,
+        verdicts: BTreeMap::new(),
+    };
+    run.verdicts = verdict::judge(
+        catalogue,
+        profile,
+        &run.checks(),
+        &reach(catalogue, &caps, options),
+    );
+    run
+}
+
+/// What a client run can judge, and where the device's requirements are judged.
+pub fn reach(catalogue: &Catalogue, caps: &Capabilities, options: &ClientOptions) -> Reach {
+    Reach {
+        here: checked_ids(caps, options).into_iter().collect(),
+        elsewhere: catalogue
+            .requirements()
+            .filter(|r| r.side == Side::Device)
+            .map(|r| {
+                (
+                    r.id.clone(),
+                    "a device requirement: exercised by `canif run --side device`".into(),
+                )
+            })
+            .collect(),
+        left_out: options.selection.describe(),
+    }
+}
+
+/// One row of the client kill matrix.
+#[derive(Debug, Clone)]
+pub struct ClientKillRow {
+    pub fault: ClientFault,
+    /// Profile name → requirement ids that failed (empty: not caught there).
+    pub caught: Vec<(String, Vec<String>)>,
+}
+
+/// Runs the soft client with each fault on every profile.
+pub fn kill_matrix(
+    catalogue: &Catalogue,
+    options: &ClientOptions,
+    mut progress: impl FnMut(&str),
+) -> Vec<ClientKillRow> {
+    ClientFault::ALL
+        .into_iter()
+        .map(|fault| {
+            progress(fault.name());
+            let options = ClientOptions {
+                counter_wrap: fault == ClientFault::IgnoresWrap,
+                ..options.clone()
+            };
+            let kind = ClientKind::Faulty(Some(fault));
+            let caught = catalogue
+                .profiles
+                .iter()
+                .map(|profile| {
+                    let run = run_profile(catalogue, profile, &kind, &options, |_| {});
+                    (profile.name.clone(), run.failed_requirements())
+                })
+                .collect();
+            ClientKillRow { fault, caught }
+        })
+        .collect()
+}

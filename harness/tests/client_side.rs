@@ -1,0 +1,158 @@
+//! The PLC side judged on itself: the reference client conforms on every
+//! profile under every master, the independent soft client too, and each
+//! faulty client is caught on exactly the requirements it breaks.
+
+use std::collections::BTreeSet;
+
+use canif_harness::client::faulty::ClientFault;
+use canif_harness::client::suite::{kill_matrix, run_profile, ClientKind, ClientOptions};
+use canif_harness::Outcome;
+use canif_spec::{Catalogue, Side};
+
+fn options() -> ClientOptions {
+    ClientOptions {
+        counter_wrap: false,
+        ..ClientOptions::new(1)
+    }
+}
+
+/// Every scenario the client runs on every profile, failures in full.
+fn problems(kind: &ClientKind, options: &ClientOptions) -> Vec<String> {
+    let catalogue = Catalogue::embedded().unwrap();
+    let mut bad = Vec::new();
+    for profile in &catalogue.profiles {
+        let run = run_profile(&catalogue, profile, kind, options, |_| {});
+        assert!(
+            run.runs.len() >= 25,
+            "{}: {} runs",
+            profile.name,
+            run.runs.len()
+        );
+        bad.extend(run.runs.iter().filter_map(|r| match &r.outcome {
+            Outcome::Pass => None,
+            Outcome::Fail(f) => Some(format!("{}: {}", profile.name, f.details())),
+            Outcome::Error(e) => Some(format!("{}: {}: {e}", profile.name, r.scenario)),
+        }));
+    }
+    bad
+}
+
+/// Covers: CL-TX-001, CL-TX-002, CL-TX-003, CL-TX-004, CL-TX-005, CL-RX-001, CL-RX-002, CL-RX-003, CL-IMG-001, CL-FQ-001, CL-RST-001, CL-RST-002, CL-TN-001
+#[test]
+fn the_reference_client_conforms_on_every_profile_under_every_master() {
+    let bad = problems(&ClientKind::Reference, &options());
+    assert!(bad.is_empty(), "{}", bad.join("\n\n"));
+}
+
+#[test]
+fn the_soft_client_without_a_fault_conforms_too() {
+    let bad = problems(&ClientKind::Faulty(None), &options());
+    assert!(bad.is_empty(), "{}", bad.join("\n\n"));
+}
+
+/// Covers: CL-TX-001, CL-RX-001
+#[test]
+fn both_counters_wrap_at_0xffff_under_the_reference_client() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("fc510x-before-fw2.14").unwrap();
+    let run = run_profile(
+        &catalogue,
+        profile,
+        &ClientKind::Reference,
+        &ClientOptions::new(1),
+        |_| {},
+    );
+    let wrap = run
+        .runs
+        .iter()
+        .find(|r| r.scenario.contains("wrap"))
+        .expect("the counter wrap runs");
+    assert_eq!(wrap.outcome, Outcome::Pass, "{}", wrap.scenario);
+    assert!(wrap.cycles > 65_536, "{} task cycles", wrap.cycles);
+}
+
+/// What each faulty client must be caught on, over every profile.
+const KILL_TABLE: &[(ClientFault, &[&str])] = &[
+    (ClientFault::SendSample000, &["CL-IMG-001"]),
+    (
+        ClientFault::DecodeOverNoOfTxMessages,
+        &["CL-FQ-001", "CL-RX-001", "CL-RX-002", "CL-RX-003"],
+    ),
+    (ClientFault::OwnRxCounter, &["CL-FQ-001", "CL-RX-001"]),
+    (
+        ClientFault::TxCounterPlusOne,
+        &["CL-FQ-001", "CL-RX-002", "CL-TX-002"],
+    ),
+    (
+        ClientFault::WritesBeforeAcknowledge,
+        &["CL-TX-001", "CL-TX-002"],
+    ),
+    (ClientFault::ReadsAllSlots, &["CL-RX-002", "CL-RX-003"]),
+    (
+        ClientFault::IgnoresWrap,
+        &["CL-FQ-001", "CL-RST-002", "CL-TX-003"],
+    ),
+    (
+        ClientFault::OneBasedSlots,
+        &["CL-RX-002", "CL-RX-003", "CL-TX-004"],
+    ),
+    (ClientFault::NoBoundOnNoOfRxMessages, &["CL-IMG-001"]),
+    (
+        ClientFault::AcknowledgesAfterFirstMessage,
+        &["CL-FQ-001", "CL-RX-001"],
+    ),
+    (ClientFault::TransactionNumberZero, &["CL-TN-001"]),
+    (ClientFault::DropsRtr, &["CL-TX-004"]),
+    (ClientFault::FastQueueRereads, &["CL-FQ-001"]),
+    (ClientFault::IgnoresExtendedFlag, &["CL-RX-003"]),
+    (ClientFault::NoOfTxMessagesIsTheSlotCount, &["CL-TX-005"]),
+    (ClientFault::RestartReadsAllSlots, &["CL-RST-001"]),
+    (ClientFault::IgnoresRxCounterZero, &["CL-RST-002"]),
+];
+
+/// Covers: CL-TX-001, CL-TX-002, CL-TX-003, CL-TX-004, CL-TX-005, CL-RX-001, CL-RX-002, CL-RX-003, CL-IMG-001, CL-FQ-001, CL-RST-001, CL-RST-002, CL-TN-001
+#[test]
+fn each_faulty_client_is_caught_on_exactly_its_requirements() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let rows = kill_matrix(&catalogue, &options(), |_| {});
+    assert_eq!(rows.len(), ClientFault::ALL.len());
+    for row in rows {
+        let caught: BTreeSet<&str> = row
+            .caught
+            .iter()
+            .flat_map(|(_, ids)| ids.iter().map(String::as_str))
+            .collect();
+        let expected = KILL_TABLE
+            .iter()
+            .find(|(fault, _)| *fault == row.fault)
+            .map(|(_, ids)| ids.iter().copied().collect::<BTreeSet<_>>())
+            .unwrap_or_else(|| panic!("{} is missing from the kill table", row.fault));
+        assert_eq!(caught, expected, "{}", row.fault);
+    }
+}
+
+#[test]
+fn every_client_requirement_is_broken_by_some_faulty_client() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let killed: BTreeSet<&str> = KILL_TABLE
+        .iter()
+        .flat_map(|(_, ids)| ids.iter().copied())
+        .collect();
+    let client: BTreeSet<&str> = catalogue
+        .requirements()
+        .filter(|r| r.side == Side::Plc)
+        .map(|r| r.id.as_str())
+        .collect();
+    assert_eq!(killed, client);
+}
+
+#[test]
+fn every_client_fault_has_a_name_and_a_description_of_its_own() {
+    let names: BTreeSet<&str> = ClientFault::ALL.iter().map(|f| f.name()).collect();
+    let descriptions: BTreeSet<&str> = ClientFault::ALL.iter().map(|f| f.description()).collect();
+    assert_eq!(names.len(), ClientFault::ALL.len());
+    assert_eq!(descriptions.len(), ClientFault::ALL.len());
+    for fault in ClientFault::ALL {
+        assert_eq!(ClientFault::from_name(fault.name()), Some(fault));
+    }
+}

@@ -1,0 +1,173 @@
+//! `canif run --side plc`: a PLC-side client under test. The harness plays
+//! the device, the EtherCAT master and the application; the report has the
+//! same shape as the device side's, with `side: plc` and the master models.
+
+use std::io::{IsTerminal, Write as _};
+use std::path::Path;
+use std::process::ExitCode;
+
+use canif_harness::client::master::Master;
+use canif_harness::client::suite::{self, ClientKind, ClientOptions};
+use canif_harness::report::{Product, ProfileReport, RunMeta, RunReport};
+use canif_harness::{Outcome, Selection};
+use canif_spec::{Catalogue, Profile, Side};
+
+/// What `--side plc` was asked for, checked.
+pub struct PlcPlan<'c> {
+    pub profiles: Vec<&'c Profile>,
+    pub options: ClientOptions,
+    pub product: Option<Product>,
+}
+
+/// The master models named on the command line (all when none), or the exit code of a usage error.
+pub fn masters(names: &[String]) -> Result<Vec<Master>, ExitCode> {
+    if names.is_empty() {
+        return Ok(Master::ALL.to_vec());
+    }
+    names
+        .iter()
+        .map(|name| {
+            Master::by_name(name).ok_or_else(|| {
+                let known: Vec<&str> = Master::ALL.iter().map(|m| m.name).collect();
+                eprintln!("unknown master `{name}`; known: {}", known.join(", "));
+                ExitCode::from(2)
+            })
+        })
+        .collect()
+}
+
+/// A selection that matches no check of the plan is a usage error, as on the device side.
+fn check_selection(catalogue: &Catalogue, plan: &PlcPlan) -> Result<(), ExitCode> {
+    let selection: &Selection = &plan.options.selection;
+    for id in &selection.requirements {
+        if catalogue.requirement(id).is_none() {
+            eprintln!("--requirement {id}: no such requirement; `canif spec list` lists them");
+            return Err(ExitCode::from(2));
+        }
+    }
+    let matched = plan.profiles.iter().any(|profile| {
+        suite::scenarios(&profile.model_capabilities(), &plan.options)
+            .iter()
+            .any(|(scenario, master)| {
+                selection.admits(
+                    &suite::run_name(scenario, *master),
+                    scenario.covers.iter().map(|id| id.as_str()),
+                )
+            })
+    });
+    if matched || selection.is_everything() {
+        Ok(())
+    } else {
+        eprintln!("{} matches no PLC-side check", selection.flags());
+        Err(ExitCode::from(2))
+    }
+}
+
+pub fn run(
+    catalogue: &Catalogue,
+    kind: &ClientKind,
+    plan: &PlcPlan,
+    report_dir: &Path,
+) -> ExitCode {
+    if let Err(code) = check_selection(catalogue, plan) {
+        return code;
+    }
+    let report = execute(catalogue, kind, plan);
+    super::run::finish(catalogue, &report, report_dir)
+}
+
+/// Every profile's client run, judged and put in one report.
+pub fn execute(catalogue: &Catalogue, kind: &ClientKind, plan: &PlcPlan) -> RunReport {
+    let started = std::time::Instant::now();
+    let terminal = std::io::stderr().is_terminal();
+    let count = plan.profiles.len();
+    let mut profiles = Vec::new();
+    for (n, profile) in plan.profiles.iter().enumerate() {
+        if canif_harness::interrupt::requested() {
+            eprintln!("interrupted: the remaining profiles are not run");
+            break;
+        }
+        let mut done = 0;
+        let run = suite::run_profile(catalogue, profile, kind, &plan.options, |scenario_run| {
+            done += 1;
+            if terminal {
+                eprint!(
+                    "\r\x1b[2K[{}/{count}] {}: {} ({done} scenarios)",
+                    n + 1,
+                    profile.name,
+                    scenario_run.scenario
+                );
+                let _ = std::io::stderr().flush();
+            }
+        });
+        if terminal {
+            eprint!("\r\x1b[2K");
+        }
+        let failed = run
+            .runs
+            .iter()
+            .filter(|r| matches!(r.outcome, Outcome::Fail(_)))
+            .count();
+        let errors = run
+            .runs
+            .iter()
+            .filter(|r| matches!(r.outcome, Outcome::Error(_)))
+            .count();
+        eprintln!(
+            "[{}/{count}] {:<22} {} scenarios, {} task cycles, {} frames checked: {}",
+            n + 1,
+            profile.name,
+            run.runs.len(),
+            run.cycles(),
+            run.frames_checked(),
+            match (failed, errors) {
+                (0, 0) => "all pass".to_string(),
+                (f, 0) => format!("{f} FAIL ({})", run.failed_requirements().join(", ")),
+                (f, e) => format!("{f} fail, {e} ERROR"),
+            }
+        );
+        let reach = suite::reach(catalogue, &profile.model_capabilities(), &plan.options);
+        profiles.push(ProfileReport::new(
+            catalogue,
+            profile,
+            run,
+            Vec::new(),
+            Vec::new(),
+            &reach,
+        ));
+    }
+    let interrupted = canif_harness::interrupt::requested();
+    let mut left_out = Vec::new();
+    if !plan.options.selection.is_everything() {
+        left_out.push(plan.options.selection.describe());
+    }
+    if !plan.options.counter_wrap {
+        left_out.push("the 65,600-cycle counter wrap (--no-counter-wrap)".to_string());
+    }
+    if plan.options.masters.len() < Master::ALL.len() {
+        left_out.push("master models left out by --master".to_string());
+    }
+    RunReport {
+        meta: RunMeta {
+            complete: left_out.is_empty() && !interrupted,
+            product: plan.product.clone(),
+            left_out: (!left_out.is_empty()).then(|| left_out.join("; ")),
+            side: Side::Plc,
+            masters: plan
+                .options
+                .masters
+                .iter()
+                .map(|m| m.name.to_string())
+                .collect(),
+            ..RunMeta::new(
+                kind.name(),
+                "simulated bus (virtual time), the reference model as the device".into(),
+                plan.options.seed,
+                catalogue,
+            )
+        },
+        profiles,
+        wall_time_ms: started.elapsed().as_millis(),
+        interrupted,
+    }
+}
