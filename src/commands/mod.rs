@@ -117,10 +117,18 @@ pub fn resolve_client(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
             eprintln!("--fault applies to the soft client (--iut softclient), not the reference");
             Err(ExitCode::from(2))
         }
+        (Some(IutArg::Exec(command)), None) => Ok(ClientKind::Exec {
+            command: command.clone(),
+            timeout_ms: iut.timeout_ms,
+        }),
+        (Some(IutArg::Exec(_)), Some(_)) => {
+            eprintln!("--fault applies to the soft client (pass it to the client's own command)");
+            Err(ExitCode::from(2))
+        }
         (Some(other), _) => {
             eprintln!(
-                "--side plc runs a client: --iut reference or softclient, not {other:?} \
-                 (clients over the adapter protocol and the C ABI are not built yet)"
+                "--side plc runs a client: --iut reference, softclient or exec:'COMMAND', not {other:?} \
+                 (a client behind the C ABI is not built yet)"
             );
             Err(ExitCode::from(2))
         }

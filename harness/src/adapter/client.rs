@@ -259,13 +259,17 @@ impl ExecIut {
         }
     }
 
-    fn fail(&mut self, what: String) -> IutError {
+    pub(crate) fn fail(&mut self, what: String) -> IutError {
         let message = format!("IUT `{}`: {what}; {}", self.command, self.stderr_tail());
         IutError(self.failed.get_or_insert(message).clone())
     }
 
     /// Sends one request and waits for the one-line answer of the expected type.
-    fn exchange(&mut self, request: &Request, expected: &str) -> Result<Answer, IutError> {
+    pub(crate) fn exchange(
+        &mut self,
+        request: &Request,
+        expected: &str,
+    ) -> Result<Answer, IutError> {
         let line = self.exchange_line(request)?;
         self.answer_of(&line, expected)
     }

@@ -69,6 +69,11 @@ impl<'a> Server<'a> {
     pub fn answer(&mut self, request: &Request) -> Option<Answer> {
         let iut = match (request, self.iut.as_mut()) {
             (Request::Bye, _) => return None,
+            (Request::Start { .. } | Request::Task { .. }, _) => {
+                return Some(Answer::error(
+                    "this is a device; `start` and `task` are the client role's requests",
+                ))
+            }
             (
                 Request::Configure {
                     protocol,
@@ -130,7 +135,10 @@ impl<'a> Server<'a> {
                 Ok(answer) => answer,
                 Err(error) => Answer::error(error.0),
             },
-            Request::Configure { .. } | Request::Bye => unreachable!("answered above"),
+            Request::Configure { .. }
+            | Request::Bye
+            | Request::Start { .. }
+            | Request::Task { .. } => unreachable!("answered above"),
         })
     }
 

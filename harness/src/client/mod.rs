@@ -11,6 +11,7 @@
 //! the faulty clients of `faulty`).
 
 pub mod application;
+pub mod exec;
 pub mod faulty;
 pub mod judge;
 pub mod master;

@@ -4,14 +4,18 @@
 
 use std::collections::BTreeMap;
 
-use canif_model::config::{Capabilities, QueueMode};
+use std::time::Duration;
+
+use canif_model::config::{Capabilities, InterfaceConfig, QueueMode};
 use canif_model::image::ImageLayout;
 use canif_spec::{Catalogue, Profile, ReqId, Side};
 
 use super::application::{self, ClientScenario};
+use super::exec::ExecClient;
 use super::faulty::{ClientFault, FaultyClient};
 use super::master::Master;
 use super::{rig, Client, ReferenceClient};
+use crate::error::RunError;
 use crate::iut::BuildError;
 use crate::outcome::{Outcome, ScenarioRun};
 use crate::suite::{ProfileRun, Selection};
@@ -24,6 +28,8 @@ pub enum ClientKind {
     Reference,
     /// The independent client of [`super::faulty`], with at most one fault.
     Faulty(Option<ClientFault>),
+    /// A process speaking the adapter protocol's client role.
+    Exec { command: String, timeout_ms: u64 },
 }
 
 impl ClientKind {
@@ -32,18 +38,26 @@ impl ClientKind {
             ClientKind::Reference => "reference client".into(),
             ClientKind::Faulty(None) => "soft client".into(),
             ClientKind::Faulty(Some(fault)) => format!("soft client with fault {fault}"),
+            ClientKind::Exec { command, .. } => format!("exec:{command}"),
         }
     }
 
-    /// A fresh client for an interface.
+    /// A fresh client (a new PLC program) for an interface.
     pub fn build(
         &self,
+        config: &InterfaceConfig,
         layout: ImageLayout,
-        queue: QueueMode,
     ) -> Result<Box<dyn Client>, BuildError> {
         Ok(match self {
             ClientKind::Reference => Box::new(ReferenceClient::new(layout)),
-            ClientKind::Faulty(fault) => Box::new(FaultyClient::new(layout, queue, *fault)),
+            ClientKind::Faulty(fault) => Box::new(FaultyClient::new(layout, config.queue, *fault)),
+            ClientKind::Exec {
+                command,
+                timeout_ms,
+            } => Box::new(
+                ExecClient::start(command, Duration::from_millis(*timeout_ms), config, layout)
+                    .map_err(|e| BuildError::Failed(e.0))?,
+            ),
         })
     }
 }
@@ -126,6 +140,7 @@ pub fn run_profile(
 ) -> ProfileRun {
     let caps = profile.model_capabilities();
     let mut runs = Vec::new();
+    let mut broken: Option<String> = None;
     for (scenario, master) in scenarios(&caps, options) {
         let name = run_name(&scenario, master);
         if !options
@@ -137,9 +152,29 @@ pub fn run_profile(
         if crate::interrupt::requested() {
             break;
         }
-        let queue = scenario.config.queue;
-        let build = |layout| kind.build(layout, queue);
-        let run = rig::run(&caps, &scenario, master, &build);
+        let run = match &broken {
+            // Fail fast: a client that broke is not started again and again.
+            Some(after) => ScenarioRun {
+                scenario: name,
+                covers: scenario.covers.clone(),
+                outcome: Outcome::Error(RunError::Skipped(after.clone())),
+                cycles: 0,
+                frames_checked: 0,
+                tolerated: 0,
+                elapsed: std::time::Duration::ZERO,
+            },
+            None => {
+                let build = |layout| kind.build(&scenario.config, layout);
+                rig::run(&caps, &scenario, master, &build)
+            }
+        };
+        if let (None, Outcome::Error(RunError::Iut(error))) = (&broken, &run.outcome) {
+            broken = Some(format!(
+                "the client broke in `{}`: {}",
+                run.scenario,
+                error.0.lines().next().unwrap_or("")
+            ));
+        }
         progress(&run);
         runs.push(run);
     }

@@ -3,10 +3,12 @@
 //! speak through them, and `tests/adapter_protocol.rs` holds them to the JSON
 //! Schema in `docs/adapter-protocol.schema.json`.
 
+mod client;
 mod config;
 mod frame;
 mod step;
 
+pub use client::WireMessage;
 pub use config::{Action, Caps, Config, Filter, Format, OwnedBus, Queue, Status};
 pub use frame::{Hex, InvalidWireFrame, Transmitted, WireFrame};
 pub use step::{BusEvent, PlannedFrame, StepLine, StepTag, SteppedLine, SteppedTag};
@@ -51,6 +53,20 @@ pub enum Request {
         outputs: Hex,
         events: Vec<BusEvent>,
     },
+    /// Client role: a PLC program starts for this interface (a fresh one
+    /// after each PLC restart: a new process).
+    Start {
+        protocol: u64,
+        config: Config,
+    },
+    /// Client role: one PLC task: the input image as the master delivers
+    /// it, the output buffer as the master hands it, the application's send
+    /// requests since the last task.
+    Task {
+        inputs: Hex,
+        outputs: Hex,
+        requests: Vec<WireMessage>,
+    },
     Bye,
 }
 
@@ -65,6 +81,8 @@ impl Request {
             Request::TransmitComplete => "transmit_complete",
             Request::ControllerStatus { .. } => "controller_status",
             Request::Step { .. } => "step",
+            Request::Start { .. } => "start",
+            Request::Task { .. } => "task",
             Request::Bye => "bye",
         }
     }
@@ -106,6 +124,17 @@ pub enum Answer {
         inputs: Hex,
         plan: Vec<PlannedFrame>,
     },
+    /// Client role: the program runs, speaking this version.
+    Started {
+        protocol: u64,
+    },
+    /// Client role: the output image the task left, the messages it
+    /// delivered to its application, and the requests (by index) it cannot send.
+    Tasked {
+        outputs: Hex,
+        delivered: Vec<WireMessage>,
+        refused: Vec<usize>,
+    },
     Error {
         message: String,
     },
@@ -119,6 +148,8 @@ impl Answer {
             Answer::Ok => "ok",
             Answer::Transmit { .. } => "transmit",
             Answer::Stepped { .. } => "stepped",
+            Answer::Started { .. } => "started",
+            Answer::Tasked { .. } => "tasked",
             Answer::Error { .. } => "error",
         }
     }

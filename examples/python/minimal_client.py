@@ -1,0 +1,159 @@
+#!/usr/bin/env python3
+"""A PLC-side client of the CAN interface in Python, written only from
+docs/adapter-protocol.md ("The client role" and "Image offsets").
+
+Once per task it reads new Rx messages (when Inputs.RxCounter differs from
+the Outputs.RxCounter it wrote, at most NoOfRxMessages and never more than
+the slots) and acknowledges by copying Inputs.RxCounter; it hands the
+application's messages over in batches, only while Outputs.TxCounter equals
+Inputs.TxCounter, then sets Outputs.TxCounter to Inputs.TxCounter + 1. It keeps
+its own output image, so it does not care what buffer the master hands it.
+
+    cargo run --release -- run --side plc --iut "exec:python3 examples/python/minimal_client.py"
+"""
+import json
+import sys
+
+FD_SIZES = [0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64]
+
+
+def u16(b, at):
+    return b[at] | (b[at + 1] << 8)
+
+
+def put(b, at, value, size):
+    b[at:at + size] = value.to_bytes(size, "little")
+
+
+def get(b, at, size):
+    return int.from_bytes(b[at:at + size], "little")
+
+
+class Client:
+    def __init__(self, config):
+        self.format = config["format"]
+        tn = config["transaction_number"]
+        ts = config["time_stamp"]
+        self.tx_slots = config["tx_slots"]
+        self.rx_slots = config["rx_slots"]
+        self.input_size = config["input_size"]
+        self.outputs = bytearray(config["output_size"])
+        self.queue = []
+        # Where the messages start and how large they are (the offsets tables).
+        with_tn = tn or self.format == "fd"
+        self.rx_start = 8 if with_tn else 6
+        if self.format == "11-bit":
+            self.tx_size, self.rx_size = (12 if tn else 10), 10
+        elif self.format == "29-bit":
+            self.tx_size, self.rx_size = (16 if tn else 14), (22 if ts else 14)
+        else:
+            self.tx_size, self.rx_size = 72, 78
+        self.tn, self.ts = tn, ts
+
+    def fits(self, message):
+        frame = message["frame"]
+        if self.format == "11-bit":
+            return not frame["extended"] and not frame["fd"]
+        if self.format == "29-bit":
+            return not frame["fd"]
+        return True
+
+    def encode(self, at, message):
+        frame = message["frame"]
+        data = bytes.fromhex(frame["data"])
+        b = self.outputs
+        b[at:at + self.tx_size] = bytes(self.tx_size)
+        if self.format == "11-bit":
+            if self.tn:
+                put(b, at, message["transaction_number"], 2)
+                at += 2
+            word = (frame["id"] << 5) | (0x10 if frame["rtr"] else 0) | frame["len"]
+            put(b, at, word, 2)
+            b[at + 2:at + 2 + len(data)] = data
+            return
+        cob = frame["id"] | (0x80000000 if frame["extended"] else 0) | (0x40000000 if frame["rtr"] else 0)
+        if self.format == "29-bit":
+            if self.tn:
+                put(b, at, message["transaction_number"], 2)
+                at += 2
+            put(b, at, frame["len"], 2)
+            put(b, at + 2, cob, 4)
+            b[at + 6:at + 6 + len(data)] = data
+            return
+        put(b, at, message["transaction_number"], 2)
+        b[at + 2] = frame["len"]
+        b[at + 3] = (1 if frame["fd"] else 0) | (2 if frame["brs"] else 0) | (4 if frame["esi"] else 0)
+        put(b, at + 4, cob, 4)
+        b[at + 8:at + 8 + len(data)] = data
+
+    def decode(self, inputs, at):
+        b = inputs
+        fd = brs = esi = False
+        stamp = 0
+        if self.format == "11-bit":
+            word = u16(b, at)
+            ident, rtr, extended, length = word >> 5, bool(word & 0x10), False, min(word & 0xF, 8)
+            data_at = at + 2
+        else:
+            if self.format == "29-bit":
+                length, cob, data_at = u16(b, at), get(b, at + 2, 4), at + 6
+                if self.ts:
+                    stamp = get(b, at + 14, 8)
+            else:
+                length, flags, cob, data_at = b[at], b[at + 1], get(b, at + 2, 4), at + 6
+                fd, brs, esi = bool(flags & 1), bool(flags & 2), bool(flags & 4)
+                stamp = get(b, at + 70, 8)
+            ident = cob & 0x1FFFFFFF
+            extended, rtr = bool(cob & 0x80000000), bool(cob & 0x40000000)
+            length = min(length, 64 if fd else 8)
+            if fd:
+                length = next(size for size in FD_SIZES if size >= length)
+        data = "" if rtr else bytes(b[data_at:data_at + length]).hex()
+        frame = {"id": ident, "extended": extended, "rtr": rtr, "fd": fd,
+                 "brs": brs if fd else False, "esi": esi if fd else False, "len": length, "data": data}
+        return {"frame": frame, "transaction_number": 0, "time_stamp_ns": stamp}
+
+    def task(self, inputs, requests):
+        refused = []
+        for index, message in enumerate(requests):
+            if self.fits(message):
+                self.queue.append(message)
+            else:
+                refused.append(index)
+        delivered = []
+        # Read: a new Inputs.RxCounter means NoOfRxMessages new messages.
+        if u16(inputs, 2) != u16(self.outputs, 2):
+            count = min(u16(inputs, 4), self.rx_slots)
+            for n in range(count):
+                delivered.append(self.decode(inputs, self.rx_start + n * self.rx_size))
+            self.outputs[2:4] = inputs[2:4]
+        # Send: only while the last batch is acknowledged.
+        if u16(self.outputs, 0) == u16(inputs, 0) and self.queue:
+            count = min(len(self.queue), self.tx_slots)
+            for n in range(count):
+                self.encode(6 + n * self.tx_size, self.queue.pop(0))
+            put(self.outputs, 4, count, 2)
+            put(self.outputs, 0, (u16(inputs, 0) + 1) & 0xFFFF, 2)
+        return {"type": "tasked", "outputs": self.outputs.hex(), "delivered": delivered, "refused": refused}
+
+
+def main():
+    client = None
+    for line in sys.stdin:
+        request = json.loads(line)
+        kind = request["type"]
+        if kind == "bye":
+            return
+        if kind == "start":
+            client = Client(request["config"])
+            answer = {"type": "started", "protocol": 1}
+        elif kind == "task" and client is not None:
+            answer = client.task(bytes.fromhex(request["inputs"]), request["requests"])
+        else:
+            answer = {"type": "error", "message": "unexpected request " + kind}
+        sys.stdout.write(json.dumps(answer, separators=(",", ":")) + "\n")
+        sys.stdout.flush()
+
+
+if __name__ == "__main__":
+    main()

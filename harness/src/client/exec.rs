@@ -1,0 +1,87 @@
+//! A client under test in another process, over the adapter protocol's
+//! client role (docs/adapter-protocol.md). The process is one PLC program:
+//! a PLC restart starts a new one. Whatever it does wrong — exit, hang,
+//! garbage, an image of the wrong size — is an error, never a failure.
+
+use std::time::Duration;
+
+use canif_model::config::InterfaceConfig;
+use canif_model::image::{ImageLayout, MessageRepr};
+
+use super::{Client, IutError, TaskAnswer, TaskIo};
+use crate::adapter::client::ExecIut;
+use crate::adapter::protocol::{Answer, Config, Hex, Request, WireMessage};
+
+/// The client role's protocol version.
+pub const CLIENT_PROTOCOL: u64 = 1;
+
+pub struct ExecClient {
+    process: ExecIut,
+    layout: ImageLayout,
+}
+
+impl ExecClient {
+    /// Starts `command` as the program of an interface configured as `config`.
+    pub fn start(
+        command: &str,
+        timeout: Duration,
+        config: &InterfaceConfig,
+        layout: ImageLayout,
+    ) -> Result<Self, IutError> {
+        let mut process = ExecIut::spawn(command, timeout, true)?;
+        let request = Request::Start {
+            protocol: CLIENT_PROTOCOL,
+            config: Config::new(config, &layout),
+        };
+        let Answer::Started { protocol } = process.exchange(&request, "started")? else {
+            unreachable!("exchange returns the expected type");
+        };
+        if protocol != CLIENT_PROTOCOL {
+            return Err(process.fail(format!(
+                "speaks client protocol version {protocol} (this harness speaks {CLIENT_PROTOCOL})"
+            )));
+        }
+        Ok(ExecClient { process, layout })
+    }
+}
+
+impl Client for ExecClient {
+    fn task(&mut self, io: TaskIo<'_>) -> Result<TaskAnswer, IutError> {
+        let size = self.layout.output_size();
+        let request = Request::Task {
+            inputs: Hex(io.inputs[..self.layout.input_size()].to_vec()),
+            outputs: Hex(io.outputs[..size].to_vec()),
+            requests: io.requests.iter().map(WireMessage::from).collect(),
+        };
+        let Answer::Tasked {
+            outputs,
+            delivered,
+            refused,
+        } = self.process.exchange(&request, "tasked")?
+        else {
+            unreachable!("exchange returns the expected type");
+        };
+        if outputs.0.len() != size {
+            return Err(self.process.fail(format!(
+                "answered an output image of {} bytes; the interface's is {size}",
+                outputs.0.len()
+            )));
+        }
+        if let Some(index) = refused.iter().find(|i| **i >= io.requests.len()) {
+            return Err(self.process.fail(format!(
+                "refused request {index} of the {} it was given",
+                io.requests.len()
+            )));
+        }
+        let delivered = delivered
+            .iter()
+            .enumerate()
+            .map(|(n, m)| {
+                MessageRepr::try_from(m).map_err(|e| format!("delivered message {n}: {e}"))
+            })
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|what| self.process.fail(what))?;
+        io.outputs[..size].copy_from_slice(&outputs.0);
+        Ok(TaskAnswer { delivered, refused })
+    }
+}

@@ -1,0 +1,158 @@
+//! Clients in other processes over the adapter protocol's client role
+//! (docs/adapter-protocol.md, "The client role"): the Python example written
+//! from the document conforms, its traffic fits the JSON Schema, and a client
+//! that breaks the protocol is an `error` that says what happened, never a `fail`.
+
+use std::time::{Duration, Instant};
+
+use canif_harness::client::application;
+use canif_harness::client::master::Master;
+use canif_harness::client::rig;
+use canif_harness::client::suite::{run_profile, ClientKind, ClientOptions};
+use canif_harness::{Outcome, RunError};
+use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig};
+use canif_spec::Catalogue;
+
+const SCRIPT: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/examples/python/minimal_client.py"
+);
+
+fn exec(command: &str, timeout_ms: u64) -> ClientKind {
+    ClientKind::Exec {
+        command: command.to_string(),
+        timeout_ms,
+    }
+}
+
+/// Covers: CL-TX-001, CL-TX-003, CL-RX-001, CL-RX-002, CL-FQ-001, CL-RST-001, CL-RST-002
+#[test]
+fn the_python_example_client_written_from_the_document_conforms() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let options = ClientOptions {
+        counter_wrap: false,
+        ..ClientOptions::new(1)
+    };
+    let kind = exec(&format!("python3 {SCRIPT}"), 5_000);
+    // FD, 11- and 29-bit with transaction numbers and time stamps; the Fast CAN Queue.
+    for profile in ["fc532x", "el6751-mdp"] {
+        let profile = catalogue.profile(profile).unwrap();
+        let run = run_profile(&catalogue, profile, &kind, &options, |_| {});
+        let bad: Vec<String> = run
+            .runs
+            .iter()
+            .filter_map(|r| match &r.outcome {
+                Outcome::Pass => None,
+                Outcome::Fail(f) => Some(f.details()),
+                Outcome::Error(e) => Some(format!("{}: {e}", r.scenario)),
+            })
+            .collect();
+        assert!(bad.is_empty(), "{}:\n{}", profile.name, bad.join("\n\n"));
+        assert!(run.runs.len() >= 90, "{} runs", run.runs.len());
+    }
+}
+
+/// One scenario against a client command.
+fn run_one(command: &str, timeout_ms: u64) -> canif_harness::ScenarioRun {
+    let config = InterfaceConfig::new(FrameFormat::Base11, 4);
+    let scenario = application::steady_traffic(&config, 1);
+    let kind = exec(command, timeout_ms);
+    let build = |layout| kind.build(&config, layout);
+    rig::run(
+        &Capabilities::everything(),
+        &scenario,
+        Master::ALL[0],
+        &build,
+    )
+}
+
+/// One broken client: the error it must produce, in words.
+fn broken(command: &str, expected: &[&str]) {
+    let started = Instant::now();
+    let run = run_one(command, 400);
+    assert!(
+        started.elapsed() < Duration::from_secs(10),
+        "{:?}",
+        started.elapsed()
+    );
+    let Outcome::Error(RunError::Iut(error)) = run.outcome else {
+        panic!("`{command}` gave {:?}, not the client's error", run.outcome)
+    };
+    for words in expected {
+        assert!(
+            error.0.contains(words),
+            "`{command}`: {words:?} not in {}",
+            error.0
+        );
+    }
+}
+
+const STARTED: &str = r#"read l; echo '{"type":"started","protocol":1}'"#;
+
+#[test]
+fn a_client_that_breaks_the_protocol_is_an_error_naming_what_it_did() {
+    broken("echo 'starting…' >&2; exit 3", &["exited", "starting…"]);
+    broken(
+        &format!("{STARTED}; sleep 5"),
+        &["no answer to `task`", "killed"],
+    );
+    broken(
+        &format!("{STARTED}; read l; echo 'hello'"),
+        &["not a JSON object"],
+    );
+    broken(
+        r#"read l; echo '{"type":"started","protocol":7}'"#,
+        &["client protocol version 7"],
+    );
+    broken(
+        &format!(
+            r#"{STARTED}; read l; echo '{{"type":"tasked","outputs":"00","delivered":[],"refused":[]}}'"#
+        ),
+        &["output image of 1 bytes"],
+    );
+    broken(
+        &format!(
+            r#"{STARTED}; read l; echo '{{"type":"tasked","outputs":"{}","delivered":[],"refused":[5]}}'"#,
+            "00".repeat(46)
+        ),
+        &["refused request 5"],
+    );
+}
+
+fn schema() -> jsonschema::Validator {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/docs/adapter-protocol.schema.json"
+    ))
+    .unwrap();
+    jsonschema::validator_for(&serde_json::from_str(&text).unwrap()).unwrap()
+}
+
+/// Every line of a real client session, both ways, fits the schema.
+#[test]
+fn real_client_traffic_fits_the_schema() {
+    let dir = std::env::temp_dir().join(format!("canif-client-traffic-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (requests, answers) = (dir.join("requests.log"), dir.join("answers.log"));
+    let command = format!(
+        "tee {} | python3 {SCRIPT} | tee {}",
+        requests.display(),
+        answers.display()
+    );
+    assert_eq!(run_one(&command, 5_000).outcome, Outcome::Pass);
+    std::thread::sleep(Duration::from_millis(100));
+    let schema = schema();
+    let mut lines = 0;
+    for file in [&requests, &answers] {
+        for line in std::fs::read_to_string(file).unwrap().lines() {
+            let value: serde_json::Value = serde_json::from_str(line).unwrap();
+            let errors: Vec<String> = schema.iter_errors(&value).map(|e| e.to_string()).collect();
+            assert!(errors.is_empty(), "{line}\nviolates the schema: {errors:?}");
+            lines += 1;
+        }
+    }
+    let requests = std::fs::read_to_string(&requests).unwrap();
+    assert!(requests.contains(r#""type":"start""#) && requests.contains(r#""requests":[{"#));
+    assert!(lines > 300, "{lines} lines");
+    let _ = std::fs::remove_dir_all(dir);
+}
