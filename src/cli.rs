@@ -242,6 +242,9 @@ pub enum Command {
         product: ProductOptions,
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Which side is under test: the device, or a PLC-side client.
+        #[arg(long, value_enum, default_value = "device")]
+        side: SideArg,
         /// Where to write certificate.json, .json.sig, .html and the run's reports.
         #[arg(long, default_value = "reports/certificate")]
         out: PathBuf,

@@ -184,6 +184,7 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
             key,
             verify,
             pubkey,
+            side,
         } => match (verify, pubkey) {
             (Some(path), Some(pubkey)) => certify::verify_certificate(&path, &pubkey),
             _ => certify::certify(
@@ -194,6 +195,7 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                 seed,
                 &dir,
                 key.as_deref(),
+                side,
             ),
         },
         Command::Device {

@@ -9,9 +9,12 @@ use canif_harness::report::{Product, ReportFile};
 use canif_harness::suite::Options;
 use canif_spec::Catalogue;
 
-use super::resolve_iut;
+use canif_harness::client::suite::ClientOptions;
+
+use super::plc::{self, PlcPlan};
 use super::run::{check_selection, execute, finish, profiles, Plan};
-use crate::cli::{CompareFormat, IutOptions};
+use super::{resolve_client, resolve_iut};
+use crate::cli::{CompareFormat, IutOptions, SideArg};
 
 /// How to check a certificate without canif, for the output and the docs.
 fn ssh_keygen_command(certificate: &Path) -> String {
@@ -31,11 +34,8 @@ pub fn certify(
     seed: u64,
     out: &Path,
     key: Option<&Path>,
+    side: SideArg,
 ) -> ExitCode {
-    let kind = match resolve_iut(iut) {
-        Ok(kind) => kind,
-        Err(code) => return code,
-    };
     let profiles = match profiles(catalogue, profile_names) {
         Ok(p) => p,
         Err(code) => return code,
@@ -47,18 +47,38 @@ pub fn certify(
             return ExitCode::from(2);
         }
     }
-    let options = Options {
-        seed,
-        ..Options::default()
+    let report = match side {
+        SideArg::Device => {
+            let kind = match resolve_iut(iut) {
+                Ok(kind) => kind,
+                Err(code) => return code,
+            };
+            let options = Options {
+                seed,
+                ..Options::default()
+            };
+            let plan = match Plan::new(profiles, options, product) {
+                Ok(plan) => plan,
+                Err(code) => return code,
+            };
+            if let Err(code) = check_selection(catalogue, &plan) {
+                return code;
+            }
+            execute(catalogue, &kind, &plan)
+        }
+        SideArg::Plc => {
+            let kind = match resolve_client(iut) {
+                Ok(kind) => kind,
+                Err(code) => return code,
+            };
+            let plan = PlcPlan {
+                profiles,
+                options: ClientOptions::new(seed),
+                product,
+            };
+            plc::execute(catalogue, &kind, &plan)
+        }
     };
-    let plan = match Plan::new(profiles, options, product) {
-        Ok(plan) => plan,
-        Err(code) => return code,
-    };
-    if let Err(code) = check_selection(catalogue, &plan) {
-        return code;
-    }
-    let report = execute(catalogue, &kind, &plan);
     let code = finish(catalogue, &report, &out.join("run"));
     let mut cert = Certificate::of(&report);
     let page = certificate::html(&cert, catalogue);
