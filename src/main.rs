@@ -189,13 +189,15 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
             (Some(path), Some(pubkey)) => certify::verify_certificate(&path, &pubkey),
             _ => certify::certify(
                 &catalogue,
-                &profile,
-                &iut,
-                product.product(),
-                seed,
+                certify::CertifyRun {
+                    profile_names: &profile,
+                    iut: &iut,
+                    side,
+                    product: product.product(),
+                    seed,
+                },
                 &dir,
                 key.as_deref(),
-                side,
             ),
         },
         Command::Device {

@@ -26,16 +26,28 @@ fn ssh_keygen_command(certificate: &Path) -> String {
     )
 }
 
+/// What `canif certify` runs: the implementation, on which side and profiles.
+pub struct CertifyRun<'a> {
+    pub profile_names: &'a [String],
+    pub iut: &'a IutOptions,
+    pub side: SideArg,
+    pub product: Option<Product>,
+    pub seed: u64,
+}
+
 pub fn certify(
     catalogue: &Catalogue,
-    profile_names: &[String],
-    iut: &IutOptions,
-    product: Option<Product>,
-    seed: u64,
+    run: CertifyRun<'_>,
     out: &Path,
     key: Option<&Path>,
-    side: SideArg,
 ) -> ExitCode {
+    let CertifyRun {
+        profile_names,
+        iut,
+        side,
+        product,
+        seed,
+    } = run;
     let profiles = match profiles(catalogue, profile_names) {
         Ok(p) => p,
         Err(code) => return code,
