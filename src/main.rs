@@ -100,10 +100,10 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                 Err(code) => return Ok(code),
             };
             if side == SideArg::Plc {
-                if !bus.is_sim() {
-                    eprintln!("--side plc runs on the simulated bus only (the kernel lane's client run is not built yet)");
-                    return Ok(ExitCode::from(2));
-                }
+                let client_bus = match plc::client_bus(&bus) {
+                    Ok(client_bus) => client_bus,
+                    Err(code) => return Ok(code),
+                };
                 let kind = match commands::resolve_client(&iut) {
                     Ok(kind) => kind,
                     Err(code) => return Ok(code),
@@ -116,6 +116,7 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                     profiles,
                     options: canif_harness::client::suite::ClientOptions {
                         seed,
+                        bus: client_bus,
                         counter_wrap: !no_counter_wrap,
                         masters,
                         selection,

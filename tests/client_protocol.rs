@@ -63,6 +63,7 @@ fn run_one(command: &str, timeout_ms: u64) -> canif_harness::ScenarioRun {
         &scenario,
         Master::ALL[0],
         &build,
+        &rig::simulated,
     )
 }
 

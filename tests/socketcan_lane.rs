@@ -176,6 +176,67 @@ fn fault_caught_over(interface: &str) -> Result<(), Failed> {
     Ok(())
 }
 
+/// The PLC side over a kernel: the model device's controller and the other
+/// nodes on one interface, so the client's frames cross a real CAN stack;
+/// the reference client conforms and a faulty one is caught on its requirement.
+fn client_side_over(interface: &str) -> Result<(), Failed> {
+    let bus = format!("socketcan:{interface}");
+    let run = |name: &str, extra: &[&str]| {
+        let dir = report_dir(name);
+        let mut args = vec![
+            "run",
+            "--side",
+            "plc",
+            "--bus",
+            &bus,
+            "--profile",
+            "fc532x",
+            "--master",
+            "lrw",
+            "--no-counter-wrap",
+        ];
+        args.extend_from_slice(extra);
+        let dir_text = dir.display().to_string();
+        args.extend_from_slice(&["--report", &dir_text]);
+        let started = Instant::now();
+        let output = canif(&args);
+        eprintln!("client side over {bus} ({name}): {:?}", started.elapsed());
+        (output, dir)
+    };
+    let (output, dir) = run("client-reference", &[]);
+    let report = report(&dir).map_err(|e| format!("{e}\n{}", text(&output)))?;
+    let (totals, _) = totals(&report);
+    if output.status.code() != Some(0) {
+        return Err(format!(
+            "expected the reference client to conform\n{}",
+            text(&output)
+        )
+        .into());
+    }
+    let bus_text = report["meta"]["bus"].as_str().unwrap_or_default();
+    if report["meta"]["side"] != "plc"
+        || !bus_text.contains(interface)
+        || !bus_text.contains("Linux")
+    {
+        return Err(
+            format!("the report does not name the side, bus and kernel: {bus_text:?}").into(),
+        );
+    }
+    if report["totals"]["pass"].as_u64().unwrap_or(0) < 10 {
+        return Err(format!("too little checked: {totals}").into());
+    }
+    let (output, dir) = run("client-fault", &["--fault", "one-based-slots"]);
+    let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap_or_default();
+    if output.status.code() != Some(1) || !summary.contains("CL-TX-004") {
+        return Err(format!(
+            "expected one-based-slots to fail CL-TX-004\n{}\nsummary:\n{summary}",
+            text(&output)
+        )
+        .into());
+    }
+    Ok(())
+}
+
 /// `ip link set IFACE up|down`, through the socketcan crate's netlink.
 fn link(interface: &str, up: bool) -> Result<(), Failed> {
     canif_kernel::set_link(interface, up).map_err(Failed::from)
@@ -649,6 +710,7 @@ fn main() {
             Ok(Box::new(move || python_canopen_over(&i)) as Check)
         }),
     ));
+    trials.push(("client_side_over_vcan_fd", on(&fd, client_side_over)));
     trials.push((
         "interface_down_is_an_error",
         on(&classic, interface_down_is_an_error),

@@ -15,6 +15,24 @@ use crate::bus::sim::{Controller, SimBus};
 use crate::bus::Bus;
 use crate::error::BusError;
 
+/// The device as the harness plays it for a client: on the simulated bus
+/// ([`DeviceSide`]) or with its controller on a SocketCAN interface
+/// ([`crate::bus::kernel_device::KernelDeviceSide`]).
+pub trait PlayedDevice {
+    fn layout(&self) -> ImageLayout;
+    /// Another node's frame, ready to send from `at`.
+    fn schedule(&mut self, at: Nanos, frame: Frame);
+    /// The bus runs to `until`; the frames that ended on it meanwhile.
+    fn run_until(&mut self, until: Nanos) -> Result<Vec<Ended>, BusError>;
+    /// The device's cycle on the client's outputs: the new input image.
+    fn cycle(&mut self, outputs: &[u8]) -> Result<Vec<u8>, SizeError>;
+    /// The device goes INIT → OP: counters, queues and the frame it was about
+    /// to send are gone; the bus and the other nodes go on.
+    fn restart(&mut self) -> Result<(), ConfigError>;
+    /// Messages the device received and has not entered in the image.
+    fn queued_rx(&self) -> usize;
+}
+
 /// A frame that ended on the bus.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Ended {
@@ -96,39 +114,35 @@ impl DeviceSide {
             config,
         })
     }
+}
 
-    /// The device goes INIT → OP: its counters, queues and the frame it was
-    /// about to send are gone; the bus and the other nodes go on.
-    pub fn restart(&mut self) -> Result<(), ConfigError> {
+impl PlayedDevice for DeviceSide {
+    fn layout(&self) -> ImageLayout {
+        self.device.device.layout()
+    }
+
+    fn schedule(&mut self, at: Nanos, frame: Frame) {
+        self.bus.schedule(at, frame);
+    }
+
+    fn run_until(&mut self, until: Nanos) -> Result<Vec<Ended>, BusError> {
+        self.bus.drive(&mut self.device, until)?;
+        Ok(std::mem::take(&mut self.device.ended))
+    }
+
+    fn cycle(&mut self, outputs: &[u8]) -> Result<Vec<u8>, SizeError> {
+        let now = self.device.now;
+        self.device.device.cycle(outputs, now).map(<[u8]>::to_vec)
+    }
+
+    fn restart(&mut self) -> Result<(), ConfigError> {
         self.device.device = Device::new(&self.caps, self.config.clone())?;
         self.device.pending = None;
         Ok(())
     }
 
-    /// Messages the device received and has not entered in the image.
-    pub fn queued_rx(&self) -> usize {
+    fn queued_rx(&self) -> usize {
         self.device.device.queued_rx()
-    }
-
-    pub fn layout(&self) -> ImageLayout {
-        self.device.device.layout()
-    }
-
-    /// Another node's frame, ready to send from `at`.
-    pub fn schedule(&mut self, at: Nanos, frame: Frame) {
-        self.bus.schedule(at, frame);
-    }
-
-    /// The bus runs to `until`; the frames that ended on it meanwhile.
-    pub fn run_until(&mut self, until: Nanos) -> Result<Vec<Ended>, BusError> {
-        self.bus.drive(&mut self.device, until)?;
-        Ok(std::mem::take(&mut self.device.ended))
-    }
-
-    /// The device's cycle on the client's outputs: the new input image.
-    pub fn cycle(&mut self, outputs: &[u8]) -> Result<&[u8], SizeError> {
-        let now = self.device.now;
-        self.device.device.cycle(outputs, now)
     }
 }
 

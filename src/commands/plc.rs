@@ -7,10 +7,12 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use canif_harness::client::master::Master;
-use canif_harness::client::suite::{self, ClientKind, ClientOptions};
+use canif_harness::client::suite::{self, ClientBus, ClientKind, ClientOptions};
 use canif_harness::report::{Product, ProfileReport, RunMeta, RunReport};
 use canif_harness::{Outcome, Selection};
 use canif_spec::{Catalogue, Profile, Side};
+
+use canif_harness::bus::BusChoice;
 
 /// What `--side plc` was asked for, checked.
 pub struct PlcPlan<'c> {
@@ -34,6 +36,32 @@ pub fn masters(names: &[String]) -> Result<Vec<Master>, ExitCode> {
             })
         })
         .collect()
+}
+
+/// The bus of `--side plc`: the simulated one, or one SocketCAN interface
+/// that the played device's controller and the other nodes share.
+pub fn client_bus(bus: &BusChoice) -> Result<ClientBus, ExitCode> {
+    match bus {
+        BusChoice::Sim => Ok(ClientBus::Sim),
+        #[cfg(feature = "socketcan")]
+        BusChoice::SocketCan(options) => {
+            let spec = &options.spec;
+            if spec.iut != spec.tester {
+                eprintln!("--side plc: one interface (socketcan:IFACE); the device and the other nodes share it");
+                return Err(ExitCode::from(2));
+            }
+            if let Err(error) = canif_kernel::probe()
+                .and_then(|()| canif_kernel::KernelSocket::open(&spec.iut, false).map(|_| ()))
+            {
+                eprintln!("error: --bus {}: {error}", spec.describe());
+                return Err(ExitCode::from(2));
+            }
+            Ok(ClientBus::SocketCan {
+                interface: spec.iut.clone(),
+                timeout: options.timeout,
+            })
+        }
+    }
 }
 
 /// A selection that matches no check of the plan is a usage error, as on the device side.
@@ -161,7 +189,7 @@ pub fn execute(catalogue: &Catalogue, kind: &ClientKind, plan: &PlcPlan) -> RunR
                 .collect(),
             ..RunMeta::new(
                 kind.name(),
-                "simulated bus (virtual time), the reference model as the device".into(),
+                plan.options.bus.describe(),
                 plan.options.seed,
                 catalogue,
             )

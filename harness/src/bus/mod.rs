@@ -8,6 +8,8 @@
 
 #[cfg(feature = "socketcan")]
 pub mod kernel;
+#[cfg(feature = "socketcan")]
+pub mod kernel_device;
 pub mod sim;
 
 use canif_model::frame::Frame;

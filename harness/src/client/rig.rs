@@ -5,15 +5,16 @@
 use std::collections::VecDeque;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
-use canif_model::config::{Capabilities, Synchronization};
+use canif_model::config::{Capabilities, InterfaceConfig, Synchronization};
 use canif_model::image::{ImageLayout, InputImage, MessageRepr, OutputImage};
+use canif_model::timing::BitRates;
 use canif_model::Nanos;
 
 use super::application::{ClientScenario, Event};
 use super::judge::{Breach, Judge, TaskSeen};
 use super::master::{Master, MasterRun};
 use super::{Client, IutError, TaskIo};
-use crate::device_side::DeviceSide;
+use crate::device_side::{DeviceSide, PlayedDevice};
 use crate::error::RunError;
 use crate::iut::BuildError;
 use crate::outcome::{Failure, Outcome, ScenarioRun};
@@ -26,6 +27,21 @@ const CONTEXT: usize = 8;
 
 /// Builds a fresh client for an image (at the start and at each PLC restart).
 pub type BuildClient<'a> = dyn Fn(ImageLayout) -> Result<Box<dyn Client>, BuildError> + 'a;
+
+/// Opens the device the harness plays, on the bus of the run.
+pub type OpenDevice<'a> = dyn Fn(&Capabilities, InterfaceConfig, BitRates) -> Result<Box<dyn PlayedDevice>, RunError>
+    + 'a;
+
+/// The device on the simulated bus.
+pub fn simulated(
+    caps: &Capabilities,
+    config: InterfaceConfig,
+    bit_rates: BitRates,
+) -> Result<Box<dyn PlayedDevice>, RunError> {
+    DeviceSide::new(caps, config, bit_rates)
+        .map(|d| Box::new(d) as Box<dyn PlayedDevice>)
+        .map_err(|e| RunError::Configuration(e.to_string()))
+}
 
 /// Where a run is, for the failure it may end in.
 struct Tracker {
@@ -76,6 +92,7 @@ pub fn run(
     scenario: &ClientScenario,
     master: Master,
     build: &BuildClient<'_>,
+    open: &OpenDevice<'_>,
 ) -> ScenarioRun {
     let started = std::time::Instant::now();
     let name = format!("{} under {}", scenario.name, master.name);
@@ -85,7 +102,14 @@ pub fn run(
         context: VecDeque::new(),
     };
     let mut counts = (0u64, 0u64); // (tasks, frames checked)
-    let result = drive(caps, scenario, master, build, &mut tracker, &mut counts);
+    let result = drive(
+        caps,
+        scenario,
+        master,
+        (build, open),
+        &mut tracker,
+        &mut counts,
+    );
     let outcome = match result {
         Ok(()) => Outcome::Pass,
         Err(Stop::Breach(breach)) => Outcome::Fail(Box::new(tracker.failure(&name, breach))),
@@ -106,7 +130,7 @@ fn drive(
     caps: &Capabilities,
     scenario: &ClientScenario,
     master: Master,
-    build: &BuildClient<'_>,
+    (build, open): (&BuildClient<'_>, &OpenDevice<'_>),
     tracker: &mut Tracker,
     counts: &mut (u64, u64),
 ) -> Result<(), Stop> {
@@ -118,8 +142,7 @@ fn drive(
     }
     let configuration =
         |e: canif_model::config::ConfigError| Stop::Error(RunError::Configuration(e.to_string()));
-    let mut device =
-        DeviceSide::new(caps, config.clone(), scenario.bit_rates).map_err(configuration)?;
+    let mut device = open(caps, config.clone(), scenario.bit_rates).map_err(Stop::Error)?;
     let layout = device.layout();
     let built =
         |layout| build(layout).map_err(|e| Stop::Error(RunError::Iut(IutError(e.to_string()))));

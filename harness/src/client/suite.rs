@@ -8,6 +8,7 @@ use std::time::Duration;
 
 use canif_model::config::{Capabilities, InterfaceConfig, QueueMode};
 use canif_model::image::ImageLayout;
+use canif_model::timing::BitRates;
 use canif_spec::{Catalogue, Profile, ReqId, Side};
 
 use super::application::{self, ClientScenario};
@@ -15,6 +16,7 @@ use super::exec::ExecClient;
 use super::faulty::{ClientFault, FaultyClient};
 use super::master::Master;
 use super::{rig, Client, ReferenceClient};
+use crate::device_side::PlayedDevice;
 use crate::error::RunError;
 use crate::iut::BuildError;
 use crate::outcome::{Outcome, ScenarioRun};
@@ -62,10 +64,56 @@ impl ClientKind {
     }
 }
 
+/// Where the device the harness plays sends and receives its frames.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum ClientBus {
+    /// The simulated bus, virtual time.
+    Sim,
+    /// The device's controller and the other nodes on a SocketCAN interface;
+    /// `timeout`: how long a frame may take to cross the kernel.
+    #[cfg(feature = "socketcan")]
+    SocketCan {
+        interface: String,
+        timeout: Duration,
+    },
+}
+
+impl ClientBus {
+    /// The bus, as a report names it.
+    pub fn describe(&self) -> String {
+        match self {
+            ClientBus::Sim => "simulated bus (virtual time), the reference model as the device".into(),
+            #[cfg(feature = "socketcan")]
+            ClientBus::SocketCan { interface, .. } => format!(
+                "the reference model as the device, its controller and the other nodes on {interface} (Linux {}); frames cross the kernel",
+                canif_kernel::kernel_release()
+            ),
+        }
+    }
+
+    fn open(
+        &self,
+        caps: &Capabilities,
+        config: InterfaceConfig,
+        bit_rates: BitRates,
+    ) -> Result<Box<dyn PlayedDevice>, RunError> {
+        match self {
+            ClientBus::Sim => rig::simulated(caps, config, bit_rates),
+            #[cfg(feature = "socketcan")]
+            ClientBus::SocketCan { interface, timeout } => {
+                crate::bus::kernel_device::KernelDeviceSide::open(caps, config, interface, *timeout)
+                    .map(|d| Box::new(d) as Box<dyn PlayedDevice>)
+                    .map_err(|e| RunError::Bus(crate::error::BusError(e)))
+            }
+        }
+    }
+}
+
 /// What a client run runs.
 #[derive(Debug, Clone)]
 pub struct ClientOptions {
     pub seed: u64,
+    pub bus: ClientBus,
     /// Include the 65,600-cycle counter wrap.
     pub counter_wrap: bool,
     /// The master models (all by default).
@@ -77,6 +125,7 @@ impl ClientOptions {
     pub fn new(seed: u64) -> Self {
         ClientOptions {
             seed,
+            bus: ClientBus::Sim,
             counter_wrap: true,
             masters: Master::ALL.to_vec(),
             selection: Selection::default(),
@@ -165,7 +214,9 @@ pub fn run_profile(
             },
             None => {
                 let build = |layout| kind.build(&scenario.config, layout);
-                rig::run(&caps, &scenario, master, &build)
+                let open =
+                    |caps: &Capabilities, config, rates| options.bus.open(caps, config, rates);
+                rig::run(&caps, &scenario, master, &build, &open)
             }
         };
         if let (None, Outcome::Error(RunError::Iut(error))) = (&broken, &run.outcome) {
