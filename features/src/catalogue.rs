@@ -1,6 +1,7 @@
 //! The scenarios of the embedded feature files, one entry per scenario or
 //! Examples row, with their tags.
 
+use canif_spec::Side;
 use cucumber::gherkin::{Feature, GherkinEnv};
 
 /// One runnable scenario (an outline's Examples row counts once).
@@ -22,6 +23,8 @@ pub struct ScenarioInfo {
     pub profile: Option<String>,
     /// An Examples row's values, `column=value, …`.
     pub example: Option<String>,
+    /// The side under test: `@plc` features judge a client, the others a device.
+    pub side: Side,
 }
 
 impl ScenarioInfo {
@@ -137,6 +140,11 @@ pub fn scenarios() -> Result<Vec<ScenarioInfo>, String> {
                     once: tags.iter().any(|t| *t == "once"),
                     profile,
                     example,
+                    side: if tags.iter().any(|t| *t == "plc") {
+                        Side::Plc
+                    } else {
+                        Side::Device
+                    },
                 });
             }
         }

@@ -7,10 +7,12 @@
 #![forbid(unsafe_code)]
 
 pub mod catalogue;
+pub mod client_world;
 pub mod steps;
 pub mod world;
 
 pub use catalogue::{scenarios, ScenarioInfo};
+pub use client_world::{set_client_target, ClientTarget, ClientWorld};
 pub use world::{set_target, CanWorld, Target};
 
 mod embedded {
@@ -23,7 +25,7 @@ use std::sync::{Arc, Mutex};
 use canif_spec::ReqId;
 use cucumber::writer::Stats as _;
 use cucumber::writer::{self, Coloring, Verbosity};
-use cucumber::{World as _, WriterExt as _};
+use cucumber::WriterExt as _;
 
 /// Output captured from cucumber's writer.
 #[derive(Clone, Default)]
@@ -81,6 +83,20 @@ impl ScenarioOutcome {
 
 /// Runs the scenario at `line` of `file` against `target`.
 pub fn run_scenario(file: &str, line: usize, target: Target) -> ScenarioOutcome {
+    set_target(target);
+    run_in::<CanWorld>(file, line)
+}
+
+/// Runs the PLC-side scenario at `line` of `file` (a `@plc` feature) against `target`.
+pub fn run_client_scenario(file: &str, line: usize, target: ClientTarget) -> ScenarioOutcome {
+    set_client_target(target);
+    run_in::<ClientWorld>(file, line)
+}
+
+fn run_in<W>(file: &str, line: usize) -> ScenarioOutcome
+where
+    W: cucumber::World + cucumber::codegen::WorldInventory + std::fmt::Debug,
+{
     let Some(feature) = catalogue::feature(file).and_then(|f| catalogue::only(f, line)) else {
         return ScenarioOutcome::failed(format!("no scenario at {file}:{line}"));
     };
@@ -89,14 +105,13 @@ pub fn run_scenario(file: &str, line: usize, target: Target) -> ScenarioOutcome 
         Ok(feature) => feature,
         Err(error) => return ScenarioOutcome::failed(format!("{file}:{line}: {error}")),
     };
-    set_target(target);
     let _ = world::take_iut_error();
     let _ = world::take_witness();
     let captured = Captured::default();
     let writer =
         writer::Basic::new(captured.clone(), Coloring::Never, Verbosity::ShowWorld).summarized();
     let result = futures::executor::block_on(
-        CanWorld::cucumber::<&str>()
+        W::cucumber::<&str>()
             .with_parser(Embedded)
             .with_writer(writer)
             .with_default_cli()

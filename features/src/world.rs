@@ -45,7 +45,7 @@ pub fn take_iut_error() -> Option<String> {
     IUT_ERROR.with(|e| e.borrow_mut().take())
 }
 
-fn record_iut_error(message: &str) {
+pub(crate) fn record_iut_error(message: &str) {
     IUT_ERROR.with(|e| *e.borrow_mut() = Some(message.to_string()));
 }
 

@@ -3,9 +3,12 @@
 //! manual's tables (`@model`) run once. A profile lacking a capability lists the
 //! scenario as ignored with the reason. Works under `cargo test` and nextest.
 
-use canif_features::{run_scenario, scenarios, ScenarioOutcome, Target};
+use canif_features::{
+    run_client_scenario, run_scenario, scenarios, ClientTarget, ScenarioOutcome, Target,
+};
+use canif_harness::client::suite::ClientKind;
 use canif_harness::IutKind;
-use canif_spec::Catalogue;
+use canif_spec::{Catalogue, Side};
 use libtest_mimic::{Arguments, Failed, Trial};
 
 fn main() {
@@ -19,6 +22,34 @@ fn main() {
             .trim_start_matches("features/")
             .trim_end_matches(".feature")
             .to_string();
+        if scenario.side == Side::Plc {
+            // The PLC side: the reference client on every profile that offers the interface.
+            for profile in &catalogue.profiles {
+                let name = format!(
+                    "plc::{}::{file}:{}: {}",
+                    profile.name, scenario.line, scenario.name
+                );
+                let missing = profile.lacks(&scenario.capabilities);
+                if !missing.is_empty() {
+                    trials.push(
+                        Trial::test(name, || Ok(()))
+                            .with_kind(format!("n/a: lacks {}", missing.join("+")))
+                            .with_ignored_flag(true),
+                    );
+                    continue;
+                }
+                let (path, line) = (scenario.file.clone(), scenario.line);
+                let target = ClientTarget {
+                    client: ClientKind::Reference,
+                    profile: profile.name.clone(),
+                    caps: profile.model_capabilities(),
+                };
+                trials.push(Trial::test(name, move || {
+                    outcome(run_client_scenario(&path, line, target))
+                }));
+            }
+            continue;
+        }
         if scenario.model_only || scenario.once {
             let iut = if scenario.model_only {
                 IutKind::Model

@@ -177,11 +177,7 @@ impl ProfileRun {
     }
 }
 
-pub(crate) fn interface(
-    format: FrameFormat,
-    queue: QueueMode,
-    caps: &Capabilities,
-) -> InterfaceConfig {
+pub fn interface(format: FrameFormat, queue: QueueMode, caps: &Capabilities) -> InterfaceConfig {
     let mut config = InterfaceConfig::new(format, 8.min(caps.max_slots));
     config.queue = queue;
     let tn_allowed = caps.transaction_number

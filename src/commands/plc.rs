@@ -9,7 +9,7 @@ use std::process::ExitCode;
 use canif_harness::client::master::Master;
 use canif_harness::client::suite::{self, ClientBus, ClientKind, ClientOptions};
 use canif_harness::report::{Product, ProfileReport, RunMeta, RunReport};
-use canif_harness::{Outcome, Selection};
+use canif_harness::{GherkinOutcome, GherkinRun, Outcome, Selection};
 use canif_spec::{Catalogue, Profile, Side};
 
 use canif_harness::bus::BusChoice;
@@ -154,12 +154,13 @@ pub fn execute(catalogue: &Catalogue, kind: &ClientKind, plan: &PlcPlan) -> RunR
                 (f, e) => format!("{f} fail, {e} ERROR"),
             }
         );
+        let gherkin = run_features(kind, profile, &plan.options);
         let reach = suite::reach(catalogue, &profile.model_capabilities(), &plan.options);
         profiles.push(ProfileReport::new(
             catalogue,
             profile,
             run,
-            Vec::new(),
+            gherkin,
             Vec::new(),
             &reach,
         ));
@@ -198,4 +199,53 @@ pub fn execute(catalogue: &Catalogue, kind: &ClientKind, plan: &PlcPlan) -> RunR
         wall_time_ms: started.elapsed().as_millis(),
         interrupted,
     }
+}
+
+/// The `@plc` Gherkin scenarios the profile offers, against the client.
+fn run_features(kind: &ClientKind, profile: &Profile, options: &ClientOptions) -> Vec<GherkinRun> {
+    if options.bus != ClientBus::Sim {
+        return Vec::new(); // they use the simulated bus
+    }
+    let Ok(scenarios) = canif_features::scenarios() else {
+        return Vec::new(); // the device side reports features that do not parse
+    };
+    let mut runs = Vec::new();
+    for scenario in scenarios {
+        let id = scenario.id();
+        if scenario.side != Side::Plc
+            || !profile.lacks(&scenario.capabilities).is_empty()
+            || !options
+                .selection
+                .admits(&id, scenario.requirements.iter().map(String::as_str))
+        {
+            continue;
+        }
+        let target = canif_features::ClientTarget {
+            client: kind.clone(),
+            profile: profile.name.clone(),
+            caps: profile.model_capabilities(),
+        };
+        let started = std::time::Instant::now();
+        let outcome =
+            match canif_features::run_client_scenario(&scenario.file, scenario.line, target) {
+                canif_features::ScenarioOutcome::Passed => GherkinOutcome::Pass,
+                canif_features::ScenarioOutcome::Failed { report, witness } => {
+                    GherkinOutcome::Fail {
+                        step: super::run::failing_step(&report),
+                        blamed: canif_harness::blame::narrow_tags(&scenario.requirements, &witness),
+                        report,
+                    }
+                }
+                canif_features::ScenarioOutcome::Error(report) => GherkinOutcome::Error(report),
+            };
+        runs.push(GherkinRun {
+            id,
+            file: scenario.file.clone(),
+            line: scenario.line,
+            requirements: scenario.requirements.clone(),
+            outcome,
+            elapsed: started.elapsed(),
+        });
+    }
+    runs
 }

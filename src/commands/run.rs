@@ -366,7 +366,8 @@ pub fn gherkin_targets(
 ) -> Result<Vec<(String, canif_features::ScenarioInfo)>, String> {
     let mut targets = Vec::new();
     for scenario in canif_features::scenarios()? {
-        if scenario.model_only {
+        // The manual's tables check the model; `@plc` scenarios a client (`--side plc`).
+        if scenario.model_only || scenario.side == canif_spec::Side::Plc {
             continue;
         }
         if scenario.once {
@@ -450,7 +451,7 @@ pub fn run_features(kind: &IutKind, plan: &Plan) -> Vec<(String, GherkinRun)> {
 
 /// The failing step of cucumber's report and what it said, in one line:
 /// `✘ And the bytes after the first 10 are 00: padding is not 00: FF FF`.
-fn failing_step(report: &str) -> String {
+pub fn failing_step(report: &str) -> String {
     let mut lines = report.lines().map(str::trim).filter(|l| !l.is_empty());
     let Some(step) = lines.find(|l| l.contains('✘')) else {
         return report

@@ -3,6 +3,7 @@
 //! documents' tables, and CANopen.
 
 mod canopen;
+mod client;
 mod given;
 mod tables;
 mod then;

@@ -6,6 +6,7 @@ use std::collections::VecDeque;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 use canif_model::config::{Capabilities, InterfaceConfig, Synchronization};
+use canif_model::frame::Frame;
 use canif_model::image::{ImageLayout, InputImage, MessageRepr, OutputImage};
 use canif_model::timing::BitRates;
 use canif_model::Nanos;
@@ -74,6 +75,17 @@ impl Tracker {
     }
 }
 
+/// What a run saw, for checks beyond the judge's (the Gherkin steps).
+#[derive(Debug, Clone, Default)]
+pub struct Record {
+    pub tasks: u64,
+    pub frames_checked: u64,
+    /// The frames the device sent on the bus, in order.
+    pub sent: Vec<Frame>,
+    /// The messages the client delivered to its application, in order.
+    pub delivered: Vec<MessageRepr>,
+}
+
 /// What ended a run early.
 enum Stop {
     Breach(Breach),
@@ -94,6 +106,17 @@ pub fn run(
     build: &BuildClient<'_>,
     open: &OpenDevice<'_>,
 ) -> ScenarioRun {
+    run_recorded(caps, scenario, master, build, open).0
+}
+
+/// [`run`], and what the run saw.
+pub fn run_recorded(
+    caps: &Capabilities,
+    scenario: &ClientScenario,
+    master: Master,
+    build: &BuildClient<'_>,
+    open: &OpenDevice<'_>,
+) -> (ScenarioRun, Record) {
     let started = std::time::Instant::now();
     let name = format!("{} under {}", scenario.name, master.name);
     let mut tracker = Tracker {
@@ -101,29 +124,30 @@ pub fn run(
         time: 0,
         context: VecDeque::new(),
     };
-    let mut counts = (0u64, 0u64); // (tasks, frames checked)
+    let mut record = Record::default();
     let result = drive(
         caps,
         scenario,
         master,
         (build, open),
         &mut tracker,
-        &mut counts,
+        &mut record,
     );
     let outcome = match result {
         Ok(()) => Outcome::Pass,
         Err(Stop::Breach(breach)) => Outcome::Fail(Box::new(tracker.failure(&name, breach))),
         Err(Stop::Error(error)) => Outcome::Error(error),
     };
-    ScenarioRun {
+    let run = ScenarioRun {
         scenario: name,
         covers: scenario.covers.clone(),
         outcome,
-        cycles: counts.0,
-        frames_checked: counts.1,
+        cycles: record.tasks,
+        frames_checked: record.frames_checked,
         tolerated: 0,
         elapsed: started.elapsed(),
-    }
+    };
+    (run, record)
 }
 
 fn drive(
@@ -132,7 +156,7 @@ fn drive(
     master: Master,
     (build, open): (&BuildClient<'_>, &OpenDevice<'_>),
     tracker: &mut Tracker,
-    counts: &mut (u64, u64),
+    record: &mut Record,
 ) -> Result<(), Stop> {
     let mut config = scenario.config.clone();
     if master.distributed_clocks {
@@ -184,8 +208,9 @@ fn drive(
             .map_err(|e| Stop::Error(RunError::Bus(e)))?
         {
             if ended.from_device {
+                record.sent.push(ended.frame);
                 judge.device_sent(&ended.frame)?;
-                counts.1 += 1;
+                record.frames_checked += 1;
             }
         }
         if exchange.client_runs() {
@@ -225,7 +250,8 @@ fn drive(
                 },
                 deadline,
             )?;
-            counts.1 += answer.delivered.len() as u64;
+            record.frames_checked += answer.delivered.len() as u64;
+            record.delivered.extend_from_slice(&answer.delivered);
             exchange.client_wrote(&buffer[..layout.output_size()]);
         } else {
             tracker.note(format!("task {task}: overrun, the client does not run"));
@@ -242,7 +268,7 @@ fn drive(
             judge.device_cycle(&inputs);
             Ok(inputs)
         })?;
-        counts.0 += 1;
+        record.tasks += 1;
     }
     judge.finish(device.queued_rx())?;
     Ok(())

@@ -1,0 +1,163 @@
+//! The world a PLC-side scenario runs in: the client under test, and the
+//! device, master and application the harness plays around it. The steps
+//! write the life cycle down cycle by cycle; the first `Then` runs it through
+//! the client rig (`canif_harness::client::rig`), with the judge on every task.
+
+use std::cell::RefCell;
+
+use canif_harness::client::application::{ClientScenario, Event};
+use canif_harness::client::master::Master;
+use canif_harness::client::rig::{self, Record};
+use canif_harness::client::suite::ClientKind;
+use canif_harness::ScenarioRun;
+use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig, QueueMode};
+use canif_model::frame::{CanId, Frame};
+use canif_model::image::MessageRepr;
+use canif_model::timing::BitRates;
+
+/// Who a PLC-side scenario runs against; set by the runner before each run.
+#[derive(Debug, Clone)]
+pub struct ClientTarget {
+    pub client: ClientKind,
+    pub profile: String,
+    pub caps: Capabilities,
+}
+
+thread_local! {
+    static CLIENT_TARGET: RefCell<Option<ClientTarget>> = const { RefCell::new(None) };
+}
+
+pub fn set_client_target(target: ClientTarget) {
+    CLIENT_TARGET.with(|t| *t.borrow_mut() = Some(target));
+}
+
+fn client_target() -> ClientTarget {
+    CLIENT_TARGET
+        .with(|t| t.borrow().clone())
+        .unwrap_or_else(|| ClientTarget {
+            client: ClientKind::Reference,
+            profile: "everything".into(),
+            caps: Capabilities::everything(),
+        })
+}
+
+/// Cycles at the end of a written life cycle for everything to arrive.
+const QUIET: u64 = 40;
+
+#[derive(cucumber::World)]
+#[world(init = Self::new)]
+pub struct ClientWorld {
+    pub target: ClientTarget,
+    pub config: InterfaceConfig,
+    pub master: Master,
+    /// The cycle the next event happens in.
+    pub cycle: u64,
+    pub events: Vec<(u64, Event)>,
+    /// What the application asked to send, and what other nodes sent, in order.
+    pub asked: Vec<Frame>,
+    pub arrived: Vec<Frame>,
+    next_id: u16,
+    next_number: u16,
+    /// The run, once a `Then` needed it.
+    pub ran: Option<(ScenarioRun, Record)>,
+}
+
+impl std::fmt::Debug for ClientWorld {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "ClientWorld {{ client: {}, profile: {}, {:?} {:?} with {} slots under {}, cycle {}, {} events }}",
+            self.target.client.name(),
+            self.target.profile,
+            self.config.format,
+            self.config.queue,
+            self.config.tx_slots,
+            self.master,
+            self.cycle,
+            self.events.len()
+        )
+    }
+}
+
+impl ClientWorld {
+    fn new() -> Self {
+        let target = client_target();
+        let config =
+            canif_harness::suite::interface(FrameFormat::Base11, QueueMode::Standard, &target.caps);
+        ClientWorld {
+            target,
+            config,
+            master: Master::ALL[0],
+            cycle: 0,
+            events: Vec::new(),
+            asked: Vec::new(),
+            arrived: Vec::new(),
+            next_id: 0x100,
+            next_number: 1,
+            ran: None,
+        }
+    }
+
+    /// The interface as the profile offers it, with `slots` slots.
+    pub fn set_up(&mut self, format: FrameFormat, queue: QueueMode, slots: u8) {
+        self.config = canif_harness::suite::interface(format, queue, &self.target.caps);
+        (self.config.tx_slots, self.config.rx_slots) = (slots, slots);
+    }
+
+    /// A frame the interface carries: 11-bit identifiers counting up from 0x100.
+    fn next_frame(&mut self) -> Frame {
+        let id = CanId::Standard(self.next_id);
+        self.next_id += 1;
+        Frame::classic(id, &self.next_id.to_le_bytes()).expect("two bytes")
+    }
+
+    pub fn application_sends(&mut self, n: u32) {
+        for _ in 0..n {
+            let frame = self.next_frame();
+            self.asked.push(frame);
+            let message = MessageRepr {
+                transaction_number: self.next_number,
+                frame,
+                time_stamp: 0,
+            };
+            self.next_number += 1;
+            self.events.push((self.cycle, Event::Send(message)));
+        }
+    }
+
+    pub fn nodes_send(&mut self, n: u32) {
+        for _ in 0..n {
+            let frame = self.next_frame();
+            self.arrived.push(frame);
+            self.events.push((self.cycle, Event::Arrive(frame)));
+        }
+    }
+
+    pub fn at_this_cycle(&mut self, event: Event) {
+        self.events.push((self.cycle, event));
+    }
+
+    /// Runs the life cycle written so far (once), with the judge on every task.
+    pub fn run(&mut self) -> &(ScenarioRun, Record) {
+        if self.ran.is_none() {
+            let scenario = ClientScenario {
+                name: "gherkin".into(),
+                covers: Vec::new(),
+                config: self.config.clone(),
+                bit_rates: BitRates::classic(500_000),
+                cycles: self.cycle + QUIET,
+                events: self.events.clone(),
+            };
+            let (kind, config) = (self.target.client.clone(), self.config.clone());
+            let build = move |layout| kind.build(&config, layout);
+            self.ran = Some(rig::run_recorded(
+                &self.target.caps,
+                &scenario,
+                self.master,
+                &build,
+                &rig::simulated,
+            ));
+        }
+        self.ran.as_ref().expect("just ran")
+    }
+}
