@@ -138,6 +138,7 @@ impl PlayedDevice for DeviceSide {
     fn restart(&mut self) -> Result<(), ConfigError> {
         self.device.device = Device::new(&self.caps, self.config.clone())?;
         self.device.pending = None;
+        self.bus.abort_own();
         Ok(())
     }
 

@@ -133,6 +133,14 @@ impl SimBus {
         }
     }
 
+    /// The controller resets (a device restart): its frame on the wire, if
+    /// any, is destroyed and never ends.
+    pub fn abort_own(&mut self) {
+        if self.on_bus.as_ref().is_some_and(|(_, _, own)| *own) {
+            self.on_bus = None;
+        }
+    }
+
     /// Completes frames and starts the next winner of arbitration, until `until`.
     pub fn drive<C: Controller>(&mut self, node: &mut C, until: Nanos) -> Result<(), C::Error> {
         for _ in 0..MOST_EVENTS_PER_CYCLE {

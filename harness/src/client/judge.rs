@@ -58,6 +58,23 @@ struct RxBatch {
     messages: VecDeque<MessageRepr>,
     /// The client was handed an image showing it (in a task it ran).
     shown: bool,
+    /// The device restarted after entering it: if the client never saw it,
+    /// it is lost with the device's memory (CL-RST-002).
+    before_device_restart: bool,
+    /// Messages of it delivered so far.
+    taken: usize,
+}
+
+impl RxBatch {
+    fn new(counter: u16, messages: VecDeque<MessageRepr>) -> Self {
+        RxBatch {
+            counter,
+            messages,
+            shown: false,
+            before_device_restart: false,
+            taken: 0,
+        }
+    }
 }
 
 /// A batch the client wrote and the device has not acknowledged in its view.
@@ -115,6 +132,15 @@ pub struct Judge {
     device_restart: Option<u64>,
     /// A device restart happened in this run.
     device_restarted: bool,
+    /// The task of the last device restart: after it, no image the client
+    /// sees comes from the device before.
+    last_device_restart: Option<u64>,
+    /// The Outputs.TxCounter the device's last cycle saw.
+    device_tx: u16,
+    /// From a PLC restart to the first batch the device takes.
+    after_plc_restart: bool,
+    /// Requests (by index) the device may never see (P3, CL-RST-001).
+    may_lose: std::collections::BTreeSet<usize>,
 }
 
 impl Judge {
@@ -136,6 +162,10 @@ impl Judge {
             restarted: false,
             device_restart: None,
             device_restarted: false,
+            last_device_restart: None,
+            device_tx: 0,
+            after_plc_restart: false,
+            may_lose: std::collections::BTreeSet::new(),
         }
     }
 
@@ -164,15 +194,21 @@ impl Judge {
             .filter_map(|slot| image.rx_message(slot))
             .map(|view| MessageRepr::parse_clamped(&view).0)
             .collect();
-        self.rx.push_back(RxBatch {
-            counter,
-            messages,
-            shown: false,
-        });
+        self.rx.push_back(RxBatch::new(counter, messages));
     }
 
     /// The device sent a frame on the bus.
+    /// The device's cycle saw Outputs.TxCounter `counter`.
+    pub fn device_saw(&mut self, counter: u16) {
+        self.device_tx = counter;
+    }
+
     pub fn device_sent(&mut self, frame: &Frame) -> Result<(), Breach> {
+        while self.may_lose.contains(&self.sent)
+            && self.requests.get(self.sent).map(|r| &r.frame) != Some(frame)
+        {
+            self.sent += 1;
+        }
         if self.requests.get(self.sent).map(|r| &r.frame) == Some(frame) {
             self.sent += 1;
             return Ok(());
@@ -206,6 +242,7 @@ impl Judge {
         }
         self.requests.truncate(self.batched);
         self.restarted = true;
+        self.after_plc_restart = true;
         self.restart_batch = Some(self.seen_rx_counter);
         // What it had handed over may still be in the image: the device takes
         // the next change of the counter as a batch (G1), and the new program
@@ -234,10 +271,14 @@ impl Judge {
             .position(|b| b.counter == visible)
             .map_or(0, |at| at + 1);
         self.rx.truncate(keep);
+        for batch in &mut self.rx {
+            batch.before_device_restart = true;
+        }
         self.device_rx_counter = 0;
         self.pending = None;
         self.device_restart = Some(task);
         self.device_restarted = true;
+        self.last_device_restart = Some(task);
     }
 
     /// One task the client ran.
@@ -264,6 +305,14 @@ impl Judge {
         let before = OutputImage::new_checked(seen.before, layout).map_err(size_breach)?;
         let after = OutputImage::new_checked(&seen.after[..size], layout).map_err(size_breach)?;
         self.requests.extend_from_slice(seen.accepted);
+        if self
+            .last_device_restart
+            .is_some_and(|restart| task > restart)
+        {
+            // What the device before its restart entered and the client did
+            // not read by now is gone with its memory (inherent, CL-RST-002).
+            self.rx.retain(|b| !b.before_device_restart);
+        }
         self.judge_rx(&inputs, &before, &after, seen.delivered)?;
         self.judge_tx(&inputs, &before, &after)?;
         if let Some(restart) = self.device_restart {
@@ -352,7 +401,8 @@ impl Judge {
             return Ok(());
         };
         for batch in self.rx.drain(..at).collect::<Vec<_>>() {
-            let lost_with_restart = self.restart_batch == Some(batch.counter);
+            let lost_with_restart = self.restart_batch == Some(batch.counter)
+                || (batch.before_device_restart && !batch.shown);
             match self.queue {
                 QueueMode::Fast if batch.shown && !lost_with_restart => {
                     return breach(
@@ -386,18 +436,14 @@ impl Judge {
             let batch = self.rx.front_mut().expect("a front message has a batch");
             let repr = batch.messages.pop_front().expect("checked above");
             let done = batch.messages.is_empty();
-            let entry = self.last_delivered.get_or_insert_with(|| RxBatch {
-                counter: batch.counter,
-                messages: VecDeque::new(),
-                shown: true,
-            });
-            if entry.counter != batch.counter {
-                *entry = RxBatch {
-                    counter: batch.counter,
-                    messages: VecDeque::new(),
-                    shown: true,
-                };
+            if batch.taken == 0 {
+                self.last_delivered = Some(RxBatch::new(batch.counter, VecDeque::new()));
             }
+            batch.taken += 1;
+            let entry = self
+                .last_delivered
+                .as_mut()
+                .expect("set at the batch's first message");
             entry.messages.push_back(repr);
             if done {
                 self.rx.pop_front();
@@ -444,7 +490,10 @@ impl Judge {
         {
             self.pending = None;
         }
-        let changed = after.tx_counter() != before.tx_counter();
+        // A restarted program may write a new batch under the counter the
+        // last one had: a new batch all the same, if one the device cannot see.
+        let changed = after.tx_counter() != before.tx_counter()
+            || (self.after_plc_restart && tx_batch(after) != tx_batch(before));
         if let Some(pending) = &self.pending {
             let now = tx_batch(after);
             if now != *pending {
@@ -539,6 +588,15 @@ impl Judge {
             self.judge_numbers(&numbers)?;
         }
         self.numbers.extend(numbers);
+        if self.after_plc_restart && after.tx_counter() == self.device_tx {
+            // A restarted program cannot know the counter the device last
+            // took; a batch with that counter shows the device no change
+            // (G1), so it may never be sent (P3, an assumption).
+            self.may_lose
+                .extend(self.batched..self.batched + usize::from(count));
+        } else {
+            self.after_plc_restart = false;
+        }
         self.batched += usize::from(count);
         self.pending = Some(tx_batch(after));
         Ok(())
@@ -575,16 +633,18 @@ impl Judge {
     }
 
     fn finish_unblamed(&self, device_queued_rx: usize) -> Result<(), Breach> {
-        if self.sent < self.requests.len() {
+        let missing = (self.sent..self.requests.len())
+            .filter(|i| !self.may_lose.contains(i))
+            .count();
+        if missing > 0 {
             return breach(
                 TX_ONCE,
                 "frames the application asked to send",
-                format!("all {} on the bus", self.requests.len()),
                 format!(
-                    "{} never sent ({} handed over)",
-                    self.requests.len() - self.sent,
-                    self.batched
+                    "all {} on the bus",
+                    self.requests.len() - self.may_lose.len()
                 ),
+                format!("{missing} never sent ({} handed over)", self.batched),
             );
         }
         if self.queue != QueueMode::Fast && device_queued_rx > 0 {
@@ -598,7 +658,7 @@ impl Judge {
         let undelivered: usize = self
             .rx
             .iter()
-            .filter(|b| b.shown || self.queue != QueueMode::Fast)
+            .filter(|b| b.shown || (self.queue != QueueMode::Fast && !b.before_device_restart))
             .map(|b| b.messages.len())
             .sum();
         if undelivered > 0 {

@@ -258,10 +258,10 @@ fn drive(
         }
         exchange.end_task(|outputs| -> Result<Vec<u8>, Stop> {
             device_saw = OutputImage::new_checked(outputs, layout).map_or(0, |o| o.tx_counter());
+            judge.device_saw(device_saw);
             let mut inputs = device
                 .cycle(outputs)
-                .map_err(|e| Stop::Error(RunError::Harness(e.to_string())))?
-                .to_vec();
+                .map_err(|e| Stop::Error(RunError::Harness(e.to_string())))?;
             if overstate && overstated(&mut inputs, layout, judge.device_rx_counter()) {
                 overstate = false;
             }
