@@ -108,6 +108,47 @@ void canif_transmit_complete(void *device);
 
 void canif_controller_status(void *device, const canif_status *status);
 
+/* ---- The client role: a PLC-side client in a shared library ------------
+ * `canif run --side plc --iut lib:path/to/libclient.so` (docs/plc-side.md).
+ * The harness plays the device, the EtherCAT master and the application; the
+ * library is the code that, once per PLC task, reads the input image and
+ * writes the output image. A client library exports canif_abi_version and the
+ * three functions below (none of the device's). */
+
+/* A message between the application and the client: in a request, the
+ * transaction number the application wants written (0 where the interface
+ * has none) and time_stamp_ns 0; delivered, what the Rx message said. */
+typedef struct canif_message {
+    canif_frame frame;
+    uint16_t transaction_number;
+    uint64_t time_stamp_ns;
+} canif_message;
+
+/* A PLC program for this interface (`filters` and the timing fields are
+ * those of the device and may be ignored). Called at the start and after
+ * each PLC restart; NULL: the program cannot run (an error). */
+void *canif_client_start(const canif_config *config);
+
+void canif_client_stop(void *client);
+
+/* One PLC task.
+ * inputs:  the input image as the master delivers it (inputs_size bytes);
+ * outputs: the output buffer as the master hands it (outputs_size bytes; it
+ *          may hold zeros or an older image): leave the output image in it.
+ *          Both sit inside the master's process image: the bytes behind them
+ *          belong to other devices and must not be touched.
+ * requests: the application's messages since the last task; set refused[i]
+ *          to 1 for each one the client cannot send (request_count bytes).
+ * delivered: room for delivered_capacity messages; write those the task read
+ *          and hands to the application, in order, and their number in
+ *          *delivered_count.
+ * 0: done; anything else: the client broke (an error, not a failure). */
+int canif_client_task(void *client, const uint8_t *inputs, size_t inputs_size,
+                      uint8_t *outputs, size_t outputs_size,
+                      const canif_message *requests, size_t request_count, uint8_t *refused,
+                      canif_message *delivered, size_t delivered_capacity,
+                      size_t *delivered_count);
+
 #ifdef __cplusplus
 }
 #endif

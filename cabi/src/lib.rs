@@ -5,8 +5,12 @@
 //! arguments of the sizes it promises; what the library does inside is the
 //! library's business (run it under AddressSanitizer to check).
 
+mod client;
+
 use std::ffi::{c_char, c_int, c_void, CStr};
 use std::path::Path;
+
+pub use client::{CMessage, ClientLibrary, ClientProgram, TaskResult};
 
 /// The ABI version this crate speaks (`CANIF_ABI_VERSION`).
 pub const ABI_VERSION: u32 = 1;
@@ -89,7 +93,7 @@ pub struct Config {
 }
 
 #[repr(C)]
-struct CConfig {
+pub(crate) struct CConfig {
     format: u8,
     queue: u8,
     transaction_number: u8,
@@ -127,7 +131,7 @@ pub struct CStatus {
     pub transmit_error_counter: u32,
 }
 
-type Version = unsafe extern "C" fn() -> u32;
+pub(crate) type Version = unsafe extern "C" fn() -> u32;
 type Create =
     unsafe extern "C" fn(*const CConfig, *const CCapabilities, *mut c_char, usize) -> *mut c_void;
 type Destroy = unsafe extern "C" fn(*mut c_void);
@@ -149,6 +153,37 @@ struct Functions {
     status: Status,
 }
 
+/// The function `name` of `library`; `T` must be its type in include/canif.h.
+pub(crate) fn symbol<T: Copy>(library: &libloading::Library, name: &str) -> Result<T, String> {
+    // SAFETY: the callers name `T` as the function type include/canif.h
+    // declares for `name`.
+    unsafe { library.get::<T>(name.as_bytes()) }
+        .map(|symbol| *symbol)
+        .map_err(|e| format!("the library has no `{name}` ({e})"))
+}
+
+impl Config {
+    /// As the library reads it; borrows the filter rows.
+    pub(crate) fn raw(&self) -> CConfig {
+        CConfig {
+            format: self.format,
+            queue: self.queue,
+            transaction_number: self.transaction_number,
+            time_stamp: self.time_stamp,
+            tx_slots: self.tx_slots,
+            rx_slots: self.rx_slots,
+            distributed_clocks: self.distributed_clocks,
+            sync1_shift_ns: self.sync1_shift_ns,
+            nominal_timing: self.nominal_timing,
+            data_timing: self.data_timing,
+            output_size: self.output_size,
+            input_size: self.input_size,
+            filter_count: self.filters.len() as u32,
+            filters: self.filters.as_ptr(),
+        }
+    }
+}
+
 /// A loaded device library. Devices keep it loaded while they live.
 pub struct Library {
     functions: Functions,
@@ -164,12 +199,6 @@ impl Library {
         // is code the user chose to put under test, as `exec:` runs a process.
         let library = unsafe { libloading::Library::new(path) }
             .map_err(|e| format!("cannot load {name}: {e}"))?;
-        fn symbol<T: Copy>(library: &libloading::Library, name: &str) -> Result<T, String> {
-            // SAFETY: `T` is the function type include/canif.h declares for `name`.
-            unsafe { library.get::<T>(name.as_bytes()) }
-                .map(|symbol| *symbol)
-                .map_err(|e| format!("the library has no `{name}` ({e})"))
-        }
         let version: Version = symbol(&library, "canif_abi_version")?;
         // SAFETY: canif_abi_version takes nothing and returns a number.
         let found = unsafe { version() };
@@ -195,22 +224,7 @@ impl Library {
 
     /// A device for `config`; `Err` carries the device's reason for refusing it.
     pub fn create(&self, config: &Config, caps: &CCapabilities) -> Result<Device, String> {
-        let raw = CConfig {
-            format: config.format,
-            queue: config.queue,
-            transaction_number: config.transaction_number,
-            time_stamp: config.time_stamp,
-            tx_slots: config.tx_slots,
-            rx_slots: config.rx_slots,
-            distributed_clocks: config.distributed_clocks,
-            sync1_shift_ns: config.sync1_shift_ns,
-            nominal_timing: config.nominal_timing,
-            data_timing: config.data_timing,
-            output_size: config.output_size,
-            input_size: config.input_size,
-            filter_count: config.filters.len() as u32,
-            filters: config.filters.as_ptr(),
-        };
+        let raw = config.raw();
         let mut reason = [0 as c_char; 512];
         // SAFETY: `raw` and its filter rows live through the call; `reason`
         // has the size passed; the library returns a handle or NULL.

@@ -27,8 +27,33 @@ pub fn build(
     config: &InterfaceConfig,
 ) -> Result<LibIut, BuildError> {
     let library = Library::open(path).map_err(BuildError::Failed)?;
+    let c_config = c_config(caps, config);
+    let c_caps = CCapabilities {
+        base11: u8::from(caps.base11),
+        ext29: u8::from(caps.ext29),
+        fd: u8::from(caps.fd),
+        fast_queue: u8::from(caps.fast_queue),
+        optimized_queue: u8::from(caps.optimized_queue),
+        transaction_number: u8::from(caps.transaction_number),
+        transaction_number_only_ext29: u8::from(caps.transaction_number_only_ext29),
+        time_stamp: u8::from(caps.time_stamp),
+        filters: u8::from(caps.filters),
+        info_data: u8::from(caps.info_data),
+        distributed_clocks: u8::from(caps.distributed_clocks),
+        max_slots: caps.max_slots,
+        rx_queue_depth: caps.rx_queue_depth as u32,
+        tx_queue_depth: caps.tx_queue_depth as u32,
+    };
+    let device = library
+        .create(&c_config, &c_caps)
+        .map_err(BuildError::Refused)?;
+    Ok(LibIut { device, next: None })
+}
+
+/// The configuration as the C ABI carries it (`canif_config`).
+pub(crate) fn c_config(caps: &Capabilities, config: &InterfaceConfig) -> Config {
     let layout = ImageLayout::new(config, caps.info_data);
-    let c_config = Config {
+    Config {
         format: match config.format {
             FrameFormat::Base11 => 0,
             FrameFormat::Extended29 => 1,
@@ -76,30 +101,10 @@ pub fn build(
                 }
             })
             .collect(),
-    };
-    let c_caps = CCapabilities {
-        base11: u8::from(caps.base11),
-        ext29: u8::from(caps.ext29),
-        fd: u8::from(caps.fd),
-        fast_queue: u8::from(caps.fast_queue),
-        optimized_queue: u8::from(caps.optimized_queue),
-        transaction_number: u8::from(caps.transaction_number),
-        transaction_number_only_ext29: u8::from(caps.transaction_number_only_ext29),
-        time_stamp: u8::from(caps.time_stamp),
-        filters: u8::from(caps.filters),
-        info_data: u8::from(caps.info_data),
-        distributed_clocks: u8::from(caps.distributed_clocks),
-        max_slots: caps.max_slots,
-        rx_queue_depth: caps.rx_queue_depth as u32,
-        tx_queue_depth: caps.tx_queue_depth as u32,
-    };
-    let device = library
-        .create(&c_config, &c_caps)
-        .map_err(BuildError::Refused)?;
-    Ok(LibIut { device, next: None })
+    }
 }
 
-fn to_c(frame: &Frame) -> CFrame {
+pub(crate) fn to_c(frame: &Frame) -> CFrame {
     let mut c = CFrame {
         id: frame.id.raw(),
         extended: u8::from(frame.id.is_extended()),
@@ -114,7 +119,7 @@ fn to_c(frame: &Frame) -> CFrame {
     c
 }
 
-fn from_c(c: &CFrame) -> Result<Frame, InvalidFrame> {
+pub(crate) fn from_c(c: &CFrame) -> Result<Frame, InvalidFrame> {
     let flag = |v: u8| v != 0;
     let id = if flag(c.extended) {
         CanId::extended(c.id)

@@ -121,14 +121,14 @@ pub fn resolve_client(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
             command: command.clone(),
             timeout_ms: iut.timeout_ms,
         }),
-        (Some(IutArg::Exec(_)), Some(_)) => {
+        (Some(IutArg::Lib(path)), None) => Ok(ClientKind::Lib { path: path.clone() }),
+        (Some(IutArg::Exec(_) | IutArg::Lib(_)), Some(_)) => {
             eprintln!("--fault applies to the soft client (pass it to the client's own command)");
             Err(ExitCode::from(2))
         }
         (Some(other), _) => {
             eprintln!(
-                "--side plc runs a client: --iut reference, softclient or exec:'COMMAND', not {other:?} \
-                 (a client behind the C ABI is not built yet)"
+                "--side plc runs a client: --iut reference, softclient, exec:'COMMAND' or lib:PATH, not {other:?}"
             );
             Err(ExitCode::from(2))
         }

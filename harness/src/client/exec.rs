@@ -73,15 +73,20 @@ impl Client for ExecClient {
                 io.requests.len()
             )));
         }
-        let delivered = delivered
-            .iter()
-            .enumerate()
-            .map(|(n, m)| {
-                MessageRepr::try_from(m).map_err(|e| format!("delivered message {n}: {e}"))
-            })
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(|what| self.process.fail(what))?;
         io.outputs[..size].copy_from_slice(&outputs.0);
-        Ok(TaskAnswer { delivered, refused })
+        let mut answer = TaskAnswer {
+            refused,
+            ..TaskAnswer::default()
+        };
+        for message in &delivered {
+            match MessageRepr::try_from(message) {
+                Ok(m) if answer.not_frames.is_empty() => answer.delivered.push(m),
+                Ok(m) => answer
+                    .not_frames
+                    .push(format!("(after one that is no frame) {}", m.frame)),
+                Err(e) => answer.not_frames.push(e),
+            }
+        }
+        Ok(answer)
     }
 }

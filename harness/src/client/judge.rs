@@ -97,6 +97,8 @@ pub struct TaskSeen<'a> {
     /// The requests the client took (those it refused are left out).
     pub accepted: &'a [MessageRepr],
     pub delivered: &'a [MessageRepr],
+    /// What it delivered after those that is no frame.
+    pub not_frames: &'a [String],
 }
 
 /// The judge of one client run.
@@ -293,12 +295,21 @@ impl Judge {
                 "written",
             );
         }
-        if seen.delivered.len() > layout.rx_slots {
+        let read = seen.delivered.len() + seen.not_frames.len();
+        if read > layout.rx_slots {
             return breach(
                 IMAGE_BOUNDS,
                 "messages read in one task",
                 format!("at most the {} Rx slots", layout.rx_slots),
-                seen.delivered.len().to_string(),
+                read.to_string(),
+            );
+        }
+        if let Some(what) = seen.not_frames.first() {
+            return breach(
+                RX_DECODING,
+                format!("delivered message {}", seen.delivered.len()),
+                "a frame, decoded per the message structure",
+                format!("no frame: {what}"),
             );
         }
         let inputs = InputImage::new_checked(seen.inputs, layout).map_err(size_breach)?;

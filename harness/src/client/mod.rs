@@ -14,6 +14,7 @@ pub mod application;
 pub mod exec;
 pub mod faulty;
 pub mod judge;
+pub mod lib_client;
 pub mod master;
 pub mod rig;
 pub mod suite;
@@ -51,6 +52,9 @@ pub struct TaskAnswer {
     pub delivered: Vec<MessageRepr>,
     /// The requests of this task (by index) the client reports it cannot send.
     pub refused: Vec<usize>,
+    /// What it delivered that is no frame (say a 29-bit identifier without
+    /// the 29-bit flag), after the `delivered` ones: judged, not an error.
+    pub not_frames: Vec<String>,
 }
 
 /// A PLC-side client under test. Every call can fail with an [`IutError`]:
@@ -102,6 +106,7 @@ impl Client for ReferenceClient {
         Ok(TaskAnswer {
             delivered: self.client.take_received(),
             refused,
+            not_frames: Vec::new(),
         })
     }
 }

@@ -247,6 +247,7 @@ fn drive(
                     after: &buffer,
                     accepted: &accepted,
                     delivered: &answer.delivered,
+                    not_frames: &answer.not_frames,
                 },
                 deadline,
             )?;

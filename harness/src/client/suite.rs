@@ -14,6 +14,7 @@ use canif_spec::{Catalogue, Profile, ReqId, Side};
 use super::application::{self, ClientScenario};
 use super::exec::ExecClient;
 use super::faulty::{ClientFault, FaultyClient};
+use super::lib_client::LibClient;
 use super::master::Master;
 use super::{rig, Client, ReferenceClient};
 use crate::device_side::PlayedDevice;
@@ -32,6 +33,8 @@ pub enum ClientKind {
     Faulty(Option<ClientFault>),
     /// A process speaking the adapter protocol's client role.
     Exec { command: String, timeout_ms: u64 },
+    /// A shared library of the C ABI's client role.
+    Lib { path: std::path::PathBuf },
 }
 
 impl ClientKind {
@@ -41,6 +44,7 @@ impl ClientKind {
             ClientKind::Faulty(None) => "soft client".into(),
             ClientKind::Faulty(Some(fault)) => format!("soft client with fault {fault}"),
             ClientKind::Exec { command, .. } => format!("exec:{command}"),
+            ClientKind::Lib { path } => format!("lib:{}", path.display()),
         }
     }
 
@@ -53,6 +57,9 @@ impl ClientKind {
         Ok(match self {
             ClientKind::Reference => Box::new(ReferenceClient::new(layout)),
             ClientKind::Faulty(fault) => Box::new(FaultyClient::new(layout, config.queue, *fault)),
+            ClientKind::Lib { path } => Box::new(
+                LibClient::start(path, config, layout).map_err(|e| BuildError::Failed(e.0))?,
+            ),
             ClientKind::Exec {
                 command,
                 timeout_ms,

@@ -1,0 +1,108 @@
+//! PLC-side clients in shared libraries, through the client role of the C
+//! ABI (include/canif.h): the C example conforms, and the same code without
+//! its bound on NoOfRxMessages reads past its image and is caught (CL-IMG-001).
+
+use std::path::PathBuf;
+use std::process::Command;
+
+use canif_harness::client::suite::{run_profile, ClientKind, ClientOptions};
+use canif_harness::Outcome;
+use canif_spec::Catalogue;
+
+/// Compiles the C example client with `flags` into a shared library.
+fn build(name: &str, flags: &[&str]) -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi-client");
+    std::fs::create_dir_all(&dir).unwrap();
+    let library = dir.join(format!("lib{name}.so"));
+    let status = Command::new("cc")
+        .args(["-shared", "-fPIC", "-O2", "-Wall", "-Wextra", "-Werror"])
+        .args(flags)
+        .arg("-I")
+        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/include"))
+        .arg("-o")
+        .arg(&library)
+        .arg(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/examples/c/minimal_client.c"
+        ))
+        .status()
+        .expect("cc runs (the machine has gcc)");
+    assert!(status.success(), "cc failed");
+    library
+}
+
+fn options() -> ClientOptions {
+    ClientOptions {
+        counter_wrap: false,
+        ..ClientOptions::new(1)
+    }
+}
+
+/// Covers: CL-TX-001, CL-TX-003, CL-TX-004, CL-RX-001, CL-RX-002, CL-RX-003, CL-FQ-001
+#[test]
+fn the_c_example_client_conforms_in_process() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let kind = ClientKind::Lib {
+        path: build("minimal_client", &[]),
+    };
+    for profile in ["fc532x", "el6751-mdp"] {
+        let profile = catalogue.profile(profile).unwrap();
+        let run = run_profile(&catalogue, profile, &kind, &options(), |_| {});
+        let bad: Vec<String> = run
+            .runs
+            .iter()
+            .filter_map(|r| match &r.outcome {
+                Outcome::Pass => None,
+                Outcome::Fail(f) => Some(f.details()),
+                Outcome::Error(e) => Some(format!("{}: {e}", r.scenario)),
+            })
+            .collect();
+        assert!(bad.is_empty(), "{}:\n{}", profile.name, bad.join("\n\n"));
+        assert!(run.runs.len() >= 90);
+    }
+}
+
+/// Covers: CL-IMG-001
+#[test]
+fn a_c_client_that_reads_past_its_image_is_caught() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let kind = ClientKind::Lib {
+        path: build("no_bound", &["-DCANIF_FAULT_NO_BOUND"]),
+    };
+    let profile = catalogue.profile("fc510x").unwrap();
+    let run = run_profile(&catalogue, profile, &kind, &options(), |_| {});
+    assert_eq!(run.failed_requirements(), ["CL-IMG-001"]);
+    assert!(run
+        .runs
+        .iter()
+        .all(|r| !matches!(r.outcome, Outcome::Error(_))));
+}
+
+#[test]
+fn a_library_without_the_client_role_is_an_error_naming_the_symbol() {
+    let device = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi-client/libdevice_only.so");
+    let status = Command::new("cc")
+        .args(["-shared", "-fPIC", "-O2", "-I"])
+        .arg(concat!(env!("CARGO_MANIFEST_DIR"), "/include"))
+        .arg("-o")
+        .arg(&device)
+        .arg(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/examples/c/minimal_device.c"
+        ))
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let catalogue = Catalogue::embedded().unwrap();
+    let run = run_profile(
+        &catalogue,
+        catalogue.profile("fc510x").unwrap(),
+        &ClientKind::Lib { path: device },
+        &options(),
+        |_| {},
+    );
+    let Outcome::Error(error) = &run.runs[0].outcome else {
+        panic!("{:?}", run.runs[0].outcome)
+    };
+    assert!(error.to_string().contains("canif_client_start"), "{error}");
+}
