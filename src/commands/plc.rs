@@ -229,10 +229,16 @@ fn run_features(kind: &ClientKind, profile: &Profile, options: &ClientOptions) -
         let outcome =
             match canif_features::run_client_scenario(&scenario.file, scenario.line, target) {
                 canif_features::ScenarioOutcome::Passed => GherkinOutcome::Pass,
+                // The judge names exactly what a client broke, whatever the
+                // scenario is tagged with.
                 canif_features::ScenarioOutcome::Failed { report, witness } => {
                     GherkinOutcome::Fail {
                         step: super::run::failing_step(&report),
-                        blamed: canif_harness::blame::narrow_tags(&scenario.requirements, &witness),
+                        blamed: if witness.is_empty() {
+                            scenario.requirements.clone()
+                        } else {
+                            witness.iter().map(|id| id.to_string()).collect()
+                        },
                         report,
                     }
                 }

@@ -75,7 +75,9 @@ impl Client for LibClient {
                     frame,
                     time_stamp: m.time_stamp_ns,
                 }),
-                Ok(frame) => answer.not_frames.push(format!("(after one that is no frame) {frame}")),
+                Ok(frame) => answer
+                    .not_frames
+                    .push(format!("(after one that is no frame) {frame}")),
                 Err(e) => answer.not_frames.push(e.0),
             }
         }
