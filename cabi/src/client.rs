@@ -5,7 +5,7 @@ use std::ffi::{c_int, c_void};
 use std::path::Path;
 use std::sync::Arc;
 
-use crate::{symbol, CConfig, CFrame, Config, Version, ABI_VERSION};
+use crate::{open_checked, symbol, CConfig, CFrame, Config};
 
 /// `canif_message`.
 #[repr(C)]
@@ -48,19 +48,7 @@ pub struct ClientLibrary {
 impl ClientLibrary {
     /// Loads `path` and checks its ABI version and the client role's symbols.
     pub fn open(path: &Path) -> Result<Self, String> {
-        let name = path.display();
-        // SAFETY: loading runs the library's initialisers; a client library
-        // is code the user chose to put under test.
-        let library = unsafe { libloading::Library::new(path) }
-            .map_err(|e| format!("cannot load {name}: {e}"))?;
-        let version: Version = symbol(&library, "canif_abi_version")?;
-        // SAFETY: canif_abi_version takes nothing and returns a number.
-        let found = unsafe { version() };
-        if found != ABI_VERSION {
-            return Err(format!(
-                "{name} speaks canif ABI version {found}; this canif speaks {ABI_VERSION}"
-            ));
-        }
+        let library = open_checked(path)?;
         let functions = Functions {
             start: symbol(&library, "canif_client_start")?,
             stop: symbol(&library, "canif_client_stop")?,

@@ -153,6 +153,24 @@ struct Functions {
     status: Status,
 }
 
+/// Loads `path` and checks that it speaks this ABI version.
+pub(crate) fn open_checked(path: &Path) -> Result<libloading::Library, String> {
+    let name = path.display();
+    // SAFETY: loading runs the library's initialisers; a library is code the
+    // user chose to put under test, as `exec:` runs a process.
+    let library = unsafe { libloading::Library::new(path) }
+        .map_err(|e| format!("cannot load {name}: {e}"))?;
+    let version: Version = symbol(&library, "canif_abi_version")?;
+    // SAFETY: canif_abi_version takes nothing and returns a number.
+    let found = unsafe { version() };
+    if found != ABI_VERSION {
+        return Err(format!(
+            "{name} speaks canif ABI version {found}; this canif speaks {ABI_VERSION}"
+        ));
+    }
+    Ok(library)
+}
+
 /// The function `name` of `library`; `T` must be its type in include/canif.h.
 pub(crate) fn symbol<T: Copy>(library: &libloading::Library, name: &str) -> Result<T, String> {
     // SAFETY: the callers name `T` as the function type include/canif.h
@@ -194,19 +212,7 @@ pub struct Library {
 impl Library {
     /// Loads `path` and checks its ABI version and every symbol.
     pub fn open(path: &Path) -> Result<Self, String> {
-        let name = path.display();
-        // SAFETY: loading runs the library's initialisers; a device library
-        // is code the user chose to put under test, as `exec:` runs a process.
-        let library = unsafe { libloading::Library::new(path) }
-            .map_err(|e| format!("cannot load {name}: {e}"))?;
-        let version: Version = symbol(&library, "canif_abi_version")?;
-        // SAFETY: canif_abi_version takes nothing and returns a number.
-        let found = unsafe { version() };
-        if found != ABI_VERSION {
-            return Err(format!(
-                "{name} speaks canif ABI version {found}; this canif speaks {ABI_VERSION}"
-            ));
-        }
+        let library = open_checked(path)?;
         let functions = Functions {
             create: symbol(&library, "canif_create")?,
             destroy: symbol(&library, "canif_destroy")?,

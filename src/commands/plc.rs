@@ -2,14 +2,13 @@
 //! the device, the EtherCAT master and the application; the report has the
 //! same shape as the device side's, with `side: plc` and the master models.
 
-use std::io::{IsTerminal, Write as _};
 use std::path::Path;
 use std::process::ExitCode;
 
 use canif_harness::client::master::Master;
 use canif_harness::client::suite::{self, ClientBus, ClientKind, ClientOptions};
 use canif_harness::report::{Product, ProfileReport, RunMeta, RunReport};
-use canif_harness::{GherkinOutcome, GherkinRun, Outcome, Selection};
+use canif_harness::{GherkinOutcome, GherkinRun, Selection};
 use canif_spec::{Catalogue, Profile, Side};
 
 use canif_harness::bus::BusChoice;
@@ -107,7 +106,6 @@ pub fn run(
 /// Every profile's client run, judged and put in one report.
 pub fn execute(catalogue: &Catalogue, kind: &ClientKind, plan: &PlcPlan) -> RunReport {
     let started = std::time::Instant::now();
-    let terminal = std::io::stderr().is_terminal();
     let count = plan.profiles.len();
     let mut profiles = Vec::new();
     for (n, profile) in plan.profiles.iter().enumerate() {
@@ -115,45 +113,11 @@ pub fn execute(catalogue: &Catalogue, kind: &ClientKind, plan: &PlcPlan) -> RunR
             eprintln!("interrupted: the remaining profiles are not run");
             break;
         }
-        let mut done = 0;
+        let mut progress = super::run::Progress::new(n, count, &profile.name);
         let run = suite::run_profile(catalogue, profile, kind, &plan.options, |scenario_run| {
-            done += 1;
-            if terminal {
-                eprint!(
-                    "\r\x1b[2K[{}/{count}] {}: {} ({done} scenarios)",
-                    n + 1,
-                    profile.name,
-                    scenario_run.scenario
-                );
-                let _ = std::io::stderr().flush();
-            }
+            progress.scenario(scenario_run)
         });
-        if terminal {
-            eprint!("\r\x1b[2K");
-        }
-        let failed = run
-            .runs
-            .iter()
-            .filter(|r| matches!(r.outcome, Outcome::Fail(_)))
-            .count();
-        let errors = run
-            .runs
-            .iter()
-            .filter(|r| matches!(r.outcome, Outcome::Error(_)))
-            .count();
-        eprintln!(
-            "[{}/{count}] {:<22} {} scenarios, {} task cycles, {} frames checked: {}",
-            n + 1,
-            profile.name,
-            run.runs.len(),
-            run.cycles(),
-            run.frames_checked(),
-            match (failed, errors) {
-                (0, 0) => "all pass".to_string(),
-                (f, 0) => format!("{f} FAIL ({})", run.failed_requirements().join(", ")),
-                (f, e) => format!("{f} fail, {e} ERROR"),
-            }
-        );
+        progress.done(&run, "task cycles");
         let gherkin = run_features(kind, profile, &plan.options);
         let reach = suite::reach(catalogue, &profile.model_capabilities(), &plan.options);
         profiles.push(ProfileReport::new(

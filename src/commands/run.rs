@@ -210,7 +210,6 @@ pub fn execute(catalogue: &Catalogue, kind: &IutKind, plan: &Plan) -> RunReport 
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.as_secs());
     let started = std::time::Instant::now();
-    let terminal = std::io::stderr().is_terminal();
     let count = plan.profiles.len();
     let mut lockstep = Vec::new();
     for (n, p) in plan.profiles.iter().enumerate() {
@@ -218,45 +217,11 @@ pub fn execute(catalogue: &Catalogue, kind: &IutKind, plan: &Plan) -> RunReport 
             eprintln!("interrupted: the remaining profiles are not run");
             break;
         }
-        let mut done = 0;
+        let mut progress = Progress::new(n, count, &p.name);
         let result = run_profile(catalogue, p, kind, options, |scenario_run| {
-            done += 1;
-            if terminal {
-                eprint!(
-                    "\r\x1b[2K[{}/{count}] {}: {} ({done} scenarios)",
-                    n + 1,
-                    p.name,
-                    scenario_run.scenario,
-                );
-                let _ = std::io::stderr().flush();
-            }
+            progress.scenario(scenario_run)
         });
-        if terminal {
-            eprint!("\r\x1b[2K");
-        }
-        let failed = result
-            .runs
-            .iter()
-            .filter(|r| matches!(r.outcome, Outcome::Fail(_)))
-            .count();
-        let errors = result
-            .runs
-            .iter()
-            .filter(|r| matches!(r.outcome, Outcome::Error(_)))
-            .count();
-        eprintln!(
-            "[{}/{count}] {:<22} {} scenarios, {} cycles, {} frames checked: {}",
-            n + 1,
-            p.name,
-            result.runs.len(),
-            result.cycles(),
-            result.frames_checked(),
-            match (failed, errors) {
-                (0, 0) => "all pass".to_string(),
-                (f, 0) => format!("{f} FAIL ({})", result.failed_requirements().join(", ")),
-                (f, e) => format!("{f} fail, {e} ERROR"),
-            }
-        );
+        progress.done(&result, "cycles");
         lockstep.push(result);
     }
     let iut_broke = lockstep.iter().flat_map(|p| &p.runs).any(|r| {
@@ -355,6 +320,75 @@ pub fn execute(catalogue: &Catalogue, kind: &IutKind, plan: &Plan) -> RunReport 
         profiles,
         wall_time_ms: started.elapsed().as_millis(),
         interrupted,
+    }
+}
+
+/// What a run says on stderr while it works through the profiles: the
+/// scenario running (on a terminal), then one line per profile.
+pub struct Progress<'a> {
+    n: usize,
+    count: usize,
+    profile: &'a str,
+    done: usize,
+    terminal: bool,
+}
+
+impl<'a> Progress<'a> {
+    pub fn new(n: usize, count: usize, profile: &'a str) -> Self {
+        Progress {
+            n,
+            count,
+            profile,
+            done: 0,
+            terminal: std::io::stderr().is_terminal(),
+        }
+    }
+
+    pub fn scenario(&mut self, run: &canif_harness::ScenarioRun) {
+        self.done += 1;
+        if self.terminal {
+            eprint!(
+                "\r\x1b[2K[{}/{}] {}: {} ({} scenarios)",
+                self.n + 1,
+                self.count,
+                self.profile,
+                run.scenario,
+                self.done
+            );
+            let _ = std::io::stderr().flush();
+        }
+    }
+
+    /// The profile's line; `unit`: what its cycles are (device or task cycles).
+    pub fn done(self, result: &canif_harness::ProfileRun, unit: &str) {
+        if self.terminal {
+            eprint!("\r\x1b[2K");
+        }
+        let count = |error: bool| {
+            result
+                .runs
+                .iter()
+                .filter(|r| match r.outcome {
+                    Outcome::Fail(_) => !error,
+                    Outcome::Error(_) => error,
+                    Outcome::Pass => false,
+                })
+                .count()
+        };
+        eprintln!(
+            "[{}/{}] {:<22} {} scenarios, {} {unit}, {} frames checked: {}",
+            self.n + 1,
+            self.count,
+            self.profile,
+            result.runs.len(),
+            result.cycles(),
+            result.frames_checked(),
+            match (count(false), count(true)) {
+                (0, 0) => "all pass".to_string(),
+                (f, 0) => format!("{f} FAIL ({})", result.failed_requirements().join(", ")),
+                (f, e) => format!("{f} fail, {e} ERROR"),
+            }
+        );
     }
 }
 
@@ -484,44 +518,12 @@ pub fn self_check(catalogue: &Catalogue, seed: u64) -> ExitCode {
         generated_cycles: 150,
         ..Options::quick(seed)
     };
-    let rows = canif_harness::suite::kill_matrix(catalogue, &options, |fault| {
+    let devices = canif_harness::suite::kill_matrix(catalogue, &options, |fault| {
         eprintln!("running {fault} on every profile")
     });
-    let mut uncaught = 0;
-    println!("| fault | caught on | requirements that failed |\n|---|---|---|");
-    for row in &rows {
-        let caught: Vec<&str> = row
-            .caught
-            .iter()
-            .filter(|(_, ids)| !ids.is_empty())
-            .map(|(p, _)| p.as_str())
-            .collect();
-        let mut ids: Vec<&str> = row
-            .caught
-            .iter()
-            .flat_map(|(_, ids)| ids.iter().map(String::as_str))
-            .collect();
-        ids.sort();
-        ids.dedup();
-        if caught.is_empty() {
-            uncaught += 1;
-        }
-        println!(
-            "| {} | {}/{} profiles | {} |",
-            row.fault.name(),
-            caught.len(),
-            row.caught.len(),
-            if ids.is_empty() {
-                "NOT CAUGHT".to_string()
-            } else {
-                ids.join(", ")
-            }
-        );
-    }
-    println!(
-        "\n{} of {} device faults caught",
-        rows.len() - uncaught,
-        rows.len()
+    let uncaught = print_kill_table(
+        "device fault",
+        devices.iter().map(|row| (row.fault.name(), &row.caught)),
     );
     let clients = canif_harness::client::suite::kill_matrix(
         catalogue,
@@ -531,37 +533,43 @@ pub fn self_check(catalogue: &Catalogue, seed: u64) -> ExitCode {
         },
         |fault| eprintln!("running client fault {fault} on every profile"),
     );
-    let mut clients_uncaught = 0;
-    println!("\n| client fault | caught on | requirements that failed |\n|---|---|---|");
-    for row in &clients {
-        let caught = row.caught.iter().filter(|(_, ids)| !ids.is_empty()).count();
-        let mut ids: Vec<&str> = row
-            .caught
+    println!();
+    let clients_uncaught = print_kill_table(
+        "client fault",
+        clients.iter().map(|row| (row.fault.name(), &row.caught)),
+    );
+    ExitCode::from(u8::from(uncaught + clients_uncaught > 0))
+}
+
+/// One kill matrix as Markdown: each fault, the profiles it was caught on and
+/// the requirements that failed. The faults not caught anywhere, counted.
+fn print_kill_table<'a>(
+    what: &str,
+    rows: impl ExactSizeIterator<Item = (&'a str, &'a Vec<(String, Vec<String>)>)>,
+) -> usize {
+    let (total, mut uncaught) = (rows.len(), 0);
+    println!("| {what} | caught on | requirements that failed |\n|---|---|---|");
+    for (fault, caught) in rows {
+        let on = caught.iter().filter(|(_, ids)| !ids.is_empty()).count();
+        let ids: std::collections::BTreeSet<&str> = caught
             .iter()
             .flat_map(|(_, ids)| ids.iter().map(String::as_str))
             .collect();
-        ids.sort();
-        ids.dedup();
-        if caught == 0 {
-            clients_uncaught += 1;
+        if on == 0 {
+            uncaught += 1;
         }
         println!(
-            "| {} | {caught}/{} profiles | {} |",
-            row.fault,
-            row.caught.len(),
+            "| {fault} | {on}/{} profiles | {} |",
+            caught.len(),
             if ids.is_empty() {
                 "NOT CAUGHT".to_string()
             } else {
-                ids.join(", ")
+                ids.into_iter().collect::<Vec<_>>().join(", ")
             }
         );
     }
-    println!(
-        "\n{} of {} client faults caught",
-        clients.len() - clients_uncaught,
-        clients.len()
-    );
-    ExitCode::from(u8::from(uncaught + clients_uncaught > 0))
+    println!("\n{} of {total} {what}s caught", total - uncaught);
+    uncaught
 }
 
 /// The bus as the report names it.

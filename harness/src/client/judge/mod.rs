@@ -14,6 +14,9 @@ use canif_spec::{req_ids, ReqId};
 
 use super::master::NEIGHBOUR_PATTERN;
 
+mod rx;
+use rx::RxBatch;
+
 pub const TX_REQUEST: &[ReqId] = req_ids!["CL-TX-001"];
 pub const TX_UNTOUCHED: &[ReqId] = req_ids!["CL-TX-002"];
 pub const TX_ONCE: &[ReqId] = req_ids!["CL-TX-003"];
@@ -49,32 +52,6 @@ fn breach(
         expected: expected.into(),
         actual: actual.into(),
     })
-}
-
-/// A batch the device entered in the input image.
-#[derive(Debug, Clone, PartialEq, Eq)]
-struct RxBatch {
-    counter: u16,
-    messages: VecDeque<MessageRepr>,
-    /// The client was handed an image showing it (in a task it ran).
-    shown: bool,
-    /// The device restarted after entering it: if the client never saw it,
-    /// it is lost with the device's memory (CL-RST-002).
-    before_device_restart: bool,
-    /// Messages of it delivered so far.
-    taken: usize,
-}
-
-impl RxBatch {
-    fn new(counter: u16, messages: VecDeque<MessageRepr>) -> Self {
-        RxBatch {
-            counter,
-            messages,
-            shown: false,
-            before_device_restart: false,
-            taken: 0,
-        }
-    }
 }
 
 /// A batch the client wrote and the device has not acknowledged in its view.
@@ -340,152 +317,6 @@ impl Judge {
         }
         self.restarted = false;
         Ok(())
-    }
-
-    fn judge_rx(
-        &mut self,
-        inputs: &InputImage<&[u8]>,
-        before: &OutputImage<&[u8]>,
-        after: &OutputImage<&[u8]>,
-        delivered: &[MessageRepr],
-    ) -> Result<(), Breach> {
-        let counter = inputs.rx_counter();
-        let fresh = counter != self.seen_rx_counter;
-        self.seen_rx_counter = counter;
-        if fresh {
-            self.skip_unshown(counter)?;
-        }
-        let restart_batch = self.restart_batch.take();
-        let mut delivered = delivered;
-        // P3: a restarted client may deliver the batch it finds once more.
-        if let (Some(again), Some(last)) = (restart_batch, &self.last_delivered) {
-            let n = last.messages.len();
-            if last.counter == again
-                && delivered.len() >= n
-                && delivered[..n].iter().eq(last.messages.iter())
-            {
-                delivered = &delivered[n..];
-            }
-        }
-        for message in delivered {
-            // P3 allows one batch; more is the restart's fault.
-            self.take_delivered(message)
-                .map_err(|breach| match restart_batch {
-                    Some(_) => Breach {
-                        requirements: PLC_RESTART,
-                        ..breach
-                    },
-                    None => breach,
-                })?;
-        }
-        if self.queue != QueueMode::Fast && after.rx_counter() != before.rx_counter() {
-            if after.rx_counter() != counter {
-                return breach(
-                    RX_ACKNOWLEDGE,
-                    "Outputs.RxCounter",
-                    format!("Inputs.RxCounter {counter}"),
-                    after.rx_counter().to_string(),
-                );
-            }
-            let undelivered = self.rx.front().is_some_and(|b| b.counter == counter);
-            if undelivered && restart_batch.is_none() {
-                return breach(
-                    RX_ACKNOWLEDGE,
-                    "messages read before the acknowledge",
-                    format!("NoOfRxMessages = {}", inputs.no_of_rx_messages()),
-                    format!(
-                        "{} left unread",
-                        self.rx.front().map_or(0, |b| b.messages.len())
-                    ),
-                );
-            }
-            if undelivered {
-                self.rx.pop_front(); // P3: dropped once
-            }
-        }
-        Ok(())
-    }
-
-    /// The client sees RxCounter `counter`: batches before it it never saw.
-    fn skip_unshown(&mut self, counter: u16) -> Result<(), Breach> {
-        let Some(at) = self.rx.iter().position(|b| b.counter == counter) else {
-            return Ok(());
-        };
-        for batch in self.rx.drain(..at).collect::<Vec<_>>() {
-            let lost_with_restart = self.restart_batch == Some(batch.counter)
-                || (batch.before_device_restart && !batch.shown);
-            match self.queue {
-                QueueMode::Fast if batch.shown && !lost_with_restart => {
-                    return breach(
-                        FAST_QUEUE,
-                        format!("the messages of RxCounter {}", batch.counter),
-                        "read in the task that saw the new RxCounter",
-                        format!("{} never delivered", batch.messages.len()),
-                    )
-                }
-                QueueMode::Fast => {} // P4: a missed task cycle loses them
-                _ if lost_with_restart => {}
-                _ => {
-                    return breach(
-                        RX_ONCE,
-                        format!("the messages of RxCounter {}", batch.counter),
-                        "delivered before the next batch",
-                        format!("{} never delivered", batch.messages.len()),
-                    )
-                }
-            }
-        }
-        if let Some(front) = self.rx.front_mut() {
-            front.shown = true;
-        }
-        Ok(())
-    }
-
-    fn take_delivered(&mut self, message: &MessageRepr) -> Result<(), Breach> {
-        let expected = self.rx.front().and_then(|b| b.messages.front()).copied();
-        if expected.as_ref() == Some(message) {
-            let batch = self.rx.front_mut().expect("a front message has a batch");
-            let repr = batch.messages.pop_front().expect("checked above");
-            let done = batch.messages.is_empty();
-            if batch.taken == 0 {
-                self.last_delivered = Some(RxBatch::new(batch.counter, VecDeque::new()));
-            }
-            batch.taken += 1;
-            let entry = self
-                .last_delivered
-                .as_mut()
-                .expect("set at the batch's first message");
-            entry.messages.push_back(repr);
-            if done {
-                self.rx.pop_front();
-            }
-            return Ok(());
-        }
-        let described = expected.map_or("no message (all were delivered)".into(), |m| {
-            m.frame.to_string()
-        });
-        let again = self
-            .last_delivered
-            .as_ref()
-            .is_some_and(|b| b.messages.contains(message));
-        let later = self
-            .rx
-            .iter()
-            .flat_map(|b| b.messages.iter())
-            .any(|m| m == message);
-        let (ids, what) = match (again, later, expected) {
-            (true, _, _) if self.queue == QueueMode::Fast => {
-                (FAST_QUEUE, "a message delivered twice")
-            }
-            (true, _, _) => (RX_ONCE, "a message delivered twice"),
-            (_, true, _) => (RX_ONCE, "a message delivered out of order"),
-            (_, _, None) => (RX_ONCE, "a message the device never entered"),
-            _ => (
-                RX_DECODING,
-                "a message decoded otherwise than the device wrote it",
-            ),
-        };
-        breach(ids, what, described, format!("{}", message.frame))
     }
 
     fn judge_tx(
