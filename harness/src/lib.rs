@@ -11,7 +11,8 @@
 //!
 //! The arrows run one way (see README.md): `suite` → `lockstep` → `plc`,
 //! `pair`, `bus` → `diff`, `blame`, `history`; `iut_kind` → `adapter`, `iut`;
-//! `device_side` → `bus::sim` (the device the harness plays for a PLC-side client).
+//! `client::suite` → `client::rig` → `client::{master, judge, application}`,
+//! `device_side` (the device the harness plays for a PLC-side client).
 
 #![forbid(unsafe_code)]
 
