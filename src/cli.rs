@@ -392,6 +392,9 @@ pub enum ListCommand {
         /// Profiles to list (repeatable, or `all`).
         #[arg(long, default_value = "all")]
         profile: Vec<String>,
+        /// The device side's checks, or the PLC side's.
+        #[arg(long, value_enum, default_value = "device")]
+        side: SideArg,
     },
 }
 

@@ -151,8 +151,11 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
             }
         }
         Command::List {
-            what: ListCommand::Scenarios { profile },
-        } => run::list_scenarios(&catalogue, &profile, out),
+            what: ListCommand::Scenarios { profile, side },
+        } => match side {
+            SideArg::Device => run::list_scenarios(&catalogue, &profile, out),
+            SideArg::Plc => plc::list_scenarios(&catalogue, &profile, out),
+        },
         Command::SelfCheck { seed } => run::self_check(&catalogue, seed),
         Command::Compare {
             base,

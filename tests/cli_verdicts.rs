@@ -153,3 +153,73 @@ fn compare_refuses_a_report_of_fewer_profiles() {
     assert!(answer["removed"].as_array().unwrap().len() > 1000);
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// The PLC side as a new user meets it: the reference client conforms and the
+/// report says side plc and names the masters; a client fault exits 1 naming
+/// its requirement; a selection that matches nothing and a wrong --iut or
+/// --master are usage errors; `list scenarios --side plc` lists what
+/// --scenario selects.
+#[test]
+fn the_plc_side_on_the_command_line() {
+    let dir = scratch("plc");
+    let dir_text = dir.display().to_string();
+    let output = canif(&[
+        "run",
+        "--side",
+        "plc",
+        "--profile",
+        "fc510x",
+        "--report",
+        &dir_text,
+    ]);
+    assert_eq!(output.status.code(), Some(0), "{output:?}");
+    let report = report(&dir);
+    assert_eq!(report["meta"]["side"], "plc");
+    assert_eq!(report["meta"]["masters"][0], "lrw");
+    assert!(report["meta"]["masters"].as_array().unwrap().len() >= 7);
+    let output = canif(&[
+        "run",
+        "--side",
+        "plc",
+        "--profile",
+        "fc510x",
+        "--fault",
+        "drops-rtr",
+        "--report",
+        &dir_text,
+    ]);
+    let said = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{said}");
+    assert!(said.contains("fc510x::CL-TX-004"), "{said}");
+    for (args, words) in [
+        (
+            &["run", "--side", "plc", "--scenario", "no-such-xyz"][..],
+            "matches no PLC-side check",
+        ),
+        (
+            &["run", "--side", "plc", "--iut", "model"],
+            "--side plc runs a client",
+        ),
+        (
+            &["run", "--side", "plc", "--master", "ethercat-9000"],
+            "unknown master",
+        ),
+        (
+            &["run", "--side", "plc", "--fault", "no-such-fault"],
+            "unknown client fault",
+        ),
+        (&["run", "--iut", "reference"], "add --side plc"),
+    ] {
+        let output = canif(args);
+        let said = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{args:?}: {said}");
+        assert!(said.contains(words), "{args:?}: {said}");
+    }
+    let listed = canif(&["list", "scenarios", "--side", "plc", "--profile", "fc510x"]);
+    let listed = String::from_utf8_lossy(&listed.stdout);
+    assert!(listed
+        .lines()
+        .any(|l| l.contains("device restart") && l.contains("CL-RST-002")));
+    assert!(listed.lines().any(|l| l.contains("plc-client.feature")));
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -219,3 +219,40 @@ fn run_features(kind: &ClientKind, profile: &Profile, options: &ClientOptions) -
     }
     runs
 }
+
+/// `canif list scenarios --side plc`: every check a client run of these
+/// profiles can select, with the requirements each exercises.
+pub fn list_scenarios(catalogue: &Catalogue, names: &[String], out: &mut String) -> ExitCode {
+    let profiles = match super::run::profiles(catalogue, names) {
+        Ok(p) => p,
+        Err(code) => return code,
+    };
+    let options = ClientOptions::new(1);
+    let gherkin = canif_features::scenarios().unwrap_or_default();
+    for profile in profiles {
+        let caps = profile.model_capabilities();
+        for (scenario, master) in suite::scenarios(&caps, &options) {
+            let covers: Vec<&str> = scenario.covers.iter().map(|id| id.as_str()).collect();
+            outln!(
+                out,
+                "{}\t{}\t{}",
+                profile.name,
+                suite::run_name(&scenario, master),
+                covers.join(" ")
+            );
+        }
+        for scenario in gherkin
+            .iter()
+            .filter(|s| s.side == Side::Plc && profile.lacks(&s.capabilities).is_empty())
+        {
+            outln!(
+                out,
+                "{}\t{}\t{}",
+                profile.name,
+                scenario.id(),
+                scenario.requirements.join(" ")
+            );
+        }
+    }
+    ExitCode::SUCCESS
+}
