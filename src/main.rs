@@ -83,6 +83,20 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                 scenarios: scenario,
                 requirements: requirement,
             };
+            if side == SideArg::Plc {
+                // What only the device side does is refused, not ignored.
+                let device_only = [
+                    (suite == Suite::Canopen, "--suite canopen"),
+                    (cases != 4, "--cases"),
+                    (duration.is_some(), "--duration"),
+                    (trace.is_some(), "--trace"),
+                    (no_fail_fast, "--no-fail-fast"),
+                ];
+                if let Some((_, flag)) = device_only.iter().find(|(given, _)| *given) {
+                    eprintln!("{flag} applies to the device side, not to --side plc");
+                    return Ok(ExitCode::from(2));
+                }
+            }
             if suite == Suite::Canopen {
                 let canopen = device::CanopenRun {
                     bus: &bus,
