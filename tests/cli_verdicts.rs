@@ -209,7 +209,10 @@ fn the_plc_side_on_the_command_line() {
             "unknown client fault",
         ),
         (&["run", "--iut", "reference"], "add --side plc"),
-        (&["run", "--side", "plc", "--cases", "9"], "--cases applies to the device side"),
+        (
+            &["run", "--side", "plc", "--cases", "9"],
+            "--cases applies to the device side",
+        ),
     ] {
         let output = canif(args);
         let said = String::from_utf8_lossy(&output.stderr);

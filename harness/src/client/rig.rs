@@ -7,7 +7,9 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 
 use canif_model::config::{Capabilities, InterfaceConfig, Synchronization};
 use canif_model::frame::Frame;
-use canif_model::image::{ImageLayout, InputImage, MessageRepr, OutputImage};
+use canif_model::image::{
+    ImageLayout, InputHeader, InputImage, MessageRepr, OutputHeader, OutputImage,
+};
 use canif_model::timing::BitRates;
 use canif_model::Nanos;
 
@@ -18,7 +20,7 @@ use super::{Client, IutError, TaskIo};
 use crate::device_side::{DeviceSide, PlayedDevice};
 use crate::error::RunError;
 use crate::iut::BuildError;
-use crate::outcome::{Failure, Outcome, ScenarioRun};
+use crate::outcome::{BusFrame, CycleView, Failure, Outcome, ScenarioRun};
 
 /// The CAN interface cycle of every client scenario.
 pub const CYCLE: Nanos = 1_000_000;
@@ -49,6 +51,12 @@ struct Tracker {
     task: u64,
     time: Nanos,
     context: VecDeque<String>,
+    /// The same tasks as data, for the report's timing diagram: the client's
+    /// outputs and the inputs it was handed (expected and actual alike: the
+    /// device is the model), and the frames that ended since the task before.
+    timeline: VecDeque<CycleView>,
+    /// Frames that ended since the last task.
+    frames: Vec<BusFrame>,
 }
 
 impl Tracker {
@@ -62,7 +70,7 @@ impl Tracker {
             expected: breach.expected,
             actual: breach.actual,
             context: self.context.iter().cloned().collect(),
-            timeline: Vec::new(),
+            timeline: self.timeline.iter().cloned().collect(),
             frames: None,
         }
     }
@@ -72,6 +80,26 @@ impl Tracker {
             self.context.pop_front();
         }
         self.context.push_back(line);
+    }
+
+    fn view(&mut self, layout: ImageLayout, inputs: &[u8], outputs: &[u8]) {
+        let inputs = InputImage::new_checked(&inputs[..layout.input_size()], layout);
+        let outputs = OutputImage::new_checked(&outputs[..layout.output_size()], layout);
+        let (Ok(inputs), Ok(outputs)) = (inputs, outputs) else {
+            return;
+        };
+        if self.timeline.len() == CONTEXT {
+            self.timeline.pop_front();
+        }
+        let seen = InputHeader::parse(&inputs);
+        self.timeline.push_back(CycleView {
+            cycle: self.task,
+            time: self.time,
+            outputs: OutputHeader::parse(&outputs),
+            expected: seen,
+            actual: seen,
+            frames: std::mem::take(&mut self.frames),
+        });
     }
 }
 
@@ -123,6 +151,8 @@ pub fn run_recorded(
         task: 0,
         time: 0,
         context: VecDeque::new(),
+        timeline: VecDeque::new(),
+        frames: Vec::new(),
     };
     let mut record = Record::default();
     let result = drive(
@@ -207,6 +237,11 @@ fn drive(
             .run_until(time)
             .map_err(|e| Stop::Error(RunError::Bus(e)))?
         {
+            tracker.frames.push(BusFrame {
+                end: ended.end,
+                from_iut: ended.from_device,
+                text: ended.frame.to_string(),
+            });
             if ended.from_device {
                 record.sent.push(ended.frame);
                 judge.device_sent(&ended.frame)?;
@@ -232,6 +267,7 @@ fn drive(
                 .filter(|(i, _)| !answer.refused.contains(i))
                 .map(|(_, m)| *m)
                 .collect();
+            tracker.view(layout, &inputs, &buffer);
             tracker.note(describe_task(
                 task,
                 layout,
