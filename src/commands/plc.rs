@@ -108,6 +108,7 @@ pub fn execute(catalogue: &Catalogue, kind: &ClientKind, plan: &PlcPlan) -> RunR
     let started = std::time::Instant::now();
     let count = plan.profiles.len();
     let mut profiles = Vec::new();
+    let mut gherkin_left_out = None;
     for (n, profile) in plan.profiles.iter().enumerate() {
         if canif_harness::interrupt::requested() {
             eprintln!("interrupted: the remaining profiles are not run");
@@ -118,7 +119,13 @@ pub fn execute(catalogue: &Catalogue, kind: &ClientKind, plan: &PlcPlan) -> RunR
             progress.scenario(scenario_run)
         });
         progress.done(&run, "task cycles");
-        let gherkin = run_features(kind, profile, &plan.options);
+        let gherkin = match run_features(kind, profile, &plan.options) {
+            Ok(runs) => runs,
+            Err(why) => {
+                gherkin_left_out = Some(why);
+                Vec::new()
+            }
+        };
         let reach = suite::reach(catalogue, &profile.model_capabilities(), &plan.options);
         profiles.push(ProfileReport::new(
             catalogue,
@@ -139,6 +146,10 @@ pub fn execute(catalogue: &Catalogue, kind: &ClientKind, plan: &PlcPlan) -> RunR
     }
     if plan.options.masters.len() < Master::ALL.len() {
         left_out.push("master models left out by --master".to_string());
+    }
+    left_out.extend(gherkin_left_out);
+    for line in &left_out {
+        eprintln!("left out: {line}");
     }
     RunReport {
         meta: RunMeta {
@@ -165,14 +176,18 @@ pub fn execute(catalogue: &Catalogue, kind: &ClientKind, plan: &PlcPlan) -> RunR
     }
 }
 
-/// The `@plc` Gherkin scenarios the profile offers, against the client.
-fn run_features(kind: &ClientKind, profile: &Profile, options: &ClientOptions) -> Vec<GherkinRun> {
+/// The `@plc` Gherkin scenarios the profile offers, against the client, or
+/// why none ran (the report says it, so the run is not complete).
+fn run_features(
+    kind: &ClientKind,
+    profile: &Profile,
+    options: &ClientOptions,
+) -> Result<Vec<GherkinRun>, String> {
     if options.bus != ClientBus::Sim {
-        return Vec::new(); // they use the simulated bus
+        return Err("Gherkin scenarios not run: they use the simulated bus".into());
     }
-    let Ok(scenarios) = canif_features::scenarios() else {
-        return Vec::new(); // the device side reports features that do not parse
-    };
+    let scenarios = canif_features::scenarios()
+        .map_err(|e| format!("Gherkin scenarios not run: the feature files do not parse: {e}"))?;
     let mut runs = Vec::new();
     for scenario in scenarios {
         let id = scenario.id();
@@ -217,7 +232,7 @@ fn run_features(kind: &ClientKind, profile: &Profile, options: &ClientOptions) -
             elapsed: started.elapsed(),
         });
     }
-    runs
+    Ok(runs)
 }
 
 /// `canif list scenarios --side plc`: every check a client run of these
