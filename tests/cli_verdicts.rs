@@ -177,6 +177,26 @@ fn the_plc_side_on_the_command_line() {
     assert_eq!(report["meta"]["side"], "plc");
     assert_eq!(report["meta"]["masters"][0], "lrw");
     assert!(report["meta"]["masters"].as_array().unwrap().len() >= 7);
+    // The certificate names what the client was driven under, not only the side.
+    let certificate_dir = scratch("plc-certificate");
+    let output = canif(&[
+        "certify",
+        "--side",
+        "plc",
+        "--profile",
+        "fc510x",
+        "--out",
+        &certificate_dir.display().to_string(),
+    ]);
+    assert_eq!(output.status.code(), Some(0), "{output:?}");
+    let certificate: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(certificate_dir.join("certificate.json")).unwrap())
+            .unwrap();
+    assert_eq!(certificate["conforms"], true, "{certificate}");
+    assert_eq!(certificate["side"], "plc");
+    assert_eq!(certificate["masters"], report["meta"]["masters"]);
+    assert_eq!(certificate["bus"], report["meta"]["bus"]);
+    assert!(certificate.get("left_out").is_none(), "{certificate}");
     let output = canif(&[
         "run",
         "--side",

@@ -38,6 +38,9 @@ pub struct CertifiedVerdict {
 /// the file is written without whitespace: one run gives one byte string.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Certificate {
+    /// The bus the run used, with the kernel when it was SocketCAN.
+    #[serde(default)]
+    pub bus: String,
     pub canif_commit: String,
     pub canif_version: String,
     pub catalogue_sha256: String,
@@ -48,6 +51,13 @@ pub struct Certificate {
     /// SHA-256 of `certificate.html` written beside it.
     pub html_sha256: String,
     pub iut: String,
+    /// What the run left out and why: a certificate of an incomplete run does
+    /// not conform, and says what is missing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub left_out: Option<String>,
+    /// The EtherCAT master models a PLC-side run drove the client under.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub masters: Vec<String>,
     pub product: Option<Product>,
     pub profiles: Vec<String>,
     pub seed: u64,
@@ -63,6 +73,7 @@ impl Certificate {
     pub fn of(report: &RunReport) -> Self {
         let m = &report.meta;
         Certificate {
+            bus: m.bus.clone(),
             canif_commit: m.canif_commit.clone(),
             canif_version: m.canif_version.clone(),
             catalogue_sha256: m.catalogue_sha256.clone(),
@@ -71,6 +82,12 @@ impl Certificate {
             date: crate::report::utc(m.started_unix),
             html_sha256: String::new(),
             iut: m.iut.clone(),
+            left_out: (!m.complete).then(|| {
+                m.left_out
+                    .clone()
+                    .unwrap_or_else(|| "interrupted".to_string())
+            }),
+            masters: m.masters.clone(),
             product: m.product.clone(),
             profiles: report.profiles.iter().map(|p| p.profile.clone()).collect(),
             seed: m.seed,
@@ -202,7 +219,7 @@ pub fn html(certificate: &Certificate, catalogue: &canif_spec::Catalogue) -> Str
 .pass td:nth-child(3){{color:#070}} .fail td:nth-child(3),.error td:nth-child(3){{color:#b00;font-weight:bold}} .not-applicable,.not-testable,.not-run{{color:#777}}</style></head>
 <body><h1>canif conformance certificate</h1>
 <p><b>{verdict}</b> — <code>{iut}</code>{product}, {side} side, profiles {profiles}</p>
-<table><tr><th>date</th><td>{date}</td></tr><tr><th>canif</th><td>{version} ({commit})</td></tr>
+<table><tr><th>date</th><td>{date}</td></tr><tr><th>bus</th><td>{bus}</td></tr>{masters}{left_out}<tr><th>canif</th><td>{version} ({commit})</td></tr>
 <tr><th>catalogue SHA-256</th><td><code>{catalogue}</code></td></tr><tr><th>seed</th><td>{seed}</td></tr>
 <tr><th>totals</th><td>{pass} pass, {fail} fail, {error} error, {na} not applicable, {nr} not run, {nt} not testable</td></tr></table>
 <p>certificate.json carries this page's SHA-256 and is signed in certificate.json.sig; see docs/certificates.md for checking it with <code>ssh-keygen -Y verify</code>.</p>
@@ -221,6 +238,22 @@ pub fn html(certificate: &Certificate, catalogue: &canif_spec::Catalogue) -> Str
         side = esc(certificate.side.as_str()),
         profiles = esc(&certificate.profiles.join(", ")),
         date = esc(&certificate.date),
+        bus = esc(&certificate.bus),
+        masters = if certificate.masters.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "<tr><th>masters</th><td>{}</td></tr>",
+                esc(&certificate.masters.join(", "))
+            )
+        },
+        left_out = certificate
+            .left_out
+            .as_ref()
+            .map_or(String::new(), |l| format!(
+                "<tr><th>left out</th><td>{}</td></tr>",
+                esc(l)
+            )),
         version = esc(&certificate.canif_version),
         commit = esc(&certificate.canif_commit),
         catalogue = esc(&certificate.catalogue_sha256),

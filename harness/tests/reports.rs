@@ -130,6 +130,7 @@ fn a_run_that_checked_nothing_does_not_conform() {
     let report = RunReport {
         meta: RunMeta {
             complete: false,
+            left_out: Some(options.selection.describe()),
             ..RunMeta::new("softdevice".into(), "sim".into(), 1, &catalogue)
         },
         profiles: vec![ProfileReport::new(
@@ -149,6 +150,13 @@ fn a_run_that_checked_nothing_does_not_conform() {
         report.profiles[0].verdicts["HS-TX-001"].kind(),
         VerdictKind::NotRun
     );
+    // Its certificate does not conform, and says what was left out.
+    let certificate = canif_harness::certificate::Certificate::of(&report);
+    assert!(!certificate.conforms);
+    assert_eq!(certificate.left_out, report.meta.left_out);
+    assert!(certificate
+        .left_out
+        .is_some_and(|l| l.contains("no-such-scenario-xyz")));
 }
 
 #[test]
