@@ -149,6 +149,14 @@ int canif_client_task(void *client, const uint8_t *inputs, size_t inputs_size,
                       canif_message *delivered, size_t delivered_capacity,
                       size_t *delivered_count);
 
+/* Optional. After each canif_client_task: the transaction numbers of the Tx
+ * messages that task learned were sent, in the order sent, written into
+ * numbers (room for capacity); returns how many. Inputs.TransactionNumber
+ * names the last message on the bus, so every message handed over before it
+ * was sent too; Inputs.TxCounter only says the device queued the batch.
+ * Judged on CL-TN-002; a library without it is not judged there. */
+size_t canif_client_sent(void *client, uint16_t *numbers, size_t capacity);
+
 #ifdef __cplusplus
 }
 #endif

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::process::Command;
 
 use canif_harness::client::suite::{run_profile, ClientKind, ClientOptions};
-use canif_harness::Outcome;
+use canif_harness::{Outcome, VerdictKind};
 use canif_spec::Catalogue;
 
 /// Compiles the C example client with `flags` into a shared library.
@@ -38,7 +38,7 @@ fn options() -> ClientOptions {
     }
 }
 
-/// Covers: CL-TX-001, CL-TX-003, CL-TX-004, CL-RX-001, CL-RX-002, CL-RX-003, CL-FQ-001
+/// Covers: CL-TX-001, CL-TX-003, CL-TX-004, CL-RX-001, CL-RX-002, CL-RX-003, CL-FQ-001, CL-TN-002
 #[test]
 fn the_c_example_client_conforms_in_process() {
     let catalogue = Catalogue::embedded().unwrap();
@@ -59,7 +59,35 @@ fn the_c_example_client_conforms_in_process() {
             .collect();
         assert!(bad.is_empty(), "{}:\n{}", profile.name, bad.join("\n\n"));
         assert!(run.runs.len() >= 90);
+        // canif_client_sent tells which messages were sent, and that is judged.
+        assert_eq!(
+            run.verdicts["CL-TN-002"].kind(),
+            VerdictKind::Pass,
+            "{}",
+            profile.name
+        );
     }
+}
+
+/// canif_client_sent is optional: without it CL-TN-002 is not run, and the
+/// verdict says why instead of passing on nothing.
+#[test]
+fn a_c_client_that_tells_nothing_sent_is_not_judged_on_it() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let kind = ClientKind::Lib {
+        path: build("without_sent", &["-DCANIF_WITHOUT_SENT"]),
+    };
+    let profile = catalogue.profile("fc532x").unwrap();
+    let run = run_profile(&catalogue, profile, &kind, &options(), |_| {});
+    assert!(run.failed_requirements().is_empty());
+    let verdict = &run.verdicts["CL-TN-002"];
+    assert_eq!(verdict.kind(), VerdictKind::NotRun);
+    assert!(
+        verdict
+            .reason()
+            .is_some_and(|r| r.contains("told its application of no Tx message sent")),
+        "{verdict:?}"
+    );
 }
 
 /// Covers: CL-IMG-001

@@ -25,7 +25,7 @@ fn exec(command: &str, timeout_ms: u64) -> ClientKind {
     }
 }
 
-/// Covers: CL-TX-001, CL-TX-003, CL-RX-001, CL-RX-002, CL-FQ-001, CL-RST-001, CL-RST-002
+/// Covers: CL-TX-001, CL-TX-003, CL-RX-001, CL-RX-002, CL-FQ-001, CL-RST-001, CL-RST-002, CL-TN-002
 #[test]
 fn the_python_example_client_written_from_the_document_conforms() {
     let catalogue = Catalogue::embedded().unwrap();
@@ -49,6 +49,14 @@ fn the_python_example_client_written_from_the_document_conforms() {
             .collect();
         assert!(bad.is_empty(), "{}:\n{}", profile.name, bad.join("\n\n"));
         assert!(run.runs.len() >= 90, "{} runs", run.runs.len());
+        // It tells which messages were sent (`sent`), and that is judged.
+        assert_eq!(
+            run.verdicts["CL-TN-002"].kind(),
+            canif_harness::VerdictKind::Pass,
+            "{}: {:?}",
+            profile.name,
+            run.verdicts["CL-TN-002"]
+        );
     }
 }
 

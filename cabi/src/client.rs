@@ -32,12 +32,20 @@ type Task = unsafe extern "C" fn(
     *mut usize,
 ) -> c_int;
 
+type Sent = unsafe extern "C" fn(*mut c_void, *mut u16, usize) -> usize;
+
 #[derive(Clone, Copy)]
 struct Functions {
     start: Start,
     stop: Stop,
     task: Task,
+    /// Optional: a client that does not tell what was sent leaves it out.
+    sent: Option<Sent>,
 }
+
+/// Room for the transaction numbers one task may tell: more than any
+/// interface has Tx messages in flight.
+const SENT_CAPACITY: usize = 1024;
 
 /// A loaded client library. Clients keep it loaded while they live.
 pub struct ClientLibrary {
@@ -53,6 +61,7 @@ impl ClientLibrary {
             start: symbol(&library, "canif_client_start")?,
             stop: symbol(&library, "canif_client_stop")?,
             task: symbol(&library, "canif_client_task")?,
+            sent: symbol(&library, "canif_client_sent").ok(),
         };
         Ok(ClientLibrary {
             functions,
@@ -82,6 +91,8 @@ pub struct TaskResult {
     pub delivered: Vec<CMessage>,
     /// Indices of the requests the client cannot send.
     pub refused: Vec<usize>,
+    /// What `canif_client_sent` told (empty without it).
+    pub sent: Vec<u16>,
 }
 
 /// One running program; stopped when dropped.
@@ -134,9 +145,22 @@ impl ClientProgram {
             ));
         }
         delivered.truncate(count);
+        let mut sent = Vec::new();
+        if let Some(told) = self.functions.sent {
+            sent = vec![0u16; SENT_CAPACITY];
+            // SAFETY: `sent` holds SENT_CAPACITY numbers; the handle is live.
+            let count = unsafe { told(self.handle, sent.as_mut_ptr(), SENT_CAPACITY) };
+            if count > SENT_CAPACITY {
+                return Err(format!(
+                    "canif_client_sent told {count} numbers into room for {SENT_CAPACITY}"
+                ));
+            }
+            sent.truncate(count);
+        }
         Ok(TaskResult {
             delivered,
             refused: (0..requests.len()).filter(|i| refused[*i] != 0).collect(),
+            sent,
         })
     }
 }

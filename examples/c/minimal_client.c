@@ -11,7 +11,9 @@
  * acknowledges by copying Inputs.RxCounter; it hands queued messages over
  * only while Outputs.TxCounter equals Inputs.TxCounter, then writes
  * Inputs.TxCounter + 1. It keeps its own output image and copies all of it
- * into the buffer the master hands it.
+ * into the buffer the master hands it. With transaction numbers it tells
+ * which messages were sent (canif_client_sent): every message up to the one
+ * Inputs.TransactionNumber names.
  */
 #include <stdlib.h>
 #include <string.h>
@@ -26,6 +28,12 @@ typedef struct client {
     uint8_t *image; /* the output image, as this program keeps it */
     canif_message queue[QUEUE];
     size_t head, count;
+    /* Transaction numbers handed over and not yet known to be sent, and
+     * those this task learned were. */
+    uint16_t in_flight[QUEUE];
+    size_t in_flight_count;
+    uint16_t sent[QUEUE];
+    size_t sent_count;
 } client;
 
 static const uint8_t FD_SIZES[] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64};
@@ -169,6 +177,20 @@ int canif_client_task(void *handle, const uint8_t *inputs, size_t inputs_size, u
         c->queue[(c->head + c->count++) % QUEUE] = requests[i];
     }
     *delivered_count = 0;
+    /* Sent: up to the message Inputs.TransactionNumber names. */
+    c->sent_count = 0;
+    if (c->rx_start == 8) {
+        uint16_t last = (uint16_t)get(inputs + 6, 2);
+        for (size_t i = 0; i < c->in_flight_count; i++) {
+            if (c->in_flight[i] != last) continue;
+            c->sent_count = i + 1;
+            memcpy(c->sent, c->in_flight, c->sent_count * sizeof c->sent[0]);
+            c->in_flight_count -= c->sent_count;
+            memmove(c->in_flight, c->in_flight + c->sent_count,
+                    c->in_flight_count * sizeof c->in_flight[0]);
+            break;
+        }
+    }
     /* Read: a new Inputs.RxCounter means NoOfRxMessages new messages. */
     if (get(inputs + 2, 2) != get(c->image + 2, 2)) {
         size_t n = get(inputs + 4, 2);
@@ -185,6 +207,8 @@ int canif_client_task(void *handle, const uint8_t *inputs, size_t inputs_size, u
         size_t n = c->count < c->config.tx_slots ? c->count : c->config.tx_slots;
         for (size_t i = 0; i < n; i++) {
             encode(c, c->image + 6 + i * c->tx_size, &c->queue[c->head]);
+            if (c->rx_start == 8 && c->in_flight_count < QUEUE)
+                c->in_flight[c->in_flight_count++] = c->queue[c->head].transaction_number;
             c->head = (c->head + 1) % QUEUE;
             c->count--;
         }
@@ -194,3 +218,12 @@ int canif_client_task(void *handle, const uint8_t *inputs, size_t inputs_size, u
     memcpy(outputs, c->image, outputs_size);
     return 0;
 }
+
+#ifndef CANIF_WITHOUT_SENT /* tests/c_abi_client.rs builds it without: optional */
+size_t canif_client_sent(void *handle, uint16_t *numbers, size_t capacity) {
+    client *c = handle;
+    size_t n = c->sent_count < capacity ? c->sent_count : capacity;
+    memcpy(numbers, c->sent, n * sizeof numbers[0]);
+    return n;
+}
+#endif

@@ -8,6 +8,8 @@ the slots) and acknowledges by copying Inputs.RxCounter; it hands the
 application's messages over in batches, only while Outputs.TxCounter equals
 Inputs.TxCounter, then sets Outputs.TxCounter to Inputs.TxCounter + 1. It keeps
 its own output image, so it does not care what buffer the master hands it.
+With transaction numbers it tells which messages were sent: every message
+up to the one Inputs.TransactionNumber names (`sent`).
 
     cargo run --release -- run --side plc --iut "exec:python3 examples/python/minimal_client.py"
 """
@@ -42,6 +44,9 @@ class Client:
         # Where the messages start and how large they are (the offsets tables).
         with_tn = tn or self.format == "fd"
         self.rx_start = 8 if with_tn else 6
+        self.with_tn = with_tn
+        # Transaction numbers handed over and not yet known to be sent.
+        self.in_flight = []
         if self.format == "11-bit":
             self.tx_size, self.rx_size = (12 if tn else 10), 10
         elif self.format == "29-bit":
@@ -127,14 +132,23 @@ class Client:
             for n in range(count):
                 delivered.append(self.decode(inputs, self.rx_start + n * self.rx_size))
             self.outputs[2:4] = inputs[2:4]
+        # Sent: up to the message Inputs.TransactionNumber names.
+        sent = []
+        if self.with_tn and u16(inputs, 6) in self.in_flight:
+            last = self.in_flight.index(u16(inputs, 6))
+            sent, self.in_flight = self.in_flight[:last + 1], self.in_flight[last + 1:]
         # Send: only while the last batch is acknowledged.
         if u16(self.outputs, 0) == u16(inputs, 0) and self.queue:
             count = min(len(self.queue), self.tx_slots)
             for n in range(count):
-                self.encode(6 + n * self.tx_size, self.queue.pop(0))
+                message = self.queue.pop(0)
+                self.encode(6 + n * self.tx_size, message)
+                if self.with_tn:
+                    self.in_flight.append(message["transaction_number"])
             put(self.outputs, 4, count, 2)
             put(self.outputs, 0, (u16(inputs, 0) + 1) & 0xFFFF, 2)
-        return {"type": "tasked", "outputs": self.outputs.hex(), "delivered": delivered, "refused": refused}
+        return {"type": "tasked", "outputs": self.outputs.hex(), "delivered": delivered,
+                "refused": refused, "sent": sent}
 
 
 def main():

@@ -37,7 +37,7 @@ fn problems(kind: &ClientKind, options: &ClientOptions) -> Vec<String> {
     bad
 }
 
-/// Covers: CL-TX-001, CL-TX-002, CL-TX-003, CL-TX-004, CL-TX-005, CL-RX-001, CL-RX-002, CL-RX-003, CL-IMG-001, CL-FQ-001, CL-RST-001, CL-RST-002, CL-TN-001
+/// Covers: CL-TX-001, CL-TX-002, CL-TX-003, CL-TX-004, CL-TX-005, CL-RX-001, CL-RX-002, CL-RX-003, CL-IMG-001, CL-FQ-001, CL-RST-001, CL-RST-002, CL-TN-001, CL-TN-002
 #[test]
 fn the_reference_client_conforms_on_every_profile_under_every_master() {
     let bad = problems(&ClientKind::Reference, &options());
@@ -108,9 +108,10 @@ const KILL_TABLE: &[(ClientFault, &[&str])] = &[
     (ClientFault::NoOfTxMessagesIsTheSlotCount, &["CL-TX-005"]),
     (ClientFault::RestartReadsAllSlots, &["CL-RST-001"]),
     (ClientFault::IgnoresRxCounterZero, &["CL-RST-002"]),
+    (ClientFault::SentOnAcknowledge, &["CL-TN-002"]),
 ];
 
-/// Covers: CL-TX-001, CL-TX-002, CL-TX-003, CL-TX-004, CL-TX-005, CL-RX-001, CL-RX-002, CL-RX-003, CL-IMG-001, CL-FQ-001, CL-RST-001, CL-RST-002, CL-TN-001
+/// Covers: CL-TX-001, CL-TX-002, CL-TX-003, CL-TX-004, CL-TX-005, CL-RX-001, CL-RX-002, CL-RX-003, CL-IMG-001, CL-FQ-001, CL-RST-001, CL-RST-002, CL-TN-001, CL-TN-002
 #[test]
 fn each_faulty_client_is_caught_on_exactly_its_requirements() {
     let catalogue = Catalogue::embedded().unwrap();

@@ -1,5 +1,6 @@
 //! The PLC side: a reference client that sends and receives exactly as the
-//! corrected sample code of 001 §6 does (ruling R5).
+//! corrected sample code of 001 §6 does (ruling R5), and with transaction
+//! numbers learns which messages were sent (000 §5.2).
 
 use std::collections::VecDeque;
 
@@ -17,6 +18,10 @@ pub struct PlcClient {
     outputs: Vec<u8>,
     to_send: VecDeque<MessageRepr>,
     received: Vec<MessageRepr>,
+    /// Transaction numbers of the messages handed over and not yet known to
+    /// be sent, oldest first.
+    in_flight: VecDeque<u16>,
+    sent: Vec<u16>,
 }
 
 impl PlcClient {
@@ -26,6 +31,8 @@ impl PlcClient {
             layout,
             to_send: VecDeque::new(),
             received: Vec::new(),
+            in_flight: VecDeque::new(),
+            sent: Vec::new(),
         }
     }
 
@@ -67,10 +74,26 @@ impl PlcClient {
         std::mem::take(&mut self.received)
     }
 
+    /// Transaction numbers of the messages learned to be sent so far, in the
+    /// order sent; drains them. Empty without transaction numbers.
+    pub fn take_sent(&mut self) -> Vec<u16> {
+        std::mem::take(&mut self.sent)
+    }
+
     /// One PLC task cycle: the read sample, then the send sample of 001 §6.
     pub fn task(&mut self, inputs: &[u8]) -> Result<&[u8], SizeError> {
         let inputs = InputImage::new_checked(inputs, self.layout)?;
         let mut outputs = OutputImage::new_checked(&mut self.outputs[..], self.layout)?;
+
+        // Inputs.TransactionNumber names the last message on the bus (TN-002);
+        // the device sends in order, so every message handed over before it
+        // was sent too. A message accepted (Inputs.TxCounter) may still wait
+        // in the device's queue: only the number tells.
+        if let Some(last) = inputs.transaction_number() {
+            if let Some(at) = self.in_flight.iter().position(|n| *n == last) {
+                self.sent.extend(self.in_flight.drain(..=at));
+            }
+        }
 
         // if Outputs.RxCounter <> Inputs.RxCounter then … Outputs.RxCounter := Inputs.RxCounter
         if handshake::new_messages(outputs.rx_counter(), inputs.rx_counter()) {
@@ -96,6 +119,9 @@ impl PlcClient {
                 };
                 // Checked in `send`.
                 let _ = message.emit(&mut view);
+                if self.layout.transaction_number {
+                    self.in_flight.push_back(message.transaction_number);
+                }
             }
             outputs.set_no_of_tx_messages(count as u16);
             // Outputs.TxCounter := Inputs.TxCounter + 1

@@ -146,6 +146,8 @@ fn scenario(
     }
     if config.transaction_number {
         covers.push(ReqId::new("CL-TN-001"));
+        // Judged only when the client tells what was sent (rig.rs).
+        covers.push(ReqId::new("CL-TN-002"));
     }
     covers.sort();
     covers.dedup();

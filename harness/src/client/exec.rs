@@ -57,6 +57,7 @@ impl Client for ExecClient {
             outputs,
             delivered,
             refused,
+            sent,
         } = self.process.exchange(&request, "tasked")?
         else {
             unreachable!("exchange returns the expected type");
@@ -76,6 +77,7 @@ impl Client for ExecClient {
         io.outputs[..size].copy_from_slice(&outputs.0);
         let mut answer = TaskAnswer {
             refused,
+            sent,
             ..TaskAnswer::default()
         };
         for message in &delivered {

@@ -34,10 +34,11 @@ pub enum ClientFault {
     NoOfTxMessagesIsTheSlotCount,
     RestartReadsAllSlots,
     IgnoresRxCounterZero,
+    SentOnAcknowledge,
 }
 
 impl ClientFault {
-    pub const ALL: [ClientFault; 17] = [
+    pub const ALL: [ClientFault; 18] = [
         ClientFault::SendSample000,
         ClientFault::DecodeOverNoOfTxMessages,
         ClientFault::OwnRxCounter,
@@ -55,6 +56,7 @@ impl ClientFault {
         ClientFault::NoOfTxMessagesIsTheSlotCount,
         ClientFault::RestartReadsAllSlots,
         ClientFault::IgnoresRxCounterZero,
+        ClientFault::SentOnAcknowledge,
     ];
 
     pub fn name(self) -> &'static str {
@@ -76,6 +78,7 @@ impl ClientFault {
             ClientFault::NoOfTxMessagesIsTheSlotCount => "no-of-tx-messages-is-the-slot-count",
             ClientFault::RestartReadsAllSlots => "restart-reads-all-slots",
             ClientFault::IgnoresRxCounterZero => "ignores-rx-counter-zero",
+            ClientFault::SentOnAcknowledge => "sent-on-acknowledge",
         }
     }
 
@@ -124,6 +127,9 @@ impl ClientFault {
             ClientFault::IgnoresRxCounterZero => {
                 "takes Inputs.RxCounter = 0 for a device with nothing yet, so it never acknowledges a restarted device"
             }
+            ClientFault::SentOnAcknowledge => {
+                "tells its application a batch was sent once Inputs.TxCounter acknowledges it, not once Inputs.TransactionNumber names it"
+            }
         }
     }
 
@@ -149,6 +155,8 @@ pub struct FaultyClient {
     own_rx_counter: u16,
     /// No task has run since the program started.
     started: bool,
+    /// Transaction numbers written and not yet known to be on the bus.
+    unconfirmed: VecDeque<u16>,
 }
 
 impl FaultyClient {
@@ -161,6 +169,7 @@ impl FaultyClient {
             to_send: VecDeque::new(),
             own_rx_counter: 0,
             started: true,
+            unconfirmed: VecDeque::new(),
         }
     }
 
@@ -235,6 +244,30 @@ impl FaultyClient {
         Ok(())
     }
 
+    /// The messages this task learns were sent: up to the one
+    /// Inputs.TransactionNumber names, for the device sends in order.
+    fn learn_sent(&mut self, inputs: &[u8]) -> Result<Vec<u16>, IutError> {
+        let layout = self.layout;
+        let image = InputImage::new_checked(&inputs[..layout.input_size()], layout)
+            .map_err(|e| IutError(e.to_string()))?;
+        if self.has(ClientFault::SentOnAcknowledge) {
+            let mine = OutputImage::new_checked(&self.image[..], layout)
+                .map_err(|e| IutError(e.to_string()))?
+                .tx_counter();
+            if handshake::ready_to_send(mine, image.tx_counter()) {
+                return Ok(self.unconfirmed.drain(..).collect());
+            }
+            return Ok(Vec::new());
+        }
+        let last = image.transaction_number();
+        Ok(
+            match self.unconfirmed.iter().rposition(|n| Some(*n) == last) {
+                Some(at) => self.unconfirmed.drain(..=at).collect(),
+                None => Vec::new(),
+            },
+        )
+    }
+
     fn write(&mut self, inputs: &[u8], buffer: &mut [u8]) -> Result<(), IutError> {
         let layout = self.layout;
         let image = InputImage::new_checked(&inputs[..layout.input_size()], layout)
@@ -267,6 +300,9 @@ impl FaultyClient {
             };
             if self.has(ClientFault::TransactionNumberZero) {
                 message.transaction_number = 0;
+            }
+            if n < count && layout.transaction_number {
+                self.unconfirmed.push_back(message.transaction_number);
             }
             if self.has(ClientFault::DropsRtr) && message.frame.is_remote() {
                 let zeros = [0u8; 8];
@@ -335,6 +371,7 @@ impl Client for FaultyClient {
             }
         }
         self.read(io.inputs, &mut answer.delivered)?;
+        answer.sent = self.learn_sent(io.inputs)?;
         self.write(io.inputs, io.outputs)?;
         io.outputs[..size].copy_from_slice(&self.image);
         Ok(answer)

@@ -66,6 +66,7 @@ impl Client for LibClient {
             .map_err(|e| IutError(format!("{}: {e}", self.path)))?;
         let mut answer = TaskAnswer {
             refused: result.refused,
+            sent: result.sent,
             ..TaskAnswer::default()
         };
         for m in &result.delivered {

@@ -55,6 +55,10 @@ pub struct TaskAnswer {
     /// What it delivered that is no frame (say a 29-bit identifier without
     /// the 29-bit flag), after the `delivered` ones: judged, not an error.
     pub not_frames: Vec<String>,
+    /// The transaction numbers of the Tx messages the client tells its
+    /// application were sent, learned in this task, in the order sent
+    /// (CL-TN-002). A client that does not tell leaves it empty.
+    pub sent: Vec<u16>,
 }
 
 /// A PLC-side client under test. Every call can fail with an [`IutError`]:
@@ -107,6 +111,7 @@ impl Client for ReferenceClient {
             delivered: self.client.take_received(),
             refused,
             not_frames: Vec::new(),
+            sent: self.client.take_sent(),
         })
     }
 }

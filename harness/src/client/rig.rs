@@ -14,7 +14,7 @@ use canif_model::timing::BitRates;
 use canif_model::Nanos;
 
 use super::application::{ClientScenario, Event};
-use super::judge::{Breach, Judge, TaskSeen};
+use super::judge::{Breach, Judge, TaskSeen, SENT_REPORTS};
 use super::master::{Master, MasterRun};
 use super::{Client, IutError, TaskIo};
 use crate::device_side::{DeviceSide, PlayedDevice};
@@ -112,6 +112,8 @@ pub struct Record {
     pub sent: Vec<Frame>,
     /// The messages the client delivered to its application, in order.
     pub delivered: Vec<MessageRepr>,
+    /// The transaction numbers the client told its application were sent.
+    pub told_sent: Vec<u16>,
 }
 
 /// What ended a run early.
@@ -168,9 +170,17 @@ pub fn run_recorded(
         Err(Stop::Breach(breach)) => Outcome::Fail(Box::new(tracker.failure(&name, breach))),
         Err(Stop::Error(error)) => Outcome::Error(error),
     };
+    // A client that tells its application nothing of what was sent gives
+    // CL-TN-002 nothing to judge: no evidence of a pass.
+    let covers = scenario
+        .covers
+        .iter()
+        .filter(|id| !record.told_sent.is_empty() || !SENT_REPORTS.contains(id))
+        .cloned()
+        .collect();
     let run = ScenarioRun {
         scenario: name,
-        covers: scenario.covers.clone(),
+        covers,
         outcome,
         cycles: record.tasks,
         frames_checked: record.frames_checked,
@@ -284,11 +294,13 @@ fn drive(
                     accepted: &accepted,
                     delivered: &answer.delivered,
                     not_frames: &answer.not_frames,
+                    sent: &answer.sent,
                 },
                 deadline,
             )?;
             record.frames_checked += answer.delivered.len() as u64;
             record.delivered.extend_from_slice(&answer.delivered);
+            record.told_sent.extend_from_slice(&answer.sent);
             exchange.client_wrote(&buffer[..layout.output_size()]);
         } else {
             tracker.note(format!("task {task}: overrun, the client does not run"));

@@ -255,7 +255,30 @@ pub fn run_profile(
         &run.checks(),
         &reach(catalogue, &caps, options),
     );
+    told_nothing_sent(&mut run);
     run
+}
+
+/// CL-TN-002 judges what a client tells its application was sent; where the
+/// runs with transaction numbers passed and it told nothing, the verdict
+/// says so rather than blaming the selection.
+fn told_nothing_sent(run: &mut ProfileRun) {
+    let [told] = super::judge::SENT_REPORTS else {
+        return;
+    };
+    let ran = run.runs.iter().any(|r| {
+        matches!(r.outcome, Outcome::Pass)
+            && r.covers
+                .iter()
+                .any(|id| super::judge::TRANSACTION_NUMBERS.contains(id))
+    });
+    if let Some(verdict @ verdict::Verdict::NotRun(_)) = run.verdicts.get_mut(told.as_str()) {
+        if ran {
+            *verdict = verdict::Verdict::NotRun(
+                "the client told its application of no Tx message sent (it does not use Inputs.TransactionNumber that way): nothing to judge".into(),
+            );
+        }
+    }
 }
 
 /// What a client run can judge, and where the device's requirements are judged.

@@ -129,11 +129,15 @@ pub enum Answer {
         protocol: u64,
     },
     /// Client role: the output image the task left, the messages it
-    /// delivered to its application, and the requests (by index) it cannot send.
+    /// delivered to its application, the requests (by index) it cannot send,
+    /// and, optionally, the transaction numbers of the Tx messages it tells
+    /// its application were sent (CL-TN-002).
     Tasked {
         outputs: Hex,
         delivered: Vec<WireMessage>,
         refused: Vec<usize>,
+        #[serde(default)]
+        sent: Vec<u16>,
     },
     Error {
         message: String,

@@ -30,6 +30,7 @@ pub const FAST_QUEUE: &[ReqId] = req_ids!["CL-FQ-001"];
 pub const PLC_RESTART: &[ReqId] = req_ids!["CL-RST-001"];
 pub const DEVICE_RESTART: &[ReqId] = req_ids!["CL-RST-002"];
 pub const TRANSACTION_NUMBERS: &[ReqId] = req_ids!["CL-TN-001"];
+pub const SENT_REPORTS: &[ReqId] = req_ids!["CL-TN-002"];
 
 /// What a client did wrong, before the rig adds where.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -76,6 +77,8 @@ pub struct TaskSeen<'a> {
     pub delivered: &'a [MessageRepr],
     /// What it delivered after those that is no frame.
     pub not_frames: &'a [String],
+    /// The transaction numbers it told its application were sent.
+    pub sent: &'a [u16],
 }
 
 /// The judge of one client run.
@@ -91,6 +94,13 @@ pub struct Judge {
     numbers: Vec<u16>,
     /// How many of them reached the bus.
     sent: usize,
+    /// Which of those handed over are on the bus (a device restart skips some).
+    on_bus: Vec<bool>,
+    /// Handed over, lost in a device restart, and sent in no client's view:
+    /// a client inferring "sent" from a later number cannot tell (CL-TN-002).
+    lost_in_restart: std::collections::BTreeSet<usize>,
+    /// Of those handed over, how many the client has told it knows the fate of.
+    reported: usize,
     /// Frames the device may send once more (a device restart re-takes the
     /// batch in the image, G1).
     may_repeat: VecDeque<Frame>,
@@ -131,6 +141,9 @@ impl Judge {
             batched: 0,
             numbers: Vec::new(),
             sent: 0,
+            on_bus: Vec::new(),
+            lost_in_restart: std::collections::BTreeSet::new(),
+            reported: 0,
             may_repeat: VecDeque::new(),
             pending: None,
             rx: VecDeque::new(),
@@ -189,11 +202,22 @@ impl Judge {
             self.sent += 1;
         }
         if self.requests.get(self.sent).map(|r| &r.frame) == Some(frame) {
+            if let Some(on_bus) = self.on_bus.get_mut(self.sent) {
+                *on_bus = true;
+            }
             self.sent += 1;
             return Ok(());
         }
         if self.may_repeat.front() == Some(frame) {
             self.may_repeat.pop_front();
+            // The batch in the image at the restart, taken once more.
+            let again = (0..self.batched.min(self.on_bus.len()))
+                .rev()
+                .find(|&i| !self.on_bus[i] && self.requests[i].frame == *frame);
+            if let Some(i) = again {
+                self.on_bus[i] = true;
+                self.lost_in_restart.remove(&i);
+            }
             return Ok(());
         }
         let expected = match self.requests.get(self.sent) {
@@ -218,7 +242,10 @@ impl Judge {
         if let Some(pending) = unseen {
             self.batched -= usize::from(pending.count);
             self.numbers.truncate(self.batched);
+            self.on_bus.truncate(self.batched);
         }
+        // A new program knows nothing of what the old one handed over.
+        self.reported = self.batched;
         self.requests.truncate(self.batched);
         self.restarted = true;
         self.after_plc_restart = true;
@@ -234,6 +261,8 @@ impl Judge {
     /// batches it had entered, the client can still see those up to the one
     /// with RxCounter `visible` (the master read it already); the others are lost.
     pub fn device_restarted(&mut self, task: u64, outputs: &[u8], visible: u16) {
+        self.lost_in_restart
+            .extend((self.sent..self.batched).filter(|&i| self.on_bus.get(i) == Some(&false)));
         self.sent = self.batched;
         self.may_repeat = OutputImage::new_checked(outputs, self.layout)
             .map(|image| {
@@ -302,6 +331,7 @@ impl Judge {
             self.rx.retain(|b| !b.before_device_restart);
         }
         self.judge_rx(&inputs, &before, &after, seen.delivered)?;
+        self.judge_sent(seen.sent)?;
         self.judge_tx(&inputs, &before, &after)?;
         if let Some(restart) = self.device_restart {
             if self.pending.is_some() || self.waiting() == 0 {
@@ -429,6 +459,7 @@ impl Judge {
         if self.layout.transaction_number {
             self.judge_numbers(&numbers)?;
         }
+        self.on_bus.resize(self.on_bus.len() + numbers.len(), false);
         self.numbers.extend(numbers);
         if self.after_plc_restart && after.tx_counter() == self.device_tx {
             // A restarted program cannot know the counter the device last
@@ -441,6 +472,41 @@ impl Judge {
         }
         self.batched += usize::from(count);
         self.pending = Some(tx_batch(after));
+        Ok(())
+    }
+
+    /// CL-TN-002: a message is told sent once it is on the bus, once, in
+    /// the order sent. Skipping some is no breach: the client may tell only
+    /// of the last one Inputs.TransactionNumber names.
+    fn judge_sent(&mut self, sent: &[u16]) -> Result<(), Breach> {
+        for number in sent {
+            let at = (self.reported..self.numbers.len()).find(|&i| self.numbers[i] == *number);
+            let Some(at) = at else {
+                let actual = if self.numbers[..self.reported].contains(number) {
+                    "told again, or out of order"
+                } else {
+                    "no message handed over carries it"
+                };
+                return breach(
+                    SENT_REPORTS,
+                    format!("the message with transaction number {number} told sent"),
+                    "a message handed over and not yet told sent",
+                    actual,
+                );
+            };
+            if !self.on_bus[at] && !self.lost_in_restart.contains(&at) {
+                return breach(
+                    SENT_REPORTS,
+                    format!("the message with transaction number {number} told sent"),
+                    "on the bus: Inputs.TransactionNumber names it or a later message",
+                    format!(
+                        "not sent yet ({} of {} handed over are on the bus)",
+                        self.sent, self.batched
+                    ),
+                );
+            }
+            self.reported = at + 1;
+        }
         Ok(())
     }
 
