@@ -11,7 +11,7 @@ use crate::image::{
 
 /// One PLC program using the CAN interface.
 ///
-/// Requirements: HS-TX-001, HS-RX-002, HS-RX-003, ERR-R5.
+/// Requirements: HS-TX-001, HS-RX-002, HS-RX-003, ERR-R5, CL-TN-002.
 #[derive(Debug, Clone)]
 pub struct PlcClient {
     layout: ImageLayout,

@@ -290,3 +290,38 @@ fn plc_ignores_slots_past_no_of_rx_messages() {
         std_frame(0x318, &[1, 2, 3, 4, 5, 6, 7, 8])
     );
 }
+
+/// Covers: CL-TN-002, TN-002
+#[test]
+fn the_transaction_number_not_the_acknowledge_tells_the_client_what_was_sent() {
+    let mut config = config(FrameFormat::Base11, QueueMode::Standard, 4);
+    config.transaction_number = true;
+    let layout = canif_model::image::ImageLayout::new(&config, false);
+    let mut plc = PlcClient::new(layout);
+    for (n, id) in [(7, 0x101), (8, 0x102), (9, 0x103)] {
+        plc.send(message(std_frame(id, &[]), n)).unwrap();
+    }
+    let inputs = |tx_counter: u16, number: u16| {
+        let mut bytes = vec![0u8; layout.input_size()];
+        let mut image =
+            canif_model::image::InputImage::new_checked(&mut bytes[..], layout).unwrap();
+        image.set_tx_counter(tx_counter);
+        image.set_transaction_number(number);
+        bytes
+    };
+    plc.task(&inputs(0, 0)).unwrap(); // hands over 7, 8, 9 under TxCounter 1
+    assert!(plc.take_sent().is_empty());
+    // The device took the batch (Inputs.TxCounter = 1): in its queue, not on the bus.
+    plc.task(&inputs(1, 0)).unwrap();
+    assert!(
+        plc.take_sent().is_empty(),
+        "an acknowledge is no sign of sending"
+    );
+    // Inputs.TransactionNumber 8: 7 and 8 are on the bus, 9 may wait.
+    plc.task(&inputs(1, 8)).unwrap();
+    assert_eq!(plc.take_sent(), [7, 8]);
+    plc.task(&inputs(1, 8)).unwrap();
+    assert!(plc.take_sent().is_empty(), "each told once");
+    plc.task(&inputs(1, 9)).unwrap();
+    assert_eq!(plc.take_sent(), [9]);
+}
