@@ -281,6 +281,11 @@ pub fn interfaces(caps: &Capabilities) -> Vec<InterfaceConfig> {
             list.push(interface(format, QueueMode::Standard, caps));
         }
     }
+    // The Optimized CAN Queue: the buffered handshake (003) on an 11-bit
+    // interface without transaction numbers or filters (CFG), as offered.
+    if caps.optimized_queue && caps.base11 {
+        list.push(interface(FrameFormat::Base11, QueueMode::Optimized, caps));
+    }
     if caps.fast_queue {
         list.push(interface(caps.first_format(), QueueMode::Fast, caps));
     }
