@@ -85,15 +85,17 @@ impl Traffic {
         };
         if self.format == FrameFormat::Fd && rng.chance(60) {
             let size = usize::from(FD_DATA_SIZES[rng.below(16) as usize]);
-            let data: Vec<u8> = (0..size).map(|_| rng.next_u64() as u8).collect();
-            return Frame::fd(id, rng.chance(50), false, &data).expect("a valid FD size");
+            let mut data = [0u8; 64];
+            data[..size].fill_with(|| rng.next_u64() as u8);
+            return Frame::fd(id, rng.chance(50), false, &data[..size]).expect("a valid FD size");
         }
         if rng.chance(10) {
             return Frame::remote(id, rng.below(9) as u8).expect("at most 8");
         }
         let len = rng.below(9) as usize;
-        let data: Vec<u8> = (0..len).map(|_| rng.next_u64() as u8).collect();
-        Frame::classic(id, &data).expect("at most 8 bytes")
+        let mut data = [0u8; 8];
+        data[..len].fill_with(|| rng.next_u64() as u8);
+        Frame::classic(id, &data[..len]).expect("at most 8 bytes")
     }
 
     fn send(&mut self) -> Event {

@@ -46,21 +46,73 @@ pub fn simulated(
         .map_err(|e| RunError::Configuration(e.to_string()))
 }
 
+/// A line of a failure's history, kept as data: most runs pass, and a
+/// counter wrap is 65,600 tasks, so text is made only for a failure.
+enum Note {
+    Task {
+        task: u64,
+        inputs: InputHeader,
+        outputs: OutputHeader,
+        delivered: usize,
+    },
+    Restart {
+        task: u64,
+        what: &'static str,
+    },
+    Overrun(u64),
+}
+
+impl std::fmt::Display for Note {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Note::Task {
+                task,
+                inputs,
+                outputs,
+                delivered,
+            } => write!(
+                f,
+                "task {task}: inputs Tx {} Rx {} n {} | outputs Tx {} Rx {} n {} | delivered {delivered}",
+                inputs.tx_counter,
+                inputs.rx_counter,
+                inputs.no_of_rx_messages,
+                outputs.tx_counter,
+                outputs.rx_counter,
+                outputs.no_of_tx_messages,
+            ),
+            Note::Restart { task, what } => write!(f, "task {task}: the {what} restarts"),
+            Note::Overrun(task) => write!(f, "task {task}: overrun, the client does not run"),
+        }
+    }
+}
+
+/// A frame that ended on the bus, before it is written as text.
+struct Ended {
+    end: Nanos,
+    from_device: bool,
+    frame: Frame,
+}
+
 /// Where a run is, for the failure it may end in.
 struct Tracker {
     task: u64,
     time: Nanos,
-    context: VecDeque<String>,
+    context: VecDeque<Note>,
     /// The same tasks as data, for the report's timing diagram: the client's
     /// outputs and the inputs it was handed (expected and actual alike: the
     /// device is the model), and the frames that ended since the task before.
-    timeline: VecDeque<CycleView>,
+    timeline: VecDeque<(CycleView, Vec<Ended>)>,
     /// Frames that ended since the last task.
-    frames: Vec<BusFrame>,
+    frames: Vec<Ended>,
 }
 
 impl Tracker {
     fn failure(&self, scenario: &str, breach: Breach) -> Failure {
+        let bus_frame = |e: &Ended| BusFrame {
+            end: e.end,
+            from_iut: e.from_device,
+            text: e.frame.to_string(),
+        };
         Failure {
             requirements: breach.requirements.to_vec(),
             scenario: scenario.to_string(),
@@ -69,20 +121,28 @@ impl Tracker {
             what: breach.what,
             expected: breach.expected,
             actual: breach.actual,
-            context: self.context.iter().cloned().collect(),
-            timeline: self.timeline.iter().cloned().collect(),
+            context: self.context.iter().map(Note::to_string).collect(),
+            timeline: self
+                .timeline
+                .iter()
+                .map(|(view, frames)| CycleView {
+                    frames: frames.iter().map(bus_frame).collect(),
+                    ..view.clone()
+                })
+                .collect(),
             frames: None,
         }
     }
 
-    fn note(&mut self, line: String) {
+    fn note(&mut self, note: Note) {
         if self.context.len() == CONTEXT {
             self.context.pop_front();
         }
-        self.context.push_back(line);
+        self.context.push_back(note);
     }
 
-    fn view(&mut self, layout: ImageLayout, inputs: &[u8], outputs: &[u8]) {
+    /// The task just run: its images for the timeline and the history.
+    fn task_ran(&mut self, layout: ImageLayout, inputs: &[u8], outputs: &[u8], delivered: usize) {
         let inputs = InputImage::new_checked(&inputs[..layout.input_size()], layout);
         let outputs = OutputImage::new_checked(&outputs[..layout.output_size()], layout);
         let (Ok(inputs), Ok(outputs)) = (inputs, outputs) else {
@@ -91,14 +151,22 @@ impl Tracker {
         if self.timeline.len() == CONTEXT {
             self.timeline.pop_front();
         }
-        let seen = InputHeader::parse(&inputs);
-        self.timeline.push_back(CycleView {
+        let (seen, written) = (InputHeader::parse(&inputs), OutputHeader::parse(&outputs));
+        let view = CycleView {
             cycle: self.task,
             time: self.time,
-            outputs: OutputHeader::parse(&outputs),
+            outputs: written,
             expected: seen,
             actual: seen,
-            frames: std::mem::take(&mut self.frames),
+            frames: Vec::new(),
+        };
+        self.timeline
+            .push_back((view, std::mem::take(&mut self.frames)));
+        self.note(Note::Task {
+            task: self.task,
+            inputs: seen,
+            outputs: written,
+            delivered,
         });
     }
 }
@@ -114,6 +182,9 @@ pub struct Record {
     pub delivered: Vec<MessageRepr>,
     /// The transaction numbers the client told its application were sent.
     pub told_sent: Vec<u16>,
+    /// Keep `sent` and `delivered` (a counter wrap is 65,600 of each, and
+    /// only the Gherkin steps read them).
+    keep_frames: bool,
 }
 
 /// What ended a run early.
@@ -136,7 +207,7 @@ pub fn run(
     build: &BuildClient<'_>,
     open: &OpenDevice<'_>,
 ) -> ScenarioRun {
-    run_recorded(caps, scenario, master, build, open).0
+    run_with(caps, scenario, master, (build, open), Record::default()).0
 }
 
 /// [`run`], and what the run saw.
@@ -147,6 +218,20 @@ pub fn run_recorded(
     build: &BuildClient<'_>,
     open: &OpenDevice<'_>,
 ) -> (ScenarioRun, Record) {
+    let record = Record {
+        keep_frames: true,
+        ..Record::default()
+    };
+    run_with(caps, scenario, master, (build, open), record)
+}
+
+fn run_with(
+    caps: &Capabilities,
+    scenario: &ClientScenario,
+    master: Master,
+    (build, open): (&BuildClient<'_>, &OpenDevice<'_>),
+    mut record: Record,
+) -> (ScenarioRun, Record) {
     let started = std::time::Instant::now();
     let name = format!("{} under {}", scenario.name, master.name);
     let mut tracker = Tracker {
@@ -156,7 +241,6 @@ pub fn run_recorded(
         timeline: VecDeque::new(),
         frames: Vec::new(),
     };
-    let mut record = Record::default();
     let result = drive(
         caps,
         scenario,
@@ -231,7 +315,7 @@ fn drive(
                     client = built(layout)?;
                     exchange.client_restarted();
                     judge.plc_restarted(device_saw);
-                    tracker.note(format!("task {task}: the PLC restarts"));
+                    tracker.note(Note::Restart { task, what: "PLC" });
                 }
                 Event::DeviceRestart => {
                     device.restart().map_err(configuration)?;
@@ -239,7 +323,10 @@ fn drive(
                     let visible = InputImage::new_checked(exchange.task_input_image(), layout)
                         .map_or(0, |i| i.rx_counter());
                     judge.device_restarted(task, exchange.device_outputs(), visible);
-                    tracker.note(format!("task {task}: the device restarts"));
+                    tracker.note(Note::Restart {
+                        task,
+                        what: "device",
+                    });
                 }
             }
         }
@@ -247,13 +334,15 @@ fn drive(
             .run_until(time)
             .map_err(|e| Stop::Error(RunError::Bus(e)))?
         {
-            tracker.frames.push(BusFrame {
+            tracker.frames.push(Ended {
                 end: ended.end,
-                from_iut: ended.from_device,
-                text: ended.frame.to_string(),
+                from_device: ended.from_device,
+                frame: ended.frame,
             });
             if ended.from_device {
-                record.sent.push(ended.frame);
+                if record.keep_frames {
+                    record.sent.push(ended.frame);
+                }
                 judge.device_sent(&ended.frame)?;
                 record.frames_checked += 1;
             }
@@ -277,14 +366,7 @@ fn drive(
                 .filter(|(i, _)| !answer.refused.contains(i))
                 .map(|(_, m)| *m)
                 .collect();
-            tracker.view(layout, &inputs, &buffer);
-            tracker.note(describe_task(
-                task,
-                layout,
-                &inputs,
-                &buffer,
-                &answer.delivered,
-            ));
+            tracker.task_ran(layout, &inputs, &buffer, answer.delivered.len());
             judge.task(
                 task,
                 TaskSeen {
@@ -299,11 +381,13 @@ fn drive(
                 deadline,
             )?;
             record.frames_checked += answer.delivered.len() as u64;
-            record.delivered.extend_from_slice(&answer.delivered);
+            if record.keep_frames {
+                record.delivered.extend_from_slice(&answer.delivered);
+            }
             record.told_sent.extend_from_slice(&answer.sent);
             exchange.client_wrote(&buffer[..layout.output_size()]);
         } else {
-            tracker.note(format!("task {task}: overrun, the client does not run"));
+            tracker.note(Note::Overrun(task));
         }
         exchange.end_task(|outputs| -> Result<Vec<u8>, Stop> {
             device_saw = OutputImage::new_checked(outputs, layout).map_or(0, |o| o.tx_counter());
@@ -333,30 +417,6 @@ fn overstated(inputs: &mut [u8], layout: ImageLayout, last_counter: u16) -> bool
     }
     image.set_no_of_rx_messages(0xFFFF);
     true
-}
-
-fn describe_task(
-    task: u64,
-    layout: ImageLayout,
-    inputs: &[u8],
-    outputs: &[u8],
-    delivered: &[MessageRepr],
-) -> String {
-    let inputs = InputImage::new_checked(&inputs[..layout.input_size()], layout);
-    let outputs = OutputImage::new_checked(&outputs[..layout.output_size()], layout);
-    match (inputs, outputs) {
-        (Ok(i), Ok(o)) => format!(
-            "task {task}: inputs Tx {} Rx {} n {} | outputs Tx {} Rx {} n {} | delivered {}",
-            i.tx_counter(),
-            i.rx_counter(),
-            i.no_of_rx_messages(),
-            o.tx_counter(),
-            o.rx_counter(),
-            o.no_of_tx_messages(),
-            delivered.len()
-        ),
-        _ => format!("task {task}"),
-    }
 }
 
 fn panic_message(panic: &Box<dyn std::any::Any + Send>) -> String {
