@@ -9,7 +9,9 @@
 
 use std::time::Instant;
 
-use canif_harness::{run_scenario, scenario, IutKind, Outcome};
+use canif_harness::device::scenario;
+use canif_harness::device::{run_scenario, IutKind};
+use canif_harness::Outcome;
 use canif_model::config::{FrameFormat, InterfaceConfig};
 use canif_model::timing::BitRates;
 use canif_spec::Catalogue;

@@ -24,7 +24,8 @@ use canif_spec::Catalogue;
 use clap::Parser;
 
 use cli::{Cli, Command, ListCommand, SideArg, Suite};
-use commands::{certify, device, plc, run, spec, tools};
+use commands::run::{self, plc};
+use commands::{certify, device, spec, tools};
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
@@ -78,8 +79,8 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
             side,
             master,
         } => {
-            let bus = run::bus_choice(&bus, &real_time);
-            let selection = canif_harness::Selection {
+            let bus = run::device::bus_choice(&bus, &real_time);
+            let selection = canif_harness::run::Selection {
                 scenarios: scenario,
                 requirements: requirement,
             };
@@ -126,18 +127,17 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                     Ok(masters) => masters,
                     Err(code) => return Ok(code),
                 };
-                let plan = plc::PlcPlan {
-                    profiles,
-                    options: canif_harness::client::suite::ClientOptions {
-                        seed,
-                        bus: client_bus,
-                        counter_wrap: !no_counter_wrap,
-                        masters,
-                        selection,
-                    },
-                    product: product.product(),
+                let options = canif_harness::client::suite::ClientOptions {
+                    seed,
+                    bus: client_bus,
+                    counter_wrap: !no_counter_wrap,
+                    masters,
+                    selection,
                 };
-                return Ok(plc::run(&catalogue, &kind, &plan, &report));
+                return Ok(match run::Plan::new(profiles, options, product.product()) {
+                    Ok(plan) => plc::run(&catalogue, &kind, &plan, &report),
+                    Err(code) => code,
+                });
             }
             if !master.is_empty() {
                 eprintln!("--master applies to --side plc");
@@ -146,7 +146,7 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
             let started = std::time::SystemTime::now()
                 .duration_since(std::time::UNIX_EPOCH)
                 .unwrap_or_default();
-            let options = canif_harness::Options {
+            let options = canif_harness::device::Options {
                 seed,
                 cases: if duration.is_some() { 1 } else { cases },
                 generated_cycles: duration.map_or(200, |s| (s * 1000.0).max(1.0) as u64),
@@ -160,15 +160,25 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                 fail_fast: !no_fail_fast,
             };
             match run::Plan::new(profiles, options, product.product()) {
-                Ok(plan) => run::run(&catalogue, &iut, &plan, &report),
+                Ok(plan) => run::device::run(&catalogue, &iut, &plan, &report),
                 Err(code) => code,
             }
         }
         Command::List {
             what: ListCommand::Scenarios { profile, side },
         } => match side {
-            SideArg::Device => run::list_scenarios(&catalogue, &profile, out),
-            SideArg::Plc => plc::list_scenarios(&catalogue, &profile, out),
+            SideArg::Device => run::list_scenarios(
+                &catalogue,
+                &profile,
+                canif_harness::device::Options::default(),
+                out,
+            ),
+            SideArg::Plc => run::list_scenarios(
+                &catalogue,
+                &profile,
+                canif_harness::client::suite::ClientOptions::new(1),
+                out,
+            ),
         },
         Command::SelfCheck { seed } => run::self_check(&catalogue, seed),
         Command::Compare {

@@ -5,11 +5,12 @@
 
 use std::time::{Duration, Instant};
 
+use canif_harness::device::run_scenario;
+use canif_harness::device::scenario;
+use canif_harness::device::suite::{run_profile, Options};
+use canif_harness::device::IutKind;
 use canif_harness::report::{ProfileReport, RunMeta, RunReport};
-use canif_harness::run_scenario;
-use canif_harness::scenario;
-use canif_harness::suite::{run_profile, Options};
-use canif_harness::{IutKind, Outcome, VerdictKind};
+use canif_harness::{Outcome, VerdictKind};
 use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig};
 use canif_spec::Catalogue;
 
@@ -34,14 +35,9 @@ fn soft_device(args: &str) -> IutKind {
 
 fn failures_and_errors(kind: &IutKind, profile: &str) -> (Vec<String>, Vec<String>) {
     let catalogue = Catalogue::embedded().unwrap();
-    let run = run_profile(
-        &catalogue,
-        catalogue.profile(profile).unwrap(),
-        kind,
-        &quick(),
-        |_| {},
-    );
-    let failed = run.failed_requirements();
+    let profile = catalogue.profile(profile).unwrap();
+    let run = run_profile(&catalogue, profile, kind, &quick(), |_| {});
+    let failed = run.failed_requirements(&catalogue, profile);
     let errors = run
         .runs
         .iter()
@@ -170,12 +166,10 @@ fn a_command_that_does_not_exist_is_an_error_and_the_report_says_error() {
         &quick(),
         |_| {},
     );
-    assert!(run
-        .verdicts
-        .values()
-        .any(|v| v.kind() == VerdictKind::Error));
+    let verdicts = run.verdicts(&catalogue, profile);
+    assert!(verdicts.values().any(|v| v.kind() == VerdictKind::Error));
     assert!(
-        !run.verdicts.values().any(|v| v.kind() == VerdictKind::Fail),
+        !verdicts.values().any(|v| v.kind() == VerdictKind::Fail),
         "a broken IUT is an error, not a failure"
     );
     let reach = canif_harness::verdict::Reach::default();

@@ -6,8 +6,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use canif_harness::suite::{run_profile, Options};
-use canif_harness::{IutKind, Outcome};
+use canif_harness::device::suite::{run_profile, Options};
+use canif_harness::device::IutKind;
+use canif_harness::Outcome;
 use canif_spec::Catalogue;
 
 /// Compiles `source` (plus `extra` C text) into a shared library named `name`.
@@ -61,7 +62,7 @@ fn the_c_example_is_certified_in_process() {
         .collect();
     assert!(bad.is_empty(), "{bad:#?}");
     assert!(
-        run.verdicts
+        run.verdicts(&catalogue, profile)
             .values()
             .filter(|v| v.kind() == canif_harness::VerdictKind::Pass)
             .count()
@@ -120,7 +121,7 @@ fn a_library_of_another_version_or_without_a_function_is_an_error() {
         (no_destroy, "has no `canif_destroy`"),
     ] {
         match (IutKind::Lib { path: library }).build(&caps, &config) {
-            Err(canif_harness::BuildError::Failed(reason)) => {
+            Err(canif_harness::device::BuildError::Failed(reason)) => {
                 assert!(reason.contains(words), "{reason}")
             }
             Err(other) => panic!("{other}"),

@@ -61,7 +61,7 @@ fn the_c_example_client_conforms_in_process() {
         assert!(run.runs.len() >= 90);
         // canif_client_sent tells which messages were sent, and that is judged.
         assert_eq!(
-            run.verdicts["CL-TN-002"].kind(),
+            run.verdicts(&catalogue, profile)["CL-TN-002"].kind(),
             VerdictKind::Pass,
             "{}",
             profile.name
@@ -79,14 +79,48 @@ fn a_c_client_that_tells_nothing_sent_is_not_judged_on_it() {
     };
     let profile = catalogue.profile("fc532x").unwrap();
     let run = run_profile(&catalogue, profile, &kind, &options(), |_| {});
-    assert!(run.failed_requirements().is_empty());
-    let verdict = &run.verdicts["CL-TN-002"];
+    assert!(run.failed_requirements(&catalogue, profile).is_empty());
+    let verdict = &run.verdicts(&catalogue, profile)["CL-TN-002"];
     assert_eq!(verdict.kind(), VerdictKind::NotRun);
     assert!(
         verdict
             .reason()
             .is_some_and(|r| r.contains("told its application of no Tx message sent")),
         "{verdict:?}"
+    );
+}
+
+/// The same, as a new user meets it: `canif run --side plc --iut lib:…`
+/// writes the reason into report.json (it said "not selected" while the
+/// command line judged the profile a second time without it).
+#[test]
+fn the_reason_a_client_is_not_judged_on_sent_messages_reaches_report_json() {
+    let library = build("without_sent_cli", &["-DCANIF_WITHOUT_SENT"]);
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi-client-report");
+    let _ = std::fs::remove_dir_all(&dir);
+    let output = Command::new(env!("CARGO_BIN_EXE_canif"))
+        .args(["run", "--side", "plc", "--profile", "el6751-mdp"])
+        .arg(format!("--iut=lib:{}", library.display()))
+        .arg("--report")
+        .arg(&dir)
+        .output()
+        .expect("canif runs");
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap())
+            .unwrap();
+    let verdict = &report["profiles"][0]["verdicts"]["CL-TN-002"];
+    assert_eq!(verdict["verdict"], "not run", "{verdict}");
+    assert!(
+        verdict["reason"]
+            .as_str()
+            .is_some_and(|r| r.contains("told its application of no Tx message sent")),
+        "{verdict}"
     );
 }
 
@@ -99,7 +133,7 @@ fn a_c_client_that_reads_past_its_image_is_caught() {
     };
     let profile = catalogue.profile("fc510x").unwrap();
     let run = run_profile(&catalogue, profile, &kind, &options(), |_| {});
-    assert_eq!(run.failed_requirements(), ["CL-IMG-001"]);
+    assert_eq!(run.failed_requirements(&catalogue, profile), ["CL-IMG-001"]);
     assert!(run
         .runs
         .iter()

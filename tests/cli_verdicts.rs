@@ -214,7 +214,7 @@ fn the_plc_side_on_the_command_line() {
     for (args, words) in [
         (
             &["run", "--side", "plc", "--scenario", "no-such-xyz"][..],
-            "matches no PLC-side check",
+            "matches no check",
         ),
         (
             &["run", "--side", "plc", "--iut", "model"],

@@ -8,11 +8,13 @@
 
 pub mod catalogue;
 pub mod client_world;
+pub mod schedule;
 pub mod steps;
 pub mod world;
 
 pub use catalogue::{scenarios, ScenarioInfo};
 pub use client_world::{set_client_target, ClientTarget, ClientWorld};
+pub use schedule::UnderTest;
 pub use world::{set_target, CanWorld, Target};
 
 mod embedded {

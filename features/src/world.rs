@@ -1,9 +1,9 @@
 //! The world a scenario runs in: a PLC (the reference client of 001 §6), an
 //! implementation under test built through the harness, and the bus around it.
 
-use canif_harness::plc::{PlcSide, TaskStimulus};
-use canif_harness::protocol_order::Ordered;
-use canif_harness::{Iut, IutKind};
+use canif_harness::device::played_plc::{PlcSide, TaskStimulus};
+use canif_harness::device::protocol_order::Ordered;
+use canif_harness::device::{Iut, IutKind};
 use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig};
 use canif_model::exchange::ExchangeMode;
 use canif_model::frame::Frame;
@@ -195,7 +195,7 @@ impl CanWorld {
                 Ok(())
             }
             Err(error) => {
-                if let canif_harness::BuildError::Failed(reason) = &error {
+                if let canif_harness::device::BuildError::Failed(reason) = &error {
                     record_iut_error(reason);
                 }
                 let reason = error.to_string();

@@ -2,7 +2,8 @@
 //! the soft device caught by at least one scenario (the mutation self-check).
 
 use canif_features::{run_scenario, scenarios, ScenarioOutcome, Target};
-use canif_harness::{blame, IutKind};
+use canif_harness::device::blame;
+use canif_harness::device::IutKind;
 use canif_softdevice::Fault;
 use canif_spec::Catalogue;
 
@@ -58,7 +59,7 @@ fn every_fault_is_caught_by_a_scenario() {
         if UNTRUSTED_INPUT.contains(&fault) {
             continue;
         }
-        let profile_name = canif_harness::suite::profile_for(fault);
+        let profile_name = canif_harness::device::suite::profile_for(fault);
         let profile = catalogue.profile(profile_name).unwrap();
         let caught: Vec<String> = list
             .iter()

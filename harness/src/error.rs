@@ -9,6 +9,13 @@ use std::fmt;
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct IutError(pub String);
 
+impl IutError {
+    /// The first line: what broke, without the IUT's own output after it.
+    pub fn headline(&self) -> &str {
+        self.0.lines().next().unwrap_or_default()
+    }
+}
+
 impl fmt::Display for IutError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(&self.0)

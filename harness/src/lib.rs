@@ -17,36 +17,20 @@
 #![forbid(unsafe_code)]
 
 pub mod adapter;
-pub mod blame;
-pub mod bounds;
 pub mod bus;
 pub mod canopen;
 pub mod certificate;
 pub mod client;
 pub mod compare;
-pub mod device_side;
-pub mod diff;
+pub mod device;
 pub mod error;
-mod history;
 pub mod interrupt;
-pub mod iut;
-pub mod iut_kind;
-pub mod lib_iut;
-pub mod lockstep;
 pub mod outcome;
-mod pair;
-pub mod plc;
-pub mod protocol_order;
 pub mod report;
-pub mod scenario;
-pub mod suite;
+pub mod run;
 pub mod trace;
 pub mod verdict;
 
 pub use error::{BusError, IutError, RunError};
-pub use iut::{BuildError, Iut};
-pub use iut_kind::IutKind;
-pub use lockstep::run_scenario;
 pub use outcome::{Failure, GherkinOutcome, GherkinRun, Outcome, ScenarioRun};
-pub use suite::{run_profile, Options, ProfileRun, Selection};
 pub use verdict::{Evidence, Verdict, VerdictKind};

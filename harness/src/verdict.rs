@@ -9,7 +9,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;
 
-use canif_spec::{Catalogue, Profile, Verification};
+use canif_spec::{Catalogue, Profile, Side, Verification};
 use serde::{Deserialize, Serialize};
 
 /// One check that ran against the implementation, named stably (no line
@@ -148,8 +148,8 @@ pub enum Verdict {
     /// The profile lacks a capability the requirement needs.
     NotApplicable(String),
     /// Something in canif exercises it, but not this run (the selection, an
-    /// earlier error, another suite).
-    NotRun(String),
+    /// earlier error, another suite or side), or the run found nothing to judge.
+    NotRun(NotRunReason),
     /// Nothing in canif exercises it against an implementation: the catalogue's reason.
     NotTestable(String),
 }
@@ -176,9 +176,8 @@ impl Verdict {
             Verdict::Pass(_) => None,
             Verdict::Fail(found) => found.first().map(|(e, f)| format!("{e}: {}", f.cause)),
             Verdict::Error(errors) => errors.first().map(|(e, cause)| format!("{e}: {cause}")),
-            Verdict::NotApplicable(reason)
-            | Verdict::NotRun(reason)
-            | Verdict::NotTestable(reason) => Some(reason.clone()),
+            Verdict::NotApplicable(reason) | Verdict::NotTestable(reason) => Some(reason.clone()),
+            Verdict::NotRun(reason) => Some(reason.to_string()),
         }
     }
 
@@ -193,15 +192,79 @@ impl Verdict {
     }
 }
 
+/// Why a requirement the run could not judge was not run.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum NotRunReason {
+    /// The run selected everything, yet no check of it ran.
+    NotSelected,
+    /// `--scenario` or `--requirement` left it out (the flags).
+    Selection(String),
+    /// The run left out a stage, as it said (Gherkin scenarios not run, a signal).
+    LeftOut(String),
+    /// A requirement of the other side of the interface.
+    OtherSide(Side),
+    /// Only the CANopen suite exercises it, against a CANopen node.
+    CanopenSuite,
+    /// Only the interface suite exercises it (for a CANopen suite run).
+    InterfaceSuite,
+    /// The checks that exercise it ran, but the implementation gave them nothing to judge.
+    NothingToJudge(Unobserved),
+}
+
+/// What an implementation did not show, so that a requirement had nothing to judge.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Unobserved {
+    /// CL-TN-002: the client told its application of no message sent.
+    SentMessages,
+}
+
+impl fmt::Display for NotRunReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            NotRunReason::NotSelected => f.write_str("not selected"),
+            NotRunReason::Selection(flags) => write!(f, "left out by the selection ({flags})"),
+            NotRunReason::LeftOut(what) => f.write_str(what),
+            NotRunReason::OtherSide(Side::Plc) => {
+                f.write_str("a PLC-side requirement: exercised by `canif run --side plc`")
+            }
+            NotRunReason::OtherSide(Side::Device) => {
+                f.write_str("a device requirement: exercised by `canif run --side device`")
+            }
+            NotRunReason::CanopenSuite => f.write_str(
+                "exercised by `canif run --suite canopen` against a CANopen node",
+            ),
+            NotRunReason::InterfaceSuite => {
+                f.write_str("exercised by the interface suite (`canif run`)")
+            }
+            NotRunReason::NothingToJudge(Unobserved::SentMessages) => f.write_str(
+                "the client told its application of no Tx message sent (it does not use Inputs.TransactionNumber that way): nothing to judge",
+            ),
+        }
+    }
+}
+
 /// What the suite can exercise on a profile, beyond what this run did.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct Reach {
     /// Requirements this run's suite exercises on the profile when nothing is left out.
     pub here: BTreeSet<String>,
-    /// Requirements only another suite or stage exercises, with where.
-    pub elsewhere: BTreeMap<String, String>,
+    /// Requirements only another suite or side exercises, with where.
+    pub elsewhere: BTreeMap<String, NotRunReason>,
+    /// Requirements whose checks ran and had nothing to judge, with why.
+    pub unobserved: BTreeMap<String, NotRunReason>,
     /// Why this run left out what it could have run (the selection, an error, a signal).
-    pub left_out: String,
+    pub left_out: NotRunReason,
+}
+
+impl Default for Reach {
+    fn default() -> Self {
+        Reach {
+            here: BTreeSet::new(),
+            elsewhere: BTreeMap::new(),
+            unobserved: BTreeMap::new(),
+            left_out: NotRunReason::NotSelected,
+        }
+    }
 }
 
 /// Every requirement's verdict on `profile`, from the checks that ran.
@@ -253,6 +316,8 @@ pub fn judge(
             Verdict::Error(errors)
         } else if let Some(evidence) = passed.remove(id) {
             Verdict::Pass(evidence)
+        } else if let Some(why) = reach.unobserved.get(id) {
+            Verdict::NotRun(why.clone())
         } else if reach.here.contains(id) {
             Verdict::NotRun(reach.left_out.clone())
         } else if let Some(where_) = reach.elsewhere.get(id) {
@@ -330,17 +395,18 @@ mod tests {
         let profile = catalogue.profile("fc532x").unwrap();
         let reach = Reach {
             here: ["HS-TX-001".to_string()].into(),
-            elsewhere: [("NMT-001".to_string(), "run --suite canopen".to_string())].into(),
-            left_out: "left out by --scenario x".into(),
+            elsewhere: [("NMT-001".to_string(), NotRunReason::CanopenSuite)].into(),
+            left_out: NotRunReason::Selection("--scenario x".into()),
+            ..Reach::default()
         };
         let verdicts = judge(&catalogue, profile, &[], &reach);
         assert_eq!(
-            verdicts["HS-TX-001"],
-            Verdict::NotRun("left out by --scenario x".into())
+            verdicts["HS-TX-001"].reason().unwrap(),
+            "left out by the selection (--scenario x)"
         );
         assert_eq!(
             verdicts["NMT-001"],
-            Verdict::NotRun("run --suite canopen".into())
+            Verdict::NotRun(NotRunReason::CanopenSuite)
         );
         assert!(!verdicts.values().any(|v| v.kind() == VerdictKind::Pass));
     }

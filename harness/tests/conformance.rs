@@ -1,48 +1,82 @@
-//! One test per requirement × profile: the soft device, certified by the
-//! harness on the simulated bus. Works under `cargo test` and `cargo nextest`.
-//! A requirement the profile lacks, or that no run against an IUT checks on
-//! that profile, is listed as ignored with the reason as its kind.
+//! One test per requirement × profile, on either side through the one
+//! runner: device requirements against the soft device, PLC-side (CL-*)
+//! requirements against the reference client, each on the simulated bus.
+//! Works under `cargo test` and `cargo nextest`. A requirement the profile
+//! lacks, or that no case of its side exercises on that profile, is listed
+//! as ignored with the reason as its kind.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::sync::{Arc, Mutex, OnceLock};
 
-use canif_harness::suite::{checked_ids, run_profile, Options};
-use canif_harness::{IutKind, ProfileRun, Verdict};
-use canif_spec::Catalogue;
+use canif_harness::client::suite::{ClientKind, ClientOptions};
+use canif_harness::device::{IutKind, Options};
+use canif_harness::run::{run_profile, Side};
+use canif_harness::Verdict;
+use canif_spec::{Catalogue, Profile, Side as SideName};
 use libtest_mimic::{Arguments, Failed, Trial};
 
-type Runs = Mutex<BTreeMap<String, Arc<ProfileRun>>>;
+type Verdicts = Arc<BTreeMap<String, Verdict>>;
+type Runs = Mutex<BTreeMap<(SideName, String), Verdicts>>;
 
-fn options() -> Options {
-    Options {
+fn device() -> (Options, IutKind) {
+    let options = Options {
         cases: 2,
         ..Options::default()
-    }
+    };
+    let soft_device = IutKind::SoftDevice {
+        faults: vec![],
+        choices: vec![],
+    };
+    (options, soft_device)
 }
 
-/// Each profile runs once, whichever of its trials comes first.
-fn profile_run(catalogue: &Catalogue, name: &str) -> Arc<ProfileRun> {
+fn client() -> (ClientOptions, ClientKind) {
+    (ClientOptions::new(1), ClientKind::Reference)
+}
+
+/// Every requirement some case of `side` exercises on `profile`.
+fn exercised<S: Side>(side: &S, profile: &Profile) -> BTreeSet<String> {
+    side.cases(profile)
+        .iter()
+        .flat_map(|case| S::covers(case).iter().map(|id| id.to_string()))
+        .collect()
+}
+
+/// Each side runs once on each profile, whichever of its trials comes first.
+fn verdicts<S: Side>(
+    catalogue: &Catalogue,
+    profile: &Profile,
+    (side, under_test): (S, S::UnderTest),
+) -> Verdicts {
     static RUNS: OnceLock<Runs> = OnceLock::new();
     let runs = RUNS.get_or_init(Default::default);
-    if let Some(run) = runs.lock().unwrap().get(name) {
-        return run.clone();
+    let key = (S::SIDE, profile.name.clone());
+    if let Some(verdicts) = runs.lock().unwrap().get(&key) {
+        return verdicts.clone();
     }
-    let profile = catalogue.profile(name).expect("profile of the catalogue");
-    let run = Arc::new(run_profile(
-        catalogue,
-        profile,
-        &IutKind::SoftDevice {
-            faults: vec![],
-            choices: vec![],
-        },
-        &options(),
-        |_| {},
-    ));
-    runs.lock()
-        .unwrap()
-        .entry(name.to_string())
-        .or_insert(run)
-        .clone()
+    let run = run_profile(catalogue, profile, &side, &under_test, |_| {});
+    let verdicts = Arc::new(run.verdicts(catalogue, profile));
+    runs.lock().unwrap().entry(key).or_insert(verdicts).clone()
+}
+
+fn judged(verdict: Option<&Verdict>) -> Result<(), Failed> {
+    match verdict {
+        Some(Verdict::Pass(_)) => Ok(()),
+        Some(Verdict::Fail(found)) => Err(Failed::from(
+            found
+                .iter()
+                .map(|(_, finding)| finding.details.clone())
+                .collect::<Vec<_>>()
+                .join("\n\n"),
+        )),
+        Some(verdict @ Verdict::Error(_)) => Err(Failed::from(format!(
+            "error: {}",
+            verdict.reason().unwrap_or_default()
+        ))),
+        other => Err(Failed::from(format!(
+            "listed as checked on this profile, but the run says {other:?}"
+        ))),
+    }
 }
 
 fn main() {
@@ -50,7 +84,14 @@ fn main() {
     let catalogue = Arc::new(Catalogue::embedded().expect("the embedded catalogue loads"));
     let mut trials = Vec::new();
     for profile in &catalogue.profiles {
-        let checked = checked_ids(&profile.model_capabilities(), &options());
+        let exercised_by = |side: SideName| match side {
+            SideName::Device => exercised(&device().0, profile),
+            SideName::Plc => exercised(&client().0, profile),
+        };
+        let checked = [
+            (SideName::Device, exercised_by(SideName::Device)),
+            (SideName::Plc, exercised_by(SideName::Plc)),
+        ];
         for requirement in catalogue.requirements() {
             let name = format!("{}::{}", profile.name, requirement.id);
             let missing = profile.lacks(&requirement.capabilities);
@@ -62,7 +103,11 @@ fn main() {
                 );
                 continue;
             }
-            if !checked.contains(&requirement.id) {
+            let side = requirement.side;
+            if !checked
+                .iter()
+                .any(|(s, ids)| *s == side && ids.contains(&requirement.id))
+            {
                 trials.push(
                     Trial::test(name, || Ok(()))
                         .with_kind("not testable by a run")
@@ -73,24 +118,14 @@ fn main() {
             let catalogue = catalogue.clone();
             let (profile_name, id) = (profile.name.clone(), requirement.id.clone());
             trials.push(Trial::test(name, move || {
-                let run = profile_run(&catalogue, &profile_name);
-                match run.verdicts.get(&id) {
-                    Some(Verdict::Pass(_)) => Ok(()),
-                    Some(Verdict::Fail(found)) => Err(Failed::from(
-                        found
-                            .iter()
-                            .map(|(_, finding)| finding.details.clone())
-                            .collect::<Vec<_>>()
-                            .join("\n\n"),
-                    )),
-                    Some(verdict @ Verdict::Error(_)) => Err(Failed::from(format!(
-                        "error: {}",
-                        verdict.reason().unwrap_or_default()
-                    ))),
-                    other => Err(Failed::from(format!(
-                        "listed as checked on this profile, but the run says {other:?}"
-                    ))),
-                }
+                let profile = catalogue
+                    .profile(&profile_name)
+                    .expect("a catalogued profile");
+                let verdicts = match side {
+                    SideName::Device => verdicts(&catalogue, profile, device()),
+                    SideName::Plc => verdicts(&catalogue, profile, client()),
+                };
+                judged(verdicts.get(&id))
             }));
         }
     }

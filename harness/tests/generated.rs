@@ -1,9 +1,10 @@
 //! Generated stimulus with shrinking, and determinism.
 
-use canif_harness::run_scenario;
-use canif_harness::scenario::{Scenario, Step, Steps};
+use canif_harness::device::run_scenario;
+use canif_harness::device::scenario::{Scenario, Step, Steps};
 
-use canif_harness::{IutKind, Outcome};
+use canif_harness::device::IutKind;
+use canif_harness::Outcome;
 use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig};
 use canif_model::exchange::ExchangeMode;
 use canif_model::frame::{CanId, Frame};
@@ -74,7 +75,7 @@ fn scenario_of(cycles: &[Cycle]) -> Scenario {
         time_stamp_tolerance: 0,
         trace: None,
         bus: canif_harness::bus::BusChoice::Sim,
-        judgement: canif_harness::scenario::Judgement::Exact,
+        judgement: canif_harness::device::scenario::Judgement::Exact,
         steps: Steps::Scripted(steps),
     }
 }
@@ -149,8 +150,8 @@ fn a_failure_shrinks_to_a_minimal_run() {
 /// installed (.ci/run installs it), it must read the file too.
 #[test]
 fn traces_are_pcapng_and_candump() {
-    use canif_harness::run_scenario;
-    use canif_harness::scenario;
+    use canif_harness::device::run_scenario;
+    use canif_harness::device::scenario;
     let dir = std::env::temp_dir().join(format!("canif-trace-{}", std::process::id()));
     let mut config = InterfaceConfig::new(FrameFormat::Fd, 4);
     config.transaction_number = true;

@@ -7,10 +7,11 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use canif_harness::compare::{compare, CompareOptions};
+use canif_harness::device::suite::{run_profile, Options};
+use canif_harness::device::IutKind;
 use canif_harness::report::{ProfileReport, ReportFile, RunMeta, RunReport};
-use canif_harness::suite::{run_profile, Options};
 use canif_harness::verdict::Reach;
-use canif_harness::{GherkinOutcome, GherkinRun, IutKind, VerdictKind};
+use canif_harness::{GherkinOutcome, GherkinRun, VerdictKind};
 use canif_softdevice::Fault;
 use canif_spec::Catalogue;
 
@@ -37,7 +38,7 @@ fn report(profile: &str, faults: Vec<Fault>, seed: u64, gherkin: Vec<GherkinRun>
         |_| {},
     );
     let reach = Reach {
-        here: canif_harness::suite::checked_ids(&profile.model_capabilities(), &options)
+        here: canif_harness::device::suite::checked_ids(&profile.model_capabilities(), &options)
             .into_iter()
             .collect(),
         ..Reach::default()
@@ -105,7 +106,7 @@ fn a_run_that_checked_nothing_does_not_conform() {
     let catalogue = Catalogue::embedded().unwrap();
     let profile = catalogue.profile("fc532x").unwrap();
     let options = Options {
-        selection: canif_harness::Selection {
+        selection: canif_harness::run::Selection {
             scenarios: vec!["no-such-scenario-xyz".into()],
             requirements: vec![],
         },
@@ -124,7 +125,7 @@ fn a_run_that_checked_nothing_does_not_conform() {
     assert!(run.runs.is_empty());
     let reach = Reach {
         here: ["HS-TX-001".to_string()].into(),
-        left_out: options.selection.describe(),
+        left_out: options.selection.not_run(),
         ..Reach::default()
     };
     let report = RunReport {

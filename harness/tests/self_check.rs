@@ -2,8 +2,10 @@
 //! device pass every profile; every fault of the soft device is caught, on the
 //! requirement it breaks.
 
-use canif_harness::suite::{profile_for, run_profile, Options};
-use canif_harness::{IutKind, Outcome, ProfileRun, VerdictKind};
+use canif_harness::device::suite::{profile_for, run_profile, Options};
+use canif_harness::device::IutKind;
+use canif_harness::run::ProfileRun;
+use canif_harness::{Outcome, VerdictKind};
 use canif_softdevice::{Choice, Fault};
 use canif_spec::Catalogue;
 
@@ -79,7 +81,7 @@ fn the_soft_device_conforms_on_every_profile() {
             problems(&result).join("\n")
         );
         assert!(result
-            .verdicts
+            .verdicts(&catalogue, profile)
             .values()
             .any(|v| v.kind() == VerdictKind::Pass));
     }
@@ -180,7 +182,8 @@ fn every_fault_is_caught_on_exactly_the_requirements_it_breaks() {
             profile,
             &options,
         );
-        let failed = result.failed_requirements();
+        let catalogue = Catalogue::embedded().unwrap();
+        let failed = result.failed_requirements(&catalogue, catalogue.profile(profile).unwrap());
         if failed != expected {
             misses.push(format!(
                 "{}: expected failures on exactly {:?}, failed: {:?}\n{}",

@@ -5,14 +5,13 @@ use std::process::ExitCode;
 
 use canif_harness::certificate::{self, Certificate};
 use canif_harness::compare::CompareOptions;
+use canif_harness::device::suite::Options;
 use canif_harness::report::{Product, ReportFile};
-use canif_harness::suite::Options;
 use canif_spec::Catalogue;
 
 use canif_harness::client::suite::ClientOptions;
 
-use super::plc::{self, PlcPlan};
-use super::run::{check_selection, execute, finish, profiles, Plan};
+use super::run::{device, finish, plc, profiles, Plan};
 use super::{resolve_client, resolve_iut};
 use crate::cli::{CompareFormat, IutOptions, SideArg};
 
@@ -73,20 +72,19 @@ pub fn certify(
                 Ok(plan) => plan,
                 Err(code) => return code,
             };
-            if let Err(code) = check_selection(catalogue, &plan) {
+            if let Err(code) = plan.check_selection(catalogue) {
                 return code;
             }
-            execute(catalogue, &kind, &plan)
+            device::execute(catalogue, &kind, &plan)
         }
         SideArg::Plc => {
             let kind = match resolve_client(iut) {
                 Ok(kind) => kind,
                 Err(code) => return code,
             };
-            let plan = PlcPlan {
-                profiles,
-                options: ClientOptions::new(seed),
-                product,
+            let plan = match Plan::new(profiles, ClientOptions::new(seed), product) {
+                Ok(plan) => plan,
+                Err(code) => return code,
             };
             plc::execute(catalogue, &kind, &plan)
         }

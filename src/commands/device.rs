@@ -6,7 +6,7 @@ use std::process::ExitCode;
 
 use canif_harness::adapter::server::{self, Build};
 use canif_harness::bus::BusChoice;
-use canif_harness::IutKind;
+use canif_harness::device::IutKind;
 
 use super::soft_device_faults;
 
@@ -140,7 +140,7 @@ pub struct CanopenRun<'a> {
 pub fn canopen_suite(
     catalogue: &canif_spec::Catalogue,
     iut: &crate::cli::IutOptions,
-    selection: &canif_harness::Selection,
+    selection: &canif_harness::run::Selection,
     run: &CanopenRun,
     report_dir: &std::path::Path,
 ) -> ExitCode {
@@ -235,27 +235,24 @@ pub fn canopen_suite(
         .collect();
     // What the interface suite (lockstep and Gherkin) exercises on any profile.
     let all: Vec<&canif_spec::Profile> = catalogue.profiles.iter().collect();
-    let gherkin = match super::run::gherkin_targets(&all) {
-        Ok(targets) => targets,
+    let gherkin = match canif_features::scenarios() {
+        Ok(scenarios) => {
+            canif_features::schedule::targets(&scenarios, &all, canif_spec::Side::Device)
+        }
         Err(error) => {
             eprintln!("the feature files do not parse: {error}");
             return ExitCode::from(2);
         }
     };
     let lockstep = all.iter().flat_map(|p| {
-        canif_harness::suite::checked_ids(
+        canif_harness::device::suite::checked_ids(
             &p.model_capabilities(),
-            &canif_harness::Options::default(),
+            &canif_harness::device::Options::default(),
         )
     });
     let elsewhere = lockstep
         .chain(gherkin.into_iter().flat_map(|(_, s)| s.requirements))
-        .map(|id| {
-            (
-                id,
-                "exercised by the interface suite (`canif run`)".to_string(),
-            )
-        })
+        .map(|id| (id, canif_harness::verdict::NotRunReason::InterfaceSuite))
         .collect();
     let reach = canif_harness::verdict::Reach {
         here: canif_harness::canopen::node_check_ids()
@@ -263,7 +260,8 @@ pub fn canopen_suite(
             .map(|s| s.to_string())
             .collect(),
         elsewhere,
-        left_out: selection.describe(),
+        left_out: selection.not_run(),
+        ..canif_harness::verdict::Reach::default()
     };
     let report = canif_harness::report::RunReport {
         meta: canif_harness::report::RunMeta {
@@ -277,7 +275,7 @@ pub fn canopen_suite(
         profiles: vec![canif_harness::report::ProfileReport::new(
             catalogue,
             &profile,
-            canif_harness::ProfileRun::none(&profile.name),
+            canif_harness::run::ProfileRun::none(&profile.name),
             Vec::new(),
             selected,
             &reach,

@@ -2,7 +2,6 @@
 
 pub mod certify;
 pub mod device;
-pub mod plc;
 pub mod run;
 pub mod spec;
 pub mod tools;
@@ -11,7 +10,7 @@ use std::process::ExitCode;
 
 use canif_harness::client::faulty::ClientFault;
 use canif_harness::client::suite::ClientKind;
-use canif_harness::IutKind;
+use canif_harness::device::IutKind;
 use canif_softdevice::{Choice, Fault};
 
 use crate::cli::{IutArg, IutOptions};

@@ -3,7 +3,7 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use canif_harness::suite::Options;
+use canif_harness::device::suite::Options;
 use canif_spec::{coverage, Catalogue, Status, Verification};
 
 use crate::cli::SpecCommand;
@@ -171,7 +171,7 @@ pub fn spec_coverage(catalogue: &Catalogue, root: &Path, each: bool, out: &mut S
         }
         outln!(out);
     }
-    let in_runs = canif_harness::suite::checked_ids(
+    let in_runs = canif_harness::device::suite::checked_ids(
         &canif_model::config::Capabilities::everything(),
         &Options::default(),
     );

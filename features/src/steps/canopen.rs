@@ -1,6 +1,6 @@
 //! CANopen over the CAN interface (002, 004): telegrams and the node.
 
-use canif_harness::diff::hex;
+use canif_harness::device::diff::hex;
 use canif_model::canopen::cob_id::{default_cob_id, Channel};
 use canif_model::canopen::guarding::GuardResponder;
 use canif_model::canopen::heartbeat;

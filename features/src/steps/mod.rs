@@ -54,11 +54,11 @@ pub(crate) fn check(condition: bool, message: impl FnOnce() -> String) -> StepRe
     }
 }
 
-/// The blame sets of the fields a check reads (`canif_harness::blame`).
+/// The blame sets of the fields a check reads (`canif_harness::device::blame`).
 pub(crate) type Witness<'a> = &'a [&'static [ReqId]];
 
 /// [`check`], and when it fails the scenario blames only its tags among the
-/// `witness` sets (`canif_harness::blame::narrow_tags`): a wrong RxCounter in
+/// `witness` sets (`canif_harness::device::blame::narrow_tags`): a wrong RxCounter in
 /// a filter scenario is a handshake finding, not a filter one.
 pub(crate) fn check_as(
     witness: Witness,

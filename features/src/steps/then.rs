@@ -1,7 +1,7 @@
 //! What the bus, the PLC and the images must show.
 
-use canif_harness::blame;
-use canif_harness::diff::hex;
+use canif_harness::device::blame;
+use canif_harness::device::diff::hex;
 use canif_model::dlc;
 use canif_model::frame::FrameKind;
 use canif_model::image::field;
@@ -12,7 +12,7 @@ use crate::world::CanWorld;
 use super::{bytes, check, check_as, num, StepResult, Witness};
 
 // What each kind of check witnesses: the blame sets of the harness
-// (canif_harness::blame) for the fields the check reads. A failing scenario
+// (canif_harness::device::blame) for the fields the check reads. A failing scenario
 // blames only its tags among them, or all its tags when none is.
 
 /// Inputs.TxCounter: the acknowledgement of a batch, when it comes and

@@ -23,8 +23,8 @@ use super::protocol::{
     Answer, BusEvent, Caps, Config, Hex, OwnedBus, PlannedFrame, Request, SteppedLine, Transmitted,
     WireFrame, PROTOCOL_VERSION,
 };
+use crate::device::iut::{InvalidFrame, Iut, Planned, Transmit};
 use crate::error::IutError;
-use crate::iut::{InvalidFrame, Iut, Planned, Transmit};
 
 /// How many lines of the IUT's stderr an error shows.
 const STDERR_LINES: usize = 20;

@@ -9,8 +9,8 @@ use canif_model::Nanos;
 
 use super::protocol::{Answer, Request};
 use super::server::{write_answer, Build, Server};
+use crate::device::iut::Iut;
 use crate::error::BusError;
-use crate::iut::Iut;
 
 /// The device's controller on a SocketCAN interface.
 struct DeviceBus {

@@ -11,8 +11,8 @@ use super::protocol::{
     Answer, BusEvent, Hex, InvalidWireFrame, PlannedFrame, Request, StepLine, Transmitted,
     WireFrame, PROTOCOL_VERSION,
 };
+use crate::device::iut::{BuildError, Iut, Planned};
 use crate::error::IutError;
-use crate::iut::{BuildError, Iut, Planned};
 
 /// Builds the IUT a `configure` asks for.
 pub type Build<'a> =

@@ -20,11 +20,11 @@ use canif_model::Nanos;
 
 use super::Bus;
 use crate::adapter::protocol::OwnedBus;
-use crate::blame;
-use crate::diff::{hex, Difference};
+use crate::device::blame;
+use crate::device::diff::{hex, Difference};
+use crate::device::pair::Pair;
 use crate::error::BusError;
 use crate::outcome::Outcome;
-use crate::pair::Pair;
 
 /// How scenarios run on a SocketCAN bus.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -15,7 +15,7 @@ use canif_model::frame::Frame;
 use canif_model::image::{ImageLayout, SizeError};
 use canif_model::Nanos;
 
-use crate::device_side::{Ended, PlayedDevice};
+use crate::client::played_device::{Ended, PlayedDevice};
 use crate::error::BusError;
 
 pub struct KernelDeviceSide {

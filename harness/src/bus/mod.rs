@@ -17,9 +17,9 @@ use canif_model::timing::BitRates;
 use canif_model::Nanos;
 
 use crate::adapter::protocol::OwnedBus;
+use crate::device::pair::Pair;
 use crate::error::RunError;
 use crate::outcome::Outcome;
-use crate::pair::Pair;
 
 /// What a bus does for the lockstep.
 pub trait Bus {

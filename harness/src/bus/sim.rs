@@ -10,8 +10,8 @@ use canif_model::timing::{frame_duration, BitRates, Stuffing};
 use canif_model::Nanos;
 
 use super::Bus;
+use crate::device::pair::Pair;
 use crate::outcome::Outcome;
-use crate::pair::Pair;
 
 /// The bits a frame sends during arbitration, as a number: lower wins.
 /// Standard: id(11) RTR IDE=0; extended: base(11) SRR=1 IDE=1 ext(18) RTR.

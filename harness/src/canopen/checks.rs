@@ -44,16 +44,21 @@ impl NodeCheck {
 }
 
 /// Every requirement the node checks exercise: what a run of `--suite canopen` can judge.
+/// (Found by running the checks once on the simulated coupler, then kept.)
 pub fn node_check_ids() -> Vec<&'static str> {
-    let node = NodeId::new(5).expect("5 is a node id");
-    let mut coupler = canif_model::canopen::coupler::Coupler::new(node, 2, 4);
-    let mut ids: Vec<&str> = check_node(&mut coupler, node, 0)
-        .iter()
-        .flat_map(|c| c.requirements.iter().copied())
-        .collect();
-    ids.sort_unstable();
-    ids.dedup();
-    ids
+    static IDS: std::sync::OnceLock<Vec<&'static str>> = std::sync::OnceLock::new();
+    IDS.get_or_init(|| {
+        let node = NodeId::new(5).expect("5 is a node id");
+        let mut coupler = canif_model::canopen::coupler::Coupler::new(node, 2, 4);
+        let mut ids: Vec<&str> = check_node(&mut coupler, node, 0)
+            .iter()
+            .flat_map(|c| c.requirements.iter().copied())
+            .collect();
+        ids.sort_unstable();
+        ids.dedup();
+        ids
+    })
+    .clone()
 }
 
 pub(super) fn sdo_request(node: NodeId, request: SdoRequest) -> Frame {

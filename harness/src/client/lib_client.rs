@@ -11,7 +11,7 @@ use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_model::image::{ImageLayout, MessageRepr};
 
 use super::{Client, IutError, TaskAnswer, TaskIo};
-use crate::lib_iut::{c_config, from_c, to_c};
+use crate::device::lib_iut::{c_config, from_c, to_c};
 
 pub struct LibClient {
     program: ClientProgram,

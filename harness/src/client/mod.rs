@@ -7,7 +7,7 @@
 //! P1–P5).
 //!
 //! The arrows run one way: `suite` → `rig` → `master`, `judge`, `application`,
-//! [`crate::device_side`]; `rig` → [`Client`] (the reference of `canif_model::client`,
+//! [`crate::client::played_device`]; `rig` → [`Client`] (the reference of `canif_model::client`,
 //! the faulty clients of `faulty`).
 
 pub mod application;
@@ -16,6 +16,7 @@ pub mod faulty;
 pub mod judge;
 pub mod lib_client;
 pub mod master;
+pub mod played_device;
 pub mod rig;
 pub mod suite;
 

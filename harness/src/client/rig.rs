@@ -17,9 +17,9 @@ use super::application::{ClientScenario, Event};
 use super::judge::{Breach, Judge, TaskSeen, SENT_REPORTS};
 use super::master::{Master, MasterRun};
 use super::{Client, IutError, TaskIo};
-use crate::device_side::{DeviceSide, PlayedDevice};
+use crate::client::played_device::{DeviceSide, PlayedDevice};
+use crate::device::iut::BuildError;
 use crate::error::RunError;
-use crate::iut::BuildError;
 use crate::outcome::{BusFrame, CycleView, Failure, Outcome, ScenarioRun};
 
 /// The CAN interface cycle of every client scenario.

@@ -1,8 +1,6 @@
 //! One profile's run of a PLC-side client: every interface the profile
 //! offers, every life cycle under every master, and a verdict per client
-//! requirement. The mirror of [`crate::suite`] for the other side.
-
-use std::collections::BTreeMap;
+//! requirement. The mirror of [`crate::device::suite`] for the other side.
 
 use std::time::Duration;
 
@@ -16,13 +14,14 @@ use super::exec::ExecClient;
 use super::faulty::{ClientFault, FaultyClient};
 use super::lib_client::LibClient;
 use super::master::Master;
-use super::{rig, Client, ReferenceClient};
-use crate::device_side::PlayedDevice;
+use super::{judge, rig, Client, ReferenceClient};
+use crate::client::played_device::PlayedDevice;
+use crate::device::iut::BuildError;
 use crate::error::RunError;
-use crate::iut::BuildError;
 use crate::outcome::{Outcome, ScenarioRun};
-use crate::suite::{ProfileRun, Selection};
-use crate::verdict::{self, Reach};
+
+use crate::run::{self, KillRow, ProfileRun, Selection, Side as RunSide};
+use crate::verdict::{NotRunReason, Reach, Unobserved};
 
 /// The client under test, as the harness builds it.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -186,99 +185,89 @@ pub fn checked_ids(caps: &Capabilities, options: &ClientOptions) -> Vec<String> 
     ids
 }
 
-/// Runs every scenario of a profile against a client and judges each requirement.
+/// One case of a client's run: a life cycle under one master model.
+#[derive(Debug, Clone)]
+pub struct ClientCase {
+    pub scenario: ClientScenario,
+    pub master: Master,
+}
+
+impl RunSide for ClientOptions {
+    type UnderTest = ClientKind;
+    type Case = ClientCase;
+    const UNDER_TEST: &'static str = "the client";
+    const SIDE: Side = Side::Plc;
+
+    fn cases(&self, profile: &Profile) -> Vec<ClientCase> {
+        scenarios(&profile.model_capabilities(), self)
+            .into_iter()
+            .map(|(scenario, master)| ClientCase { scenario, master })
+            .collect()
+    }
+
+    fn name(case: &ClientCase) -> String {
+        run_name(&case.scenario, case.master)
+    }
+
+    fn covers(case: &ClientCase) -> &[ReqId] {
+        &case.scenario.covers
+    }
+
+    fn run(&self, kind: &ClientKind, profile: &Profile, case: ClientCase) -> ScenarioRun {
+        let build = |layout| kind.build(&case.scenario.config, layout);
+        let open = |caps: &Capabilities, config, rates| self.bus.open(caps, config, rates);
+        rig::run(
+            &profile.model_capabilities(),
+            &case.scenario,
+            case.master,
+            &build,
+            &open,
+        )
+    }
+
+    fn selection(&self) -> &Selection {
+        &self.selection
+    }
+
+    fn fail_fast(&self) -> bool {
+        true
+    }
+
+    fn reach(&self, catalogue: &Catalogue, profile: &Profile, runs: &[ScenarioRun]) -> Reach {
+        let mut reach = reach(catalogue, &profile.model_capabilities(), self);
+        if told_nothing_sent(runs) {
+            for told in judge::SENT_REPORTS {
+                reach.unobserved.insert(
+                    told.to_string(),
+                    NotRunReason::NothingToJudge(Unobserved::SentMessages),
+                );
+            }
+        }
+        reach
+    }
+}
+
+/// Runs every selected case of a profile against a client.
 pub fn run_profile(
     catalogue: &Catalogue,
     profile: &Profile,
     kind: &ClientKind,
     options: &ClientOptions,
-    mut progress: impl FnMut(&ScenarioRun),
+    progress: impl FnMut(&ScenarioRun),
 ) -> ProfileRun {
-    let caps = profile.model_capabilities();
-    let mut runs = Vec::new();
-    let mut broken: Option<String> = None;
-    for (scenario, master) in scenarios(&caps, options) {
-        let name = run_name(&scenario, master);
-        if !options
-            .selection
-            .admits(&name, scenario.covers.iter().map(ReqId::as_str))
-        {
-            continue;
-        }
-        if crate::interrupt::requested() {
-            break;
-        }
-        let run = match &broken {
-            // Fail fast: a client that broke is not started again and again.
-            Some(after) => ScenarioRun {
-                scenario: name,
-                covers: scenario.covers.clone(),
-                outcome: Outcome::Error(RunError::Skipped(after.clone())),
-                cycles: 0,
-                frames_checked: 0,
-                tolerated: 0,
-                elapsed: std::time::Duration::ZERO,
-            },
-            None => {
-                let build = |layout| kind.build(&scenario.config, layout);
-                let open =
-                    |caps: &Capabilities, config, rates| options.bus.open(caps, config, rates);
-                rig::run(&caps, &scenario, master, &build, &open)
-            }
-        };
-        if let (None, Outcome::Error(RunError::Iut(error))) = (&broken, &run.outcome) {
-            broken = Some(format!(
-                "the client broke in `{}`: {}",
-                run.scenario,
-                error.0.lines().next().unwrap_or("")
-            ));
-        }
-        progress(&run);
-        runs.push(run);
-    }
-    let failures = runs
-        .iter()
-        .filter_map(|run| match &run.outcome {
-            Outcome::Fail(failure) => Some(failure.as_ref().clone()),
-            _ => None,
-        })
-        .collect();
-    let mut run = ProfileRun {
-        profile: profile.name.clone(),
-        runs,
-        failures,
-        verdicts: BTreeMap::new(),
-    };
-    run.verdicts = verdict::judge(
-        catalogue,
-        profile,
-        &run.checks(),
-        &reach(catalogue, &caps, options),
-    );
-    told_nothing_sent(&mut run);
-    run
+    run::run_profile(catalogue, profile, options, kind, progress)
 }
 
-/// CL-TN-002 judges what a client tells its application was sent; where the
-/// runs with transaction numbers passed and it told nothing, the verdict
-/// says so rather than blaming the selection.
-fn told_nothing_sent(run: &mut ProfileRun) {
-    let [told] = super::judge::SENT_REPORTS else {
-        return;
-    };
-    let ran = run.runs.iter().any(|r| {
+/// CL-TN-002 judges what a client tells its application was sent: where a
+/// run with transaction numbers passed and the client told nothing (a run
+/// that told something and broke CL-TN-002 fails it), there was nothing to judge.
+fn told_nothing_sent(runs: &[ScenarioRun]) -> bool {
+    runs.iter().any(|r| {
         matches!(r.outcome, Outcome::Pass)
             && r.covers
                 .iter()
-                .any(|id| super::judge::TRANSACTION_NUMBERS.contains(id))
-    });
-    if let Some(verdict @ verdict::Verdict::NotRun(_)) = run.verdicts.get_mut(told.as_str()) {
-        if ran {
-            *verdict = verdict::Verdict::NotRun(
-                "the client told its application of no Tx message sent (it does not use Inputs.TransactionNumber that way): nothing to judge".into(),
-            );
-        }
-    }
+                .any(|id| judge::TRANSACTION_NUMBERS.contains(id))
+    })
 }
 
 /// What a client run can judge, and where the device's requirements are judged.
@@ -288,49 +277,30 @@ pub fn reach(catalogue: &Catalogue, caps: &Capabilities, options: &ClientOptions
         elsewhere: catalogue
             .requirements()
             .filter(|r| r.side == Side::Device)
-            .map(|r| {
-                (
-                    r.id.clone(),
-                    "a device requirement: exercised by `canif run --side device`".into(),
-                )
-            })
+            .map(|r| (r.id.clone(), NotRunReason::OtherSide(Side::Device)))
             .collect(),
-        left_out: options.selection.describe(),
+        left_out: options.selection.not_run(),
+        ..Reach::default()
     }
 }
 
-/// One row of the client kill matrix.
-#[derive(Debug, Clone)]
-pub struct ClientKillRow {
-    pub fault: ClientFault,
-    /// Profile name → requirement ids that failed (empty: not caught there).
-    pub caught: Vec<(String, Vec<String>)>,
-}
-
-/// Runs the soft client with each fault on every profile.
+/// The soft client with each of its faults on every profile.
 pub fn kill_matrix(
     catalogue: &Catalogue,
     options: &ClientOptions,
-    mut progress: impl FnMut(&str),
-) -> Vec<ClientKillRow> {
-    ClientFault::ALL
-        .into_iter()
-        .map(|fault| {
-            progress(fault.name());
+    progress: impl FnMut(&str),
+) -> Vec<KillRow<ClientFault>> {
+    run::kill_matrix(
+        catalogue,
+        ClientFault::ALL,
+        |fault| {
             let options = ClientOptions {
                 counter_wrap: fault == ClientFault::IgnoresWrap,
                 ..options.clone()
             };
-            let kind = ClientKind::Faulty(Some(fault));
-            let caught = catalogue
-                .profiles
-                .iter()
-                .map(|profile| {
-                    let run = run_profile(catalogue, profile, &kind, &options, |_| {});
-                    (profile.name.clone(), run.failed_requirements())
-                })
-                .collect();
-            ClientKillRow { fault, caught }
-        })
-        .collect()
+            (options, ClientKind::Faulty(Some(fault)))
+        },
+        ClientFault::name,
+        progress,
+    )
 }

@@ -22,7 +22,7 @@ use canif_spec::{Catalogue, Profile};
 
 use crate::canopen::NodeCheck;
 use crate::outcome::{GherkinOutcome, GherkinRun};
-use crate::suite::ProfileRun;
+use crate::run::ProfileRun;
 use crate::verdict::{self, Check, CheckResult, Evidence, Finding, Reach, Verdict, VerdictKind};
 
 /// Everything that ran against one profile, and the merged verdicts.

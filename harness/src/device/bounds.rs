@@ -10,9 +10,9 @@ use canif_model::frame::Frame;
 use canif_model::image::{ImageLayout, InputImage, OutputImage};
 use canif_spec::{req_ids, ReqId};
 
-use crate::blame;
-use crate::diff::{image_size, Difference};
-use crate::iut::Transmit;
+use crate::device::blame;
+use crate::device::diff::{image_size, Difference};
+use crate::device::iut::Transmit;
 
 /// More frames than the acknowledged slots, or no acknowledge at the end.
 const BEYOND_THE_SLOTS: &[ReqId] = req_ids!["HS-TX-010"];

@@ -10,11 +10,11 @@ use canif_model::image::{ImageLayout, LengthField};
 use canif_model::Nanos;
 use canif_spec::ReqId;
 
-use crate::blame;
-use crate::bounds::Bounds;
-use crate::diff::{frame_difference, Difference};
-use crate::history::History;
-use crate::iut::{InvalidFrame, Iut};
+use crate::device::blame;
+use crate::device::bounds::Bounds;
+use crate::device::diff::{frame_difference, Difference};
+use crate::device::history::History;
+use crate::device::iut::{InvalidFrame, Iut};
 use crate::outcome::{Failure, FrameDiff, Outcome};
 use crate::trace::TraceWriter;
 

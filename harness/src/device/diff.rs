@@ -8,7 +8,7 @@ use canif_model::image::{field, ImageLayout, InputImage, LengthField, MessageRep
 use canif_model::Nanos;
 use canif_spec::ReqId;
 
-use crate::blame;
+use crate::device::blame;
 use crate::outcome::FrameDiff;
 
 /// A difference found, before it becomes a [`crate::Failure`].

@@ -9,18 +9,18 @@ use canif_model::device::Device;
 use canif_model::image::{InputImage, OutputImage};
 use canif_model::Nanos;
 
-use crate::blame;
-use crate::bounds::Bounds;
 use crate::bus::Bus;
-use crate::diff::{Difference, InputCheck, RxState};
+use crate::device::blame;
+use crate::device::bounds::Bounds;
+use crate::device::diff::{Difference, InputCheck, RxState};
+use crate::device::iut::BuildError;
+use crate::device::iut_kind::IutKind;
+use crate::device::pair::Pair;
+use crate::device::played_plc::{PlcSide, TaskStimulus};
+use crate::device::protocol_order::Ordered;
+use crate::device::scenario::{Judgement, Scenario, Step};
 use crate::error::{IutError, RunError};
-use crate::iut::BuildError;
-use crate::iut_kind::IutKind;
 use crate::outcome::{Outcome, ScenarioRun};
-use crate::pair::Pair;
-use crate::plc::{PlcSide, TaskStimulus};
-use crate::protocol_order::Ordered;
-use crate::scenario::{Judgement, Scenario, Step};
 use crate::trace::TraceWriter;
 
 /// Runs one scenario against an IUT beside the model.
@@ -152,7 +152,7 @@ impl Lockstep<'_> {
             self.pair
                 .iut
                 .controller_status(&status)
-                .map_err(crate::pair::iut_broke)?;
+                .map_err(crate::device::pair::iut_broke)?;
             self.pair.model.handle_controller_status(status);
         }
         if !step.plc_busy {

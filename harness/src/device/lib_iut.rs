@@ -11,8 +11,8 @@ use canif_model::image::ImageLayout;
 use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 
+use crate::device::iut::{BuildError, InvalidFrame, Iut, Transmit};
 use crate::error::IutError;
-use crate::iut::{BuildError, InvalidFrame, Iut, Transmit};
 
 /// A library's device behind the [`Iut`] trait.
 pub struct LibIut {

@@ -1,7 +1,7 @@
 //! The device side of a cycle, as the harness plays it when a PLC-side client
 //! is under test: the reference model device (the EL6751 of 000/001/003) with
 //! its controller on the simulated bus, and the other nodes. The mirror of
-//! [`crate::plc::PlcSide`]; swapping which side is the IUT swaps which of the
+//! [`crate::device::played_plc::PlcSide`]; swapping which side is the IUT swaps which of the
 //! two the harness plays.
 
 use canif_model::config::{Capabilities, ConfigError, InterfaceConfig};
@@ -150,7 +150,7 @@ impl PlayedDevice for DeviceSide {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::plc::{PlcSide, TaskStimulus};
+    use crate::device::played_plc::{PlcSide, TaskStimulus};
     use canif_model::config::FrameFormat;
     use canif_model::exchange::ExchangeMode;
     use canif_model::frame::CanId;

@@ -21,7 +21,7 @@ use canif_model::Nanos;
 use canif_spec::ReqId;
 
 use crate::bus::BusChoice;
-pub use crate::plc::OutputEdit;
+pub use crate::device::played_plc::OutputEdit;
 
 /// One PLC task cycle of stimulus.
 #[derive(Debug, Clone, Default)]

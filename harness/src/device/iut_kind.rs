@@ -10,7 +10,7 @@ use canif_softdevice::{Choice, Fault, SoftDevice};
 
 use crate::adapter::client::{Configured, ExecIut};
 use crate::adapter::protocol::OwnedBus;
-use crate::iut::{soft_settings, BuildError, Iut, ModelIut, SoftDeviceIut};
+use crate::device::iut::{soft_settings, BuildError, Iut, ModelIut, SoftDeviceIut};
 
 /// Which implementation to run.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -62,7 +62,9 @@ impl IutKind {
             IutKind::Model => Ok(Box::new(ModelIut(
                 Device::new(caps, config.clone()).map_err(|e| refused(&e))?,
             ))),
-            IutKind::Lib { path } => Ok(Box::new(crate::lib_iut::build(path, caps, config)?)),
+            IutKind::Lib { path } => {
+                Ok(Box::new(crate::device::lib_iut::build(path, caps, config)?))
+            }
             IutKind::SoftDevice { faults, choices } => {
                 let mut device =
                     SoftDevice::new(soft_settings(caps, config)).map_err(|e| refused(&e))?;

@@ -10,8 +10,8 @@ use canif_model::frame::Frame;
 use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 
+use crate::device::iut::{Iut, Planned, Transmit};
 use crate::error::IutError;
-use crate::iut::{Iut, Planned, Transmit};
 
 /// An IUT whose requests are checked against the protocol's promises before
 /// they reach it.
@@ -100,7 +100,7 @@ impl Iut for Ordered {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::IutKind;
+    use crate::device::IutKind;
     use canif_model::client::PlcClient;
     use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig};
     use canif_model::frame::CanId;

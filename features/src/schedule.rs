@@ -1,0 +1,136 @@
+//! Which Gherkin scenario runs on which profile, for either side, and one
+//! run of it as the harness reports it. The command line and the test
+//! target both schedule through here.
+
+use canif_harness::client::suite::ClientKind;
+use canif_harness::device::{blame, IutKind};
+use canif_harness::{GherkinOutcome, GherkinRun};
+use canif_spec::{Profile, Side};
+
+use crate::{
+    run_client_scenario, run_scenario, ClientTarget, ScenarioInfo, ScenarioOutcome, Target,
+};
+
+/// What a Gherkin scenario runs against.
+#[derive(Debug, Clone)]
+pub enum UnderTest {
+    Device(IutKind),
+    Client(ClientKind),
+}
+
+impl UnderTest {
+    pub fn side(&self) -> Side {
+        match self {
+            UnderTest::Device(_) => Side::Device,
+            UnderTest::Client(_) => Side::Plc,
+        }
+    }
+}
+
+/// Each scenario of `side` on each profile that offers what it needs, as
+/// (profile, scenario): once per profile whose capabilities it needs, a
+/// `@once` scenario on the profile it names. The manual's tables (`@model`)
+/// check the model, not an implementation: `cargo test` runs them.
+pub fn targets(
+    scenarios: &[ScenarioInfo],
+    profiles: &[&Profile],
+    side: Side,
+) -> Vec<(String, ScenarioInfo)> {
+    let mut targets = Vec::new();
+    for scenario in scenarios.iter().filter(|s| s.side == side && !s.model_only) {
+        let offers = |p: &&&Profile| p.lacks(&scenario.capabilities).is_empty();
+        if scenario.once {
+            let named = profiles
+                .iter()
+                .find(|p| scenario.profile.as_deref().is_none_or(|n| n == p.name));
+            if let Some(profile) = named {
+                targets.push((profile.name.clone(), scenario.clone()));
+            }
+        } else {
+            for profile in profiles.iter().filter(offers) {
+                targets.push((profile.name.clone(), scenario.clone()));
+            }
+        }
+    }
+    targets
+}
+
+/// Runs one scenario on `profile` and says how it ended, blamed the way its side blames.
+pub fn run(profile: &Profile, scenario: &ScenarioInfo, under_test: &UnderTest) -> GherkinRun {
+    let started = std::time::Instant::now();
+    let (caps, name) = (profile.model_capabilities(), profile.name.clone());
+    let outcome = match under_test {
+        UnderTest::Device(iut) => run_scenario(
+            &scenario.file,
+            scenario.line,
+            Target {
+                iut: iut.clone(),
+                profile: name,
+                caps,
+            },
+        ),
+        UnderTest::Client(client) => run_client_scenario(
+            &scenario.file,
+            scenario.line,
+            ClientTarget {
+                client: client.clone(),
+                profile: name,
+                caps,
+            },
+        ),
+    };
+    let outcome = match outcome {
+        ScenarioOutcome::Passed => GherkinOutcome::Pass,
+        ScenarioOutcome::Failed { report, witness } => GherkinOutcome::Fail {
+            step: failing_step(&report),
+            blamed: match under_test {
+                // A device step names the families of the field it read:
+                // the scenario's tags of those families are blamed.
+                UnderTest::Device(_) => blame::narrow_tags(&scenario.requirements, &witness),
+                // The client judge names exactly what a client broke,
+                // whatever the scenario is tagged with.
+                UnderTest::Client(_) if witness.is_empty() => scenario.requirements.clone(),
+                UnderTest::Client(_) => witness.iter().map(|id| id.to_string()).collect(),
+            },
+            report,
+        },
+        ScenarioOutcome::Error(report) => GherkinOutcome::Error(report),
+    };
+    GherkinRun {
+        id: scenario.id(),
+        file: scenario.file.clone(),
+        line: scenario.line,
+        requirements: scenario.requirements.clone(),
+        outcome,
+        elapsed: started.elapsed(),
+    }
+}
+
+/// The failing step of cucumber's report and what it said, in one line:
+/// `✘ And the bytes after the first 10 are 00: padding is not 00: FF FF`.
+pub fn failing_step(report: &str) -> String {
+    let mut lines = report.lines().map(str::trim).filter(|l| !l.is_empty());
+    let Some(step) = lines.find(|l| l.contains('✘')) else {
+        return report
+            .lines()
+            .next()
+            .unwrap_or("the scenario failed")
+            .trim()
+            .to_string();
+    };
+    let said = lines
+        .take_while(|l| !l.contains('✘') && !l.contains('✔') && !l.starts_with('['))
+        .find_map(|l| {
+            l.strip_prefix("Step panicked. Captured output:")
+                .or_else(|| {
+                    (!l.starts_with("Step failed")
+                        && !l.starts_with("Defined:")
+                        && !l.starts_with("Matched:"))
+                    .then_some(l)
+                })
+        });
+    match said {
+        Some(said) => format!("{step}: {}", said.trim()),
+        None => step.to_string(),
+    }
+}

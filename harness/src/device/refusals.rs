@@ -1,0 +1,177 @@
+//! The configuration-refusal grid: every configuration in a grid of formats,
+//! queue modes, options, filters and slot counts, and the IUT must accept
+//! exactly what the model accepts (the profile's capabilities, 000 §3).
+
+use canif_model::config::{
+    Capabilities, ConfigError, FrameFormat, InterfaceConfig, QueueMode, Synchronization,
+};
+use canif_model::filter::FilterRow;
+use canif_spec::{req_ids, ReqId};
+
+use super::cases::describe;
+use super::iut::BuildError;
+use super::iut_kind::IutKind;
+use crate::outcome::{Failure, Outcome, ScenarioRun};
+
+fn refusal_ids(error: &ConfigError) -> &'static [ReqId] {
+    use ConfigError::*;
+    match error {
+        FormatNotOffered(_) => req_ids!["PROF-002", "PROF-006", "PROF-007", "PROF-009"],
+        QueueModeNotOffered(_) => req_ids!["PROF-002"],
+        QueueModeNeedsBase11(_) => req_ids!["BQ-003", "PROF-003"],
+        QueueModeWithoutTransactionNumber(_) => req_ids!["BQ-005", "PROF-003"],
+        FiltersNotAllowed(_) => req_ids!["BQ-004"],
+        FiltersNotOffered => req_ids!["PROF-002"],
+        InvalidFilter { .. } => req_ids!["FLT-010"],
+        TransactionNumberNotOffered => req_ids!["PROF-002", "PROF-008"],
+        TransactionNumberOnlyExt29 => req_ids!["PROF-005", "TN-004"],
+        TimeStampNotOffered => req_ids!["PROF-004", "PROF-008"],
+        TimeStampNeedsExt29WithTransactionNumber => req_ids!["PROF-004", "TS-002"],
+        FdStructuresCarryTransactionNumberAndTimeStamp => req_ids!["LAY-FD-001", "LAY-FD-004"],
+        SlotCount { .. } => req_ids!["PROF-011", "LAY-GEN-007"],
+        DistributedClocksNotOffered | DistributedClocksNeedsFastQueue => req_ids!["PDX-005"],
+    }
+}
+
+/// The refusal check's name.
+pub const REFUSALS: &str = "configuration refusals";
+
+/// Requirements the refusal check exercises.
+pub const REFUSAL_IDS: &[ReqId] = req_ids![
+    "PROF-001",
+    "PROF-002",
+    "PROF-003",
+    "PROF-004",
+    "PROF-005",
+    "PROF-006",
+    "PROF-007",
+    "PROF-008",
+    "PROF-009",
+    "PROF-011",
+    "PROF-012",
+    "BQ-003",
+    "BQ-004",
+    "BQ-005",
+    "FLT-010",
+    "TN-004",
+    "TS-002",
+    "LAY-FD-001",
+    "LAY-FD-004",
+    "LAY-GEN-007",
+    "PDX-005",
+];
+
+/// Every configuration of the grid, with its slot counts in the name.
+fn grid() -> impl Iterator<Item = InterfaceConfig> {
+    let filter_tables = || {
+        [
+            vec![],
+            vec![FilterRow::accept_range(0x100, 0x1FF)],
+            vec![FilterRow::accept_range(0x200, 0x100)],
+            // The edges of FLT-010: one identifier, all 29 bits, and
+            // code/mask rows at and beyond them.
+            vec![
+                FilterRow::accept_range(0x123, 0x123),
+                FilterRow::accept_range(0, 0x1FFF_FFFF),
+                FilterRow::accept_code_mask(0x1FFF_FFFF, 0),
+            ],
+            vec![FilterRow::accept_code_mask(0x2000_0000, 0)],
+            vec![FilterRow::accept_code_mask(0x2000_0000, 0x2000_0000)],
+        ]
+    };
+    let formats = [
+        FrameFormat::Base11,
+        FrameFormat::Extended29,
+        FrameFormat::Fd,
+    ];
+    let queues = [QueueMode::Standard, QueueMode::Optimized, QueueMode::Fast];
+    let options = [(false, false), (true, false), (false, true), (true, true)];
+    let slots = [(0u8, 0u8), (1, 1), (32, 32), (33, 33), (8, 33), (0, 8)];
+    formats.into_iter().flat_map(move |format| {
+        queues.into_iter().flat_map(move |queue| {
+            options.into_iter().flat_map(move |(tn, ts)| {
+                filter_tables().into_iter().flat_map(move |filters| {
+                    slots.into_iter().flat_map(move |(tx_slots, rx_slots)| {
+                        let filters = filters.clone();
+                        [false, true].into_iter().map(move |dc| {
+                            let mut config = InterfaceConfig::new(format, tx_slots);
+                            config.rx_slots = rx_slots;
+                            config.queue = queue;
+                            config.transaction_number = tn;
+                            config.time_stamp = ts;
+                            config.filters = filters.clone();
+                            if dc {
+                                config.synchronization = Synchronization::DistributedClocks {
+                                    sync1_shift: 100_000,
+                                };
+                            }
+                            config
+                        })
+                    })
+                })
+            })
+        })
+    })
+}
+
+/// Every configuration in the grid: the IUT must accept exactly what the model accepts.
+pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
+    let mut checked = 0;
+    let mut configure = kind.configurer();
+    let outcome = grid()
+        .find_map(|config| {
+            checked += 1;
+            let expected = config.validate(caps);
+            let actual = match configure(caps, &config) {
+                Ok(()) => Ok(()),
+                Err(BuildError::Refused(reason)) => Err(reason),
+                Err(BuildError::Failed(reason)) => {
+                    return Some(Outcome::Error(crate::error::IutError(reason).into()))
+                }
+            };
+            (expected.is_ok() != actual.is_ok())
+                .then(|| Outcome::Fail(Box::new(mismatch(&config, expected, actual))))
+        })
+        .unwrap_or(Outcome::Pass);
+    ScenarioRun {
+        scenario: REFUSALS.into(),
+        covers: REFUSAL_IDS.to_vec(),
+        outcome,
+        cycles: checked,
+        frames_checked: 0,
+        tolerated: 0,
+        elapsed: std::time::Duration::ZERO,
+    }
+}
+
+/// The IUT accepted what the model refuses, or refused what it accepts.
+fn mismatch(
+    config: &InterfaceConfig,
+    expected: Result<(), ConfigError>,
+    actual: Result<(), String>,
+) -> Failure {
+    let said = |result: Result<(), String>| match result {
+        Ok(()) => "accepted".to_string(),
+        Err(e) => format!("refused: {e}"),
+    };
+    Failure {
+        requirements: match &expected {
+            Err(e) => refusal_ids(e).to_vec(),
+            Ok(()) => req_ids!["PROF-001", "PROF-002"].to_vec(),
+        },
+        scenario: REFUSALS.into(),
+        cycle: 0,
+        time: 0,
+        what: format!(
+            "configuration {} with {} Tx and {} Rx slots",
+            describe(config),
+            config.tx_slots,
+            config.rx_slots
+        ),
+        expected: said(expected.map_err(|e| e.to_string())),
+        actual: said(actual),
+        context: Vec::new(),
+        timeline: Vec::new(),
+        frames: None,
+    }
+}

@@ -1,0 +1,236 @@
+//! One profile's run of a device: the configuration-refusal grid, then every
+//! scenario of every interface the profile offers, each in lockstep with the
+//! model. The device side of [`crate::run::Side`].
+
+use canif_model::config::Capabilities;
+use canif_model::Nanos;
+use canif_spec::{Catalogue, Profile, ReqId, Side as SideName};
+
+use super::cases::scenarios;
+use super::iut_kind::IutKind;
+use super::lockstep::run_scenario;
+use super::refusals::{check_refusals, REFUSALS, REFUSAL_IDS};
+use super::scenario::Scenario;
+use crate::bus::BusChoice;
+use crate::outcome::ScenarioRun;
+use crate::run::{self, KillRow, ProfileRun, Selection, Side};
+use crate::verdict::{NotRunReason, Reach};
+
+/// What to run.
+#[derive(Debug, Clone)]
+pub struct Options {
+    pub seed: u64,
+    /// Generated scenarios per interface.
+    pub cases: u64,
+    /// Cycles of each generated scenario.
+    pub generated_cycles: u64,
+    /// Include the 65,540-cycle RxCounter wrap.
+    pub counter_wrap: bool,
+    /// Write each scenario's bus trace under this folder (`PROFILE/SCENARIO.{log,pcapng}`).
+    pub trace_dir: Option<std::path::PathBuf>,
+    /// What a trace stamps scenario time 0 with, in ns since the Unix epoch.
+    pub trace_epoch: Nanos,
+    /// The bus the scenarios run on.
+    pub bus: BusChoice,
+    /// Which scenarios run (all by default).
+    pub selection: Selection,
+    /// After the IUT breaks in a profile, report the profile's remaining
+    /// scenarios as skipped instead of starting the broken IUT again.
+    pub fail_fast: bool,
+}
+
+impl Options {
+    /// A short run for tests: one generated case of 100 cycles, no counter wrap.
+    pub fn quick(seed: u64) -> Self {
+        Options {
+            seed,
+            cases: 1,
+            generated_cycles: 100,
+            counter_wrap: false,
+            trace_dir: None,
+            trace_epoch: 0,
+            bus: BusChoice::Sim,
+            fail_fast: true,
+            selection: Selection::default(),
+        }
+    }
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            cases: 4,
+            generated_cycles: 200,
+            counter_wrap: true,
+            ..Options::quick(1)
+        }
+    }
+}
+
+/// One case of a device's run.
+#[derive(Debug, Clone)]
+pub enum DeviceCase {
+    /// The configuration-refusal grid (`configuration refusals`).
+    Refusals,
+    /// One scenario in lockstep with the model.
+    Scenario(Box<Scenario>),
+}
+
+impl Side for Options {
+    type UnderTest = IutKind;
+    type Case = DeviceCase;
+    const UNDER_TEST: &'static str = "the IUT";
+    const SIDE: SideName = SideName::Device;
+
+    fn cases(&self, profile: &Profile) -> Vec<DeviceCase> {
+        let scenarios = scenarios(&profile.model_capabilities(), self);
+        std::iter::once(DeviceCase::Refusals)
+            .chain(
+                scenarios
+                    .into_iter()
+                    .map(|s| DeviceCase::Scenario(Box::new(s))),
+            )
+            .collect()
+    }
+
+    fn name(case: &DeviceCase) -> String {
+        match case {
+            DeviceCase::Refusals => REFUSALS.into(),
+            DeviceCase::Scenario(scenario) => scenario.name.clone(),
+        }
+    }
+
+    fn covers(case: &DeviceCase) -> &[ReqId] {
+        match case {
+            DeviceCase::Refusals => REFUSAL_IDS,
+            DeviceCase::Scenario(scenario) => &scenario.covers,
+        }
+    }
+
+    fn run(&self, kind: &IutKind, profile: &Profile, case: DeviceCase) -> ScenarioRun {
+        let caps = profile.model_capabilities();
+        let mut scenario = match case {
+            DeviceCase::Refusals => return check_refusals(kind, &caps),
+            DeviceCase::Scenario(scenario) => scenario,
+        };
+        scenario.time_stamp_tolerance = profile.timestamp_tolerance_ns;
+        scenario.bus = self.bus.clone();
+        if let Some(dir) = &self.trace_dir {
+            let name: String = scenario
+                .name
+                .chars()
+                .map(|c| {
+                    if c.is_ascii_alphanumeric() || c == '-' {
+                        c
+                    } else {
+                        '_'
+                    }
+                })
+                .collect();
+            scenario.trace = Some((dir.join(&profile.name), name, self.trace_epoch));
+        }
+        run_scenario(kind, &caps, &scenario, scenario.steps())
+    }
+
+    fn selection(&self) -> &Selection {
+        &self.selection
+    }
+
+    fn fail_fast(&self) -> bool {
+        self.fail_fast
+    }
+
+    fn reach(&self, catalogue: &Catalogue, profile: &Profile, _: &[ScenarioRun]) -> Reach {
+        let plc_side = catalogue
+            .requirements()
+            .filter(|r| r.side == SideName::Plc)
+            .map(|r| (r.id.clone(), NotRunReason::OtherSide(SideName::Plc)));
+        let node_checks = crate::canopen::node_check_ids()
+            .into_iter()
+            .map(|id| (id.to_string(), NotRunReason::CanopenSuite));
+        Reach {
+            here: checked_ids(&profile.model_capabilities(), self)
+                .into_iter()
+                .collect(),
+            elsewhere: node_checks.chain(plc_side).collect(),
+            left_out: self.selection.not_run(),
+            ..Reach::default()
+        }
+    }
+}
+
+/// Runs every selected case of a profile against a device.
+pub fn run_profile(
+    catalogue: &Catalogue,
+    profile: &Profile,
+    kind: &IutKind,
+    options: &Options,
+    progress: impl FnMut(&ScenarioRun),
+) -> ProfileRun {
+    run::run_profile(catalogue, profile, options, kind, progress)
+}
+
+/// Every requirement the scenarios and checks of a run exercise on a device
+/// with these capabilities: exactly what [`judge`] can call pass or fail,
+/// whatever the selection.
+pub fn checked_ids(caps: &Capabilities, options: &Options) -> Vec<String> {
+    let everything = Options {
+        cases: options.cases.max(1),
+        ..options.clone()
+    };
+    let mut ids: Vec<String> = scenarios(caps, &everything)
+        .into_iter()
+        .flat_map(|s| s.covers)
+        .map(|id| id.to_string())
+        .collect();
+    ids.extend(REFUSAL_IDS.iter().map(|id| id.to_string()));
+    ids.sort();
+    ids.dedup();
+    ids
+}
+
+/// A profile that has the feature `fault` breaks, for tests that need one.
+pub fn profile_for(fault: canif_softdevice::Fault) -> &'static str {
+    use canif_softdevice::Fault::*;
+    match fault {
+        FdLengthRoundsDown
+        | FdLength32As36
+        | FdPaddingFf
+        | BrsEsiSwapped
+        | ReceiveFifoNotReported
+        | BrsWithoutEdlSendsFd
+        | InfoDataTwoBytesLate => "fc532x",
+        ExtendedFlagMissing
+        | TransactionNumberOfFirstFrame
+        | TransactionNumberOnHandover
+        | TimeStampInMicroseconds
+        | FilterLastMatchWins
+        | StandardIdKeepsHighBits => "ccat",
+        _ => "el6751-mdp",
+    }
+}
+
+/// The soft device with each of its faults on every profile.
+pub fn kill_matrix(
+    catalogue: &Catalogue,
+    options: &Options,
+    progress: impl FnMut(&str),
+) -> Vec<KillRow<canif_softdevice::Fault>> {
+    run::kill_matrix(
+        catalogue,
+        canif_softdevice::Fault::ALL,
+        |fault| {
+            let options = Options {
+                counter_wrap: fault == canif_softdevice::Fault::CounterDoesNotWrap,
+                ..options.clone()
+            };
+            let kind = IutKind::SoftDevice {
+                faults: vec![fault],
+                choices: vec![],
+            };
+            (options, kind)
+        },
+        canif_softdevice::Fault::name,
+        progress,
+    )
+}

@@ -1,0 +1,17 @@
+//! What both sides share: the selection, one profile's run of either side
+//! ([`Side`], [`run_profile`]), the kill matrix that proves each side's
+//! power on its own faults, and the bounded ring a failure's history is kept in.
+//!
+//! A side says what its cases are and how one runs; everything around a
+//! case — selection, fail-fast, interrupts, progress, the reach of the
+//! verdicts — is written once here.
+
+mod kill;
+mod profile;
+mod ring;
+mod selection;
+
+pub use kill::{kill_matrix, KillRow};
+pub use profile::{run_profile, ProfileRun, Side};
+pub use ring::Ring;
+pub use selection::Selection;

@@ -1,0 +1,190 @@
+//! One profile's run of either side: the side names its cases and runs one;
+//! selection, fail-fast, interrupts and progress are the same for both, and
+//! written here once.
+
+use std::collections::BTreeMap;
+use std::time::{Duration, Instant};
+
+use canif_spec::{Catalogue, Profile, ReqId};
+
+use super::Selection;
+use crate::error::RunError;
+use crate::outcome::{Failure, Outcome, ScenarioRun};
+use crate::verdict::{self, Check, CheckResult, Evidence, Finding, Reach, Verdict, VerdictKind};
+
+/// A side of the interface under test: what its cases are and how one runs.
+/// The other side is played by the harness inside [`Side::run`].
+pub trait Side {
+    /// What is under test: a device's IUT kind, a client's kind.
+    type UnderTest;
+    /// One case of a profile's run.
+    type Case;
+    /// How a skip names what broke: "the IUT", "the client".
+    const UNDER_TEST: &'static str;
+    /// Which side of the interface this is (the catalogue's and the feature files' word).
+    const SIDE: canif_spec::Side;
+
+    /// Every case a profile's run has, in the order they run.
+    fn cases(&self, profile: &Profile) -> Vec<Self::Case>;
+    /// The name a case is selected, reported and compared by.
+    fn name(case: &Self::Case) -> String;
+    /// The requirements a case exercises.
+    fn covers(case: &Self::Case) -> &[ReqId];
+    /// Runs one case against a fresh instance of what is under test.
+    fn run(&self, under_test: &Self::UnderTest, profile: &Profile, case: Self::Case)
+        -> ScenarioRun;
+    fn selection(&self) -> &Selection;
+    /// After what is under test broke, skip the profile's remaining cases
+    /// instead of starting it again and again.
+    fn fail_fast(&self) -> bool;
+    /// What a profile's run could judge, given the runs it made.
+    fn reach(&self, catalogue: &Catalogue, profile: &Profile, runs: &[ScenarioRun]) -> Reach;
+}
+
+/// Everything one profile's run produced, and what it could have reached.
+#[derive(Debug, Clone)]
+pub struct ProfileRun {
+    pub profile: String,
+    pub runs: Vec<ScenarioRun>,
+    pub failures: Vec<Failure>,
+    /// What the verdicts over these runs rest on besides the runs.
+    pub reach: Reach,
+}
+
+impl ProfileRun {
+    pub fn new(profile: &str, runs: Vec<ScenarioRun>, reach: Reach) -> Self {
+        let failures = runs
+            .iter()
+            .filter_map(|run| match &run.outcome {
+                Outcome::Fail(failure) => Some(failure.as_ref().clone()),
+                _ => None,
+            })
+            .collect();
+        ProfileRun {
+            profile: profile.to_string(),
+            runs,
+            failures,
+            reach,
+        }
+    }
+
+    /// A profile on which no scenario ran (the CANopen suite's node).
+    pub fn none(profile: &str) -> Self {
+        ProfileRun::new(profile, Vec::new(), Reach::default())
+    }
+
+    /// Every requirement's verdict over these runs alone (a report merges
+    /// the Gherkin scenarios' in through the same [`verdict::judge`]).
+    pub fn verdicts(&self, catalogue: &Catalogue, profile: &Profile) -> BTreeMap<String, Verdict> {
+        verdict::judge(catalogue, profile, &self.checks(), &self.reach)
+    }
+
+    /// The requirements that failed on this profile.
+    pub fn failed_requirements(&self, catalogue: &Catalogue, profile: &Profile) -> Vec<String> {
+        self.verdicts(catalogue, profile)
+            .into_iter()
+            .filter(|(_, v)| v.kind() == VerdictKind::Fail)
+            .map(|(id, _)| id)
+            .collect()
+    }
+
+    /// The scenario runs as checks for [`verdict::judge`].
+    pub fn checks(&self) -> Vec<Check> {
+        let mut failures = 0;
+        self.runs
+            .iter()
+            .map(|run| Check {
+                evidence: Evidence::Scenario(run.scenario.clone()),
+                covers: run.covers.iter().map(|id| id.to_string()).collect(),
+                result: match &run.outcome {
+                    Outcome::Pass => CheckResult::Pass,
+                    Outcome::Fail(failure) => {
+                        failures += 1;
+                        CheckResult::Fail(Finding {
+                            requirements: failure
+                                .requirements
+                                .iter()
+                                .map(|id| id.to_string())
+                                .collect(),
+                            cause: failure.cause(),
+                            details: failure.details(),
+                            failure: Some(failures - 1),
+                        })
+                    }
+                    Outcome::Error(error) => CheckResult::Error(error.to_string()),
+                },
+                elapsed: run.elapsed,
+            })
+            .collect()
+    }
+
+    pub fn frames_checked(&self) -> u64 {
+        self.runs.iter().map(|r| r.frames_checked).sum()
+    }
+
+    pub fn cycles(&self) -> u64 {
+        self.runs.iter().map(|r| r.cycles).sum()
+    }
+}
+
+/// Runs every selected case of a profile, in order, and says each to `progress`.
+pub fn run_profile<S: Side>(
+    catalogue: &Catalogue,
+    profile: &Profile,
+    side: &S,
+    under_test: &S::UnderTest,
+    mut progress: impl FnMut(&ScenarioRun),
+) -> ProfileRun {
+    let mut runs = Vec::new();
+    let mut broken: Option<String> = None;
+    for case in side.cases(profile) {
+        let name = S::name(&case);
+        if !side
+            .selection()
+            .admits(&name, S::covers(&case).iter().map(ReqId::as_str))
+        {
+            continue;
+        }
+        if crate::interrupt::requested() {
+            break;
+        }
+        let run = match &broken {
+            Some(after) => ScenarioRun {
+                scenario: name,
+                covers: S::covers(&case).to_vec(),
+                outcome: Outcome::Error(RunError::Skipped(after.clone())),
+                cycles: 0,
+                frames_checked: 0,
+                tolerated: 0,
+                elapsed: Duration::ZERO,
+            },
+            None => {
+                let started = Instant::now();
+                let mut run = side.run(under_test, profile, case);
+                run.elapsed = started.elapsed();
+                run
+            }
+        };
+        if side.fail_fast() && broken.is_none() {
+            broken = broke_in::<S>(&run);
+        }
+        progress(&run);
+        runs.push(run);
+    }
+    let reach = side.reach(catalogue, profile, &runs);
+    ProfileRun::new(&profile.name, runs, reach)
+}
+
+/// Where and how what is under test broke in `run`, if it did: what the
+/// profile's later cases are skipped after.
+fn broke_in<S: Side>(run: &ScenarioRun) -> Option<String> {
+    match &run.outcome {
+        Outcome::Error(RunError::Iut(error)) => Some(format!(
+            "{} broke in `{}`: {}",
+            S::UNDER_TEST,
+            run.scenario,
+            error.headline()
+        )),
+        _ => None,
+    }
+}

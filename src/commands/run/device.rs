@@ -1,0 +1,120 @@
+//! `canif run` on the device side: an IUT that must behave like an EL6751,
+//! with the harness playing the PLC and the other nodes.
+
+use std::path::Path;
+use std::process::ExitCode;
+
+#[cfg(feature = "socketcan")]
+use canif_harness::bus::kernel::KernelBusOptions;
+use canif_harness::bus::BusChoice;
+use canif_harness::device::{IutKind, Options};
+use canif_harness::report::{RunMeta, RunReport};
+use canif_harness::{Outcome, RunError};
+use canif_spec::Catalogue;
+
+use super::{finish, Plan};
+use crate::cli::{BusArg, IutOptions, RealTimeOptions};
+use crate::commands::resolve_iut;
+
+pub fn run(
+    catalogue: &Catalogue,
+    iut: &IutOptions,
+    plan: &Plan<Options>,
+    report_dir: &Path,
+) -> ExitCode {
+    let kind = match resolve_iut(iut) {
+        Ok(kind) => kind,
+        Err(code) => return code,
+    };
+    if let Err(code) = plan.check_selection(catalogue) {
+        return code;
+    }
+    #[cfg(feature = "socketcan")]
+    if let BusChoice::SocketCan(kernel) = &plan.options.bus {
+        // A bus that cannot be opened at all is one error, not one per scenario.
+        let opened = canif_kernel::probe().and_then(|()| {
+            canif_kernel::KernelSocket::open(&kernel.spec.iut, false)?;
+            canif_kernel::KernelSocket::open(&kernel.spec.tester, false).map(|_| ())
+        });
+        if let Err(error) = opened {
+            eprintln!("error: --bus {}: {error}", kernel.spec.describe());
+            return ExitCode::from(2);
+        }
+    }
+    finish(catalogue, &execute(catalogue, &kind, plan), report_dir)
+}
+
+/// Runs a plan: the lockstep on each profile, then the Gherkin scenarios, and
+/// judges every requirement once over all of them.
+pub fn execute(catalogue: &Catalogue, kind: &IutKind, plan: &Plan<Options>) -> RunReport {
+    let options = &plan.options;
+    let started = std::time::Instant::now();
+    let meta = RunMeta::new(
+        kind.name(),
+        describe_bus(&options.bus),
+        options.seed,
+        catalogue,
+    );
+    let lockstep = plan.run_profiles(catalogue, kind, "cycles");
+    let iut_broke = lockstep.iter().flat_map(|p| &p.runs).any(|r| {
+        matches!(
+            r.outcome,
+            Outcome::Error(RunError::Iut(_) | RunError::Skipped(_))
+        )
+    });
+    let mut left_out = plan.selection_left_out();
+    let gherkin = if canif_harness::interrupt::requested() {
+        left_out.push("interrupted before the Gherkin scenarios".into());
+        Vec::new()
+    } else if iut_broke && options.fail_fast {
+        left_out.push(
+            "Gherkin scenarios not run: the IUT broke (--no-fail-fast runs them anyway)".into(),
+        );
+        Vec::new()
+    } else if !options.bus.is_sim() {
+        left_out.push("Gherkin scenarios not run: they use the simulated bus".into());
+        Vec::new()
+    } else {
+        plan.run_gherkin(&canif_features::UnderTest::Device(kind.clone()))
+    };
+    plan.assemble(catalogue, lockstep, gherkin, left_out, meta, started)
+}
+
+/// The bus as the report names it.
+fn describe_bus(bus: &BusChoice) -> String {
+    match bus {
+        BusChoice::Sim => "simulated bus (virtual time)".into(),
+        #[cfg(feature = "socketcan")]
+        BusChoice::SocketCan(k) => format!(
+            "{} on Linux {}, real time, {} µs cycle, time stamps within {} µs{}",
+            k.spec.describe(),
+            canif_kernel::kernel_release(),
+            k.cycle_time / 1_000,
+            k.time_stamp_tolerance / 1_000,
+            match (k.remote_frames, k.esi_settable) {
+                (true, true) => "",
+                (false, true) => ", remote frames sent as data frames",
+                (true, false) => ", ESI left to the controllers",
+                (false, false) =>
+                    ", remote frames sent as data frames, ESI left to the controllers",
+            }
+        ),
+    }
+}
+
+/// The bus the command line chose, with its real-time options.
+#[cfg_attr(not(feature = "socketcan"), allow(unused_variables))]
+pub fn bus_choice(bus: &BusArg, real_time: &RealTimeOptions) -> BusChoice {
+    match bus {
+        BusArg::Sim => BusChoice::Sim,
+        #[cfg(feature = "socketcan")]
+        BusArg::SocketCan(spec) => BusChoice::SocketCan(KernelBusOptions {
+            spec: spec.clone(),
+            cycle_time: real_time.cycle_us * 1_000,
+            time_stamp_tolerance: real_time.time_stamp_tolerance_us * 1_000,
+            timeout: std::time::Duration::from_millis(real_time.frame_timeout_ms),
+            remote_frames: !real_time.no_remote_frames,
+            esi_settable: !real_time.esi_from_controller,
+        }),
+    }
+}

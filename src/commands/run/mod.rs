@@ -1,0 +1,353 @@
+//! `canif run`, `canif list scenarios` and `canif self-check`, for either
+//! side. A run is planned (profiles, selection, the Gherkin scenarios),
+//! executed (each profile's cases, then the Gherkin scenarios), judged once
+//! per requirement × profile, and reported. What differs between the sides
+//! is in `device` and `plc`; everything else is here, once.
+
+pub mod device;
+pub mod plc;
+mod progress;
+
+use std::path::Path;
+use std::process::ExitCode;
+
+use canif_features::{ScenarioInfo, UnderTest};
+use canif_harness::report::{Product, ProfileReport, RunMeta, RunReport};
+use canif_harness::run::{run_profile, KillRow, ProfileRun, Side};
+use canif_harness::verdict::NotRunReason;
+use canif_harness::GherkinRun;
+use canif_spec::{Catalogue, Profile, ReqId};
+
+pub use progress::Progress;
+
+/// A run of one side, checked before anything starts.
+pub struct Plan<'c, S> {
+    pub profiles: Vec<&'c Profile>,
+    pub options: S,
+    pub product: Option<Product>,
+    /// The Gherkin scenarios of this side these profiles run, read once: (profile, scenario).
+    pub gherkin: Vec<(String, ScenarioInfo)>,
+}
+
+impl<'c, S: Side> Plan<'c, S> {
+    /// The plan, or the exit code of feature files that do not parse (said on stderr).
+    pub fn new(
+        profiles: Vec<&'c Profile>,
+        options: S,
+        product: Option<Product>,
+    ) -> Result<Self, ExitCode> {
+        let scenarios = canif_features::scenarios().map_err(|error| {
+            eprintln!("the feature files do not parse: {error}");
+            ExitCode::from(2)
+        })?;
+        let gherkin = canif_features::schedule::targets(&scenarios, &profiles, S::SIDE);
+        Ok(Plan {
+            profiles,
+            options,
+            product,
+            gherkin,
+        })
+    }
+
+    /// Every check the plan could run: (profile, name, requirements exercised).
+    fn candidates(&self) -> Vec<(String, String, Vec<String>)> {
+        let mut list = Vec::new();
+        for profile in &self.profiles {
+            for case in self.options.cases(profile) {
+                let covers = S::covers(&case).iter().map(ReqId::to_string).collect();
+                list.push((profile.name.clone(), S::name(&case), covers));
+            }
+            for (_, scenario) in self.gherkin.iter().filter(|(p, _)| *p == profile.name) {
+                list.push((
+                    profile.name.clone(),
+                    scenario.id(),
+                    scenario.requirements.clone(),
+                ));
+            }
+        }
+        list
+    }
+
+    /// An unknown requirement or a selection that matches nothing is a usage error.
+    pub fn check_selection(&self, catalogue: &Catalogue) -> Result<(), ExitCode> {
+        let selection = self.options.selection();
+        for id in &selection.requirements {
+            if catalogue.requirement(id).is_none() {
+                eprintln!("--requirement {id}: no such requirement; `canif spec list` lists them");
+                return Err(ExitCode::from(2));
+            }
+        }
+        if selection.is_everything()
+            || self
+                .candidates()
+                .iter()
+                .any(|(_, name, covers)| selection.admits(name, covers.iter().map(String::as_str)))
+        {
+            return Ok(());
+        }
+        eprintln!(
+            "{} matches no check on {}; `canif list scenarios` lists them",
+            selection.flags(),
+            self.profiles
+                .iter()
+                .map(|p| p.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        Err(ExitCode::from(2))
+    }
+
+    /// Each profile's cases against what is under test, with a progress line each.
+    fn run_profiles(
+        &self,
+        catalogue: &Catalogue,
+        under_test: &S::UnderTest,
+        unit: &str,
+    ) -> Vec<ProfileRun> {
+        let count = self.profiles.len();
+        let mut runs = Vec::new();
+        for (n, profile) in self.profiles.iter().enumerate() {
+            if canif_harness::interrupt::requested() {
+                eprintln!("interrupted: the remaining profiles are not run");
+                break;
+            }
+            let mut progress = Progress::new(n, count, &profile.name);
+            let run = run_profile(catalogue, profile, &self.options, under_test, |run| {
+                progress.scenario(run)
+            });
+            progress.done(&run, catalogue, profile, unit);
+            runs.push(run);
+        }
+        runs
+    }
+
+    /// The selected Gherkin scenarios against what is under test: (profile, run).
+    fn run_gherkin(&self, under_test: &UnderTest) -> Vec<(String, GherkinRun)> {
+        let mut results = Vec::new();
+        let selection = self.options.selection();
+        for (profile_name, scenario) in &self.gherkin {
+            if !selection.admits(
+                &scenario.id(),
+                scenario.requirements.iter().map(String::as_str),
+            ) {
+                continue;
+            }
+            if canif_harness::interrupt::requested() {
+                break;
+            }
+            let Some(profile) = self.profiles.iter().find(|p| p.name == *profile_name) else {
+                continue;
+            };
+            let run = canif_features::schedule::run(profile, scenario, under_test);
+            results.push((profile_name.clone(), run));
+        }
+        let count = |f: fn(&GherkinRun) -> bool| results.iter().filter(|(_, r)| f(r)).count();
+        eprintln!(
+            "Gherkin scenarios: {} run, {} failed, {} error",
+            results.len(),
+            count(|r| matches!(r.outcome, canif_harness::GherkinOutcome::Fail { .. })),
+            count(|r| matches!(r.outcome, canif_harness::GherkinOutcome::Error(_))),
+        );
+        results
+    }
+
+    /// The report: every profile's checks judged once, with what the run left out.
+    fn assemble(
+        &self,
+        catalogue: &Catalogue,
+        lockstep: Vec<ProfileRun>,
+        gherkin: Vec<(String, GherkinRun)>,
+        left_out: Vec<String>,
+        meta: RunMeta,
+        started: std::time::Instant,
+    ) -> RunReport {
+        for line in &left_out {
+            eprintln!("left out: {line}");
+        }
+        let interrupted = canif_harness::interrupt::requested();
+        let profiles = lockstep
+            .into_iter()
+            .zip(&self.profiles)
+            .map(|(run, profile)| {
+                let mut reach = run.reach.clone();
+                reach.here.extend(
+                    self.gherkin
+                        .iter()
+                        .filter(|(p, _)| *p == profile.name)
+                        .flat_map(|(_, s)| s.requirements.iter().cloned()),
+                );
+                if !left_out.is_empty() {
+                    reach.left_out = NotRunReason::LeftOut(left_out.join("; "));
+                } else if interrupted {
+                    reach.left_out = NotRunReason::LeftOut("interrupted".into());
+                }
+                let runs: Vec<GherkinRun> = gherkin
+                    .iter()
+                    .filter(|(p, _)| *p == profile.name)
+                    .map(|(_, r)| r.clone())
+                    .collect();
+                ProfileReport::new(catalogue, profile, run, runs, Vec::new(), &reach)
+            })
+            .collect();
+        RunReport {
+            meta: RunMeta {
+                complete: left_out.is_empty() && !interrupted,
+                product: self.product.clone(),
+                left_out: (!left_out.is_empty()).then(|| left_out.join("; ")),
+                ..meta
+            },
+            profiles,
+            wall_time_ms: started.elapsed().as_millis(),
+            interrupted,
+        }
+    }
+
+    /// The selection as the run's first left-out line, when it leaves anything out.
+    fn selection_left_out(&self) -> Vec<String> {
+        let selection = self.options.selection();
+        if selection.is_everything() {
+            Vec::new()
+        } else {
+            vec![selection.describe()]
+        }
+    }
+}
+
+/// `canif list scenarios`: every check a run of these profiles can select.
+pub fn list_scenarios<S: Side>(
+    catalogue: &Catalogue,
+    names: &[String],
+    options: S,
+    out: &mut String,
+) -> ExitCode {
+    let profiles = match profiles(catalogue, names) {
+        Ok(p) => p,
+        Err(code) => return code,
+    };
+    let plan = match Plan::new(profiles, options, None) {
+        Ok(plan) => plan,
+        Err(code) => return code,
+    };
+    for (profile, name, covers) in plan.candidates() {
+        outln!(out, "{profile}\t{name}\t{}", covers.join(" "));
+    }
+    ExitCode::SUCCESS
+}
+
+/// The profiles named on the command line (`all`, or names), or the exit code of a usage error.
+pub fn profiles<'c>(
+    catalogue: &'c Catalogue,
+    names: &[String],
+) -> Result<Vec<&'c Profile>, ExitCode> {
+    if names.is_empty() || names.iter().any(|n| n == "all") {
+        return Ok(catalogue.profiles.iter().collect());
+    }
+    let mut chosen = Vec::new();
+    for name in names {
+        match catalogue.profile(name) {
+            Some(p) if !chosen.iter().any(|c: &&Profile| c.name == p.name) => chosen.push(p),
+            Some(_) => {}
+            None => {
+                let known: Vec<_> = catalogue.profiles.iter().map(|p| p.name.as_str()).collect();
+                eprintln!("unknown profile `{name}`; known: {}", known.join(", "));
+                return Err(ExitCode::from(2));
+            }
+        }
+    }
+    Ok(chosen)
+}
+
+/// Writes the reports and says the verdict: each failing requirement in one line.
+pub fn finish(catalogue: &Catalogue, report: &RunReport, report_dir: &Path) -> ExitCode {
+    if let Err(error) = report.write(catalogue, report_dir) {
+        eprintln!(
+            "cannot write the reports to {}: {error}",
+            report_dir.display()
+        );
+        return ExitCode::from(2);
+    }
+    if report.interrupted {
+        eprintln!("interrupted: the reports hold what ran before the signal");
+    }
+    let problems = report.problems();
+    for line in problems.iter().take(40) {
+        eprintln!("{line}");
+    }
+    if problems.len() > 40 {
+        eprintln!(
+            "… and {} more in {}",
+            problems.len() - 40,
+            report_dir.join("summary.md").display()
+        );
+    }
+    println!(
+        "{} {}: {} — reports in {}",
+        report.meta.iut,
+        report.headline(),
+        report.totals_line(),
+        report_dir.display()
+    );
+    ExitCode::from(report.exit_code())
+}
+
+/// `canif self-check`: both kill matrices, every fault of each side on every profile.
+pub fn self_check(catalogue: &Catalogue, seed: u64) -> ExitCode {
+    let options = canif_harness::device::Options {
+        cases: 2,
+        generated_cycles: 150,
+        ..canif_harness::device::Options::quick(seed)
+    };
+    let devices = canif_harness::device::suite::kill_matrix(catalogue, &options, |fault| {
+        eprintln!("running {fault} on every profile")
+    });
+    let uncaught = print_kill_table("device fault", &devices, |f| f.name());
+    let clients = canif_harness::client::suite::kill_matrix(
+        catalogue,
+        &canif_harness::client::suite::ClientOptions {
+            counter_wrap: false,
+            ..canif_harness::client::suite::ClientOptions::new(seed)
+        },
+        |fault| eprintln!("running client fault {fault} on every profile"),
+    );
+    println!();
+    let clients_uncaught = print_kill_table("client fault", &clients, |f| f.name());
+    ExitCode::from(u8::from(uncaught + clients_uncaught > 0))
+}
+
+/// One kill matrix as Markdown: each fault, the profiles it was caught on and
+/// the requirements that failed. The faults not caught anywhere, counted.
+fn print_kill_table<F: Copy>(
+    what: &str,
+    rows: &[KillRow<F>],
+    name: impl Fn(F) -> &'static str,
+) -> usize {
+    let mut uncaught = 0;
+    println!("| {what} | caught on | requirements that failed |\n|---|---|---|");
+    for row in rows {
+        let on = row.caught.iter().filter(|(_, ids)| !ids.is_empty()).count();
+        let ids: std::collections::BTreeSet<&str> = row
+            .caught
+            .iter()
+            .flat_map(|(_, ids)| ids.iter().map(String::as_str))
+            .collect();
+        if on == 0 {
+            uncaught += 1;
+        }
+        println!(
+            "| {} | {on}/{} profiles | {} |",
+            name(row.fault),
+            row.caught.len(),
+            if ids.is_empty() {
+                "NOT CAUGHT".to_string()
+            } else {
+                ids.into_iter().collect::<Vec<_>>().join(", ")
+            }
+        );
+    }
+    println!(
+        "\n{} of {} {what}s caught",
+        rows.len() - uncaught,
+        rows.len()
+    );
+    uncaught
+}

@@ -1,0 +1,98 @@
+//! `canif run --side plc`: a PLC-side client under test. The harness plays
+//! the device, the EtherCAT master and the application; the report has the
+//! same shape as the device side's, with `side: plc` and the master models.
+
+use std::path::Path;
+use std::process::ExitCode;
+
+use canif_harness::bus::BusChoice;
+use canif_harness::client::master::Master;
+use canif_harness::client::suite::{ClientBus, ClientKind, ClientOptions};
+use canif_harness::report::{RunMeta, RunReport};
+use canif_spec::{Catalogue, Side};
+
+use super::{finish, Plan};
+
+/// The master models named on the command line (all when none), or the exit code of a usage error.
+pub fn masters(names: &[String]) -> Result<Vec<Master>, ExitCode> {
+    if names.is_empty() {
+        return Ok(Master::ALL.to_vec());
+    }
+    names
+        .iter()
+        .map(|name| {
+            Master::by_name(name).ok_or_else(|| {
+                let known: Vec<&str> = Master::ALL.iter().map(|m| m.name).collect();
+                eprintln!("unknown master `{name}`; known: {}", known.join(", "));
+                ExitCode::from(2)
+            })
+        })
+        .collect()
+}
+
+/// The bus of `--side plc`: the simulated one, or one SocketCAN interface
+/// that the played device's controller and the other nodes share.
+pub fn client_bus(bus: &BusChoice) -> Result<ClientBus, ExitCode> {
+    match bus {
+        BusChoice::Sim => Ok(ClientBus::Sim),
+        #[cfg(feature = "socketcan")]
+        BusChoice::SocketCan(options) => {
+            let spec = &options.spec;
+            if spec.iut != spec.tester {
+                eprintln!("--side plc: one interface (socketcan:IFACE); the device and the other nodes share it");
+                return Err(ExitCode::from(2));
+            }
+            if let Err(error) = canif_kernel::probe()
+                .and_then(|()| canif_kernel::KernelSocket::open(&spec.iut, false).map(|_| ()))
+            {
+                eprintln!("error: --bus {}: {error}", spec.describe());
+                return Err(ExitCode::from(2));
+            }
+            Ok(ClientBus::SocketCan {
+                interface: spec.iut.clone(),
+                timeout: options.timeout,
+            })
+        }
+    }
+}
+
+pub fn run(
+    catalogue: &Catalogue,
+    kind: &ClientKind,
+    plan: &Plan<ClientOptions>,
+    report_dir: &Path,
+) -> ExitCode {
+    if let Err(code) = plan.check_selection(catalogue) {
+        return code;
+    }
+    finish(catalogue, &execute(catalogue, kind, plan), report_dir)
+}
+
+/// Every profile's client run and the `@plc` Gherkin scenarios, judged and put in one report.
+pub fn execute(catalogue: &Catalogue, kind: &ClientKind, plan: &Plan<ClientOptions>) -> RunReport {
+    let options = &plan.options;
+    let started = std::time::Instant::now();
+    let meta = RunMeta {
+        side: Side::Plc,
+        masters: options.masters.iter().map(|m| m.name.to_string()).collect(),
+        ..RunMeta::new(kind.name(), options.bus.describe(), options.seed, catalogue)
+    };
+    let lockstep = plan.run_profiles(catalogue, kind, "task cycles");
+    let mut left_out = plan.selection_left_out();
+    if !options.counter_wrap {
+        left_out.push("the 65,600-cycle counter wrap (--no-counter-wrap)".to_string());
+    }
+    if options.masters.len() < Master::ALL.len() {
+        left_out.push("master models left out by --master".to_string());
+    }
+    let gherkin = if canif_harness::interrupt::requested() {
+        left_out.push("interrupted before the Gherkin scenarios".into());
+        Vec::new()
+    } else if options.bus != ClientBus::Sim {
+        left_out.push("Gherkin scenarios not run: they use the simulated bus".into());
+        Vec::new()
+    } else {
+        plan.run_gherkin(&canif_features::UnderTest::Client(kind.clone()))
+    };
+    plan.assemble(catalogue, lockstep, gherkin, left_out, meta, started)
+}

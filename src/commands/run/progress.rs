@@ -1,0 +1,78 @@
+//! What a run says on stderr while it works through the profiles: the
+//! scenario running (on a terminal), then one line per profile.
+
+use std::io::{IsTerminal, Write as _};
+
+use canif_harness::run::ProfileRun;
+use canif_harness::{Outcome, ScenarioRun};
+use canif_spec::{Catalogue, Profile};
+
+pub struct Progress<'a> {
+    n: usize,
+    count: usize,
+    profile: &'a str,
+    done: usize,
+    terminal: bool,
+}
+
+impl<'a> Progress<'a> {
+    pub fn new(n: usize, count: usize, profile: &'a str) -> Self {
+        Progress {
+            n,
+            count,
+            profile,
+            done: 0,
+            terminal: std::io::stderr().is_terminal(),
+        }
+    }
+
+    pub fn scenario(&mut self, run: &ScenarioRun) {
+        self.done += 1;
+        if self.terminal {
+            eprint!(
+                "\r\x1b[2K[{}/{}] {}: {} ({} scenarios)",
+                self.n + 1,
+                self.count,
+                self.profile,
+                run.scenario,
+                self.done
+            );
+            let _ = std::io::stderr().flush();
+        }
+    }
+
+    /// The profile's line; `unit`: what its cycles are (device or task cycles).
+    pub fn done(self, result: &ProfileRun, catalogue: &Catalogue, profile: &Profile, unit: &str) {
+        if self.terminal {
+            eprint!("\r\x1b[2K");
+        }
+        let count = |error: bool| {
+            result
+                .runs
+                .iter()
+                .filter(|r| match r.outcome {
+                    Outcome::Fail(_) => !error,
+                    Outcome::Error(_) => error,
+                    Outcome::Pass => false,
+                })
+                .count()
+        };
+        eprintln!(
+            "[{}/{}] {:<22} {} scenarios, {} {unit}, {} frames checked: {}",
+            self.n + 1,
+            self.count,
+            self.profile,
+            result.runs.len(),
+            result.cycles(),
+            result.frames_checked(),
+            match (count(false), count(true)) {
+                (0, 0) => "all pass".to_string(),
+                (f, 0) => format!(
+                    "{f} FAIL ({})",
+                    result.failed_requirements(catalogue, profile).join(", ")
+                ),
+                (f, e) => format!("{f} fail, {e} ERROR"),
+            }
+        );
+    }
+}
