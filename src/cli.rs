@@ -11,7 +11,7 @@ use clap::{Args, Parser, Subcommand};
     version,
     about = "Conformance suite for the Beckhoff CAN interface"
 )]
-pub struct Cli {
+pub(crate) struct Cli {
     /// A catalogue folder of the shape of spec/ instead of the embedded one.
     #[arg(long, global = true, value_name = "DIR")]
     pub spec: Option<PathBuf>,
@@ -21,7 +21,7 @@ pub struct Cli {
 
 /// The implementation under test, as the command line names it.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum IutArg {
+pub(crate) enum IutArg {
     SoftDevice,
     Model,
     /// The reference client of 001 §6 (`--side plc`).
@@ -58,7 +58,7 @@ fn iut_arg(text: &str) -> Result<IutArg, String> {
 
 /// The bus, as the command line names it.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum BusArg {
+pub(crate) enum BusArg {
     Sim,
     /// `socketcan:IFACE` or `socketcan:IUT_IFACE,OTHER_IFACE`.
     #[cfg(feature = "socketcan")]
@@ -95,7 +95,7 @@ fn seconds(text: &str) -> Result<f64, String> {
 
 /// Which implementation, and how an external one is run.
 #[derive(Args, Debug, Clone)]
-pub struct IutOptions {
+pub(crate) struct IutOptions {
     /// Device side: softdevice (the built-in soft EL6751, the default), model
     /// (the reference itself), exec:'COMMAND' (a process speaking the adapter
     /// protocol), or lib:PATH (a shared library built against include/canif.h).
@@ -123,7 +123,7 @@ pub struct IutOptions {
 
 /// How a SocketCAN bus is run (ignored on the simulated bus).
 #[derive(Args, Debug, Clone)]
-pub struct RealTimeOptions {
+pub(crate) struct RealTimeOptions {
     /// On a SocketCAN bus: the real cycle time in microseconds.
     #[arg(long, default_value_t = 2000, value_parser = clap::value_parser!(u64).range(100..=10_000_000))]
     pub cycle_us: u64,
@@ -145,7 +145,7 @@ pub struct RealTimeOptions {
 
 /// Which side of the interface is under test.
 #[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
-pub enum SideArg {
+pub(crate) enum SideArg {
     /// The device (EL6751, FC51xx, CCAT, FC532x or what behaves like one).
     Device,
     /// The PLC-side client that fills and reads the image.
@@ -154,7 +154,7 @@ pub enum SideArg {
 
 /// Which suite `canif run` runs.
 #[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Suite {
+pub(crate) enum Suite {
     /// The CAN interface (the default).
     Interface,
     /// The CANopen node checks (002, 004).
@@ -162,7 +162,7 @@ pub enum Suite {
 }
 
 #[derive(Subcommand)]
-pub enum Command {
+pub(crate) enum Command {
     /// Certify an implementation against the model, per profile, on the
     /// simulated bus or a SocketCAN interface.
     Run {
@@ -359,14 +359,14 @@ pub enum Command {
 
 /// How `canif compare` writes its answer.
 #[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
-pub enum CompareFormat {
+pub(crate) enum CompareFormat {
     Markdown,
     Json,
 }
 
 /// The implementation's maker's own name and version for it, for reports and certificates.
 #[derive(Args, Debug, Clone)]
-pub struct ProductOptions {
+pub(crate) struct ProductOptions {
     /// The product's name as its maker declares it.
     #[arg(long, requires = "product_version")]
     pub product: Option<String>,
@@ -376,7 +376,7 @@ pub struct ProductOptions {
 }
 
 impl ProductOptions {
-    pub fn product(&self) -> Option<canif_harness::report::Product> {
+    pub(crate) fn product(&self) -> Option<canif_harness::report::Product> {
         Some(canif_harness::report::Product {
             name: self.product.clone()?,
             version: self.product_version.clone()?,
@@ -385,7 +385,7 @@ impl ProductOptions {
 }
 
 #[derive(Subcommand)]
-pub enum ListCommand {
+pub(crate) enum ListCommand {
     /// Every check `canif run` can select with --scenario, per profile, with
     /// the requirements each exercises (tab-separated).
     Scenarios {
@@ -399,7 +399,7 @@ pub enum ListCommand {
 }
 
 #[derive(Subcommand)]
-pub enum SpecCommand {
+pub(crate) enum SpecCommand {
     /// Every requirement, one line each.
     List {
         /// Only ids starting with this prefix (e.g. HS-TX).

@@ -1,6 +1,8 @@
 //! `canif`: the conformance suite's command line. Parsing is `cli`, each
 //! command is a module of `commands`; this file only dispatches.
 
+#![forbid(unsafe_code)]
+
 /// A line into a command's output buffer (written to stdout at the end, so a
 /// reader that stops early — `canif spec list | head` — ends nothing badly).
 macro_rules! outln {

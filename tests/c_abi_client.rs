@@ -112,8 +112,7 @@ fn the_reason_a_client_is_not_judged_on_sent_messages_reaches_report_json() {
         String::from_utf8_lossy(&output.stderr)
     );
     let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
     let verdict = &report["profiles"][0]["verdicts"]["CL-TN-002"];
     assert_eq!(verdict["verdict"], "not run", "{verdict}");
     assert!(

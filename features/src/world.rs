@@ -114,7 +114,7 @@ pub struct CanWorld {
     /// Cycles from the PLC's TxCounter increment to its confirmation, as the PLC saw it.
     pub confirmation_delay: Option<u64>,
     /// The last cycles, shown when a step fails (bounded).
-    pub trace: std::collections::VecDeque<String>,
+    pub trace: canif_harness::run::Ring<String>,
     /// A CANopen bus coupler on the bus (the quick start), and whether it still runs.
     pub coupler: Option<canif_model::canopen::coupler::Coupler>,
     pub coupler_alive: bool,
@@ -169,7 +169,7 @@ impl CanWorld {
             next_tn: 1,
             status: None,
             confirmation_delay: None,
-            trace: std::collections::VecDeque::new(),
+            trace: canif_harness::run::Ring::context(),
             coupler: None,
             coupler_alive: true,
             coupler_failed_at: None,
@@ -254,7 +254,7 @@ impl CanWorld {
             .iter()
             .map(ToString::to_string)
             .collect();
-        self.trace.push_back(format!(
+        self.trace.push(format!(
             "cycle {:>3}{}: out[tx={} rx={} n={}] in[tx={} rx={} n={}] bus: {}",
             self.cycle,
             if plc_busy { " (PLC busy)" } else { "" },
@@ -270,9 +270,6 @@ impl CanWorld {
                 sent.join(" ")
             }
         ));
-        if self.trace.len() > 6 {
-            self.trace.pop_front();
-        }
         result?;
         if let (Some(coupler), true) = (self.coupler.as_mut(), self.coupler_alive) {
             for frame in coupler.poll(self.now + CYCLE / 2) {

@@ -25,8 +25,8 @@ pub const SIM_INTERFACE: &str = "canif-sim";
 
 /// EPB flags, bits 0-1: the direction of the packet (pcapng §4.3.1).
 mod direction {
-    pub const INBOUND: u32 = 0b01;
-    pub const OUTBOUND: u32 = 0b10;
+    pub(super) const INBOUND: u32 = 0b01;
+    pub(super) const OUTBOUND: u32 = 0b10;
 }
 
 /// Writes one scenario's bus to `NAME.log` and `NAME.pcapng`.

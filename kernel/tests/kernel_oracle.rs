@@ -303,10 +303,10 @@ mod isotp {
         rest: [u32; 2],
     }
 
-    pub struct Socket(i32);
+    pub(crate) struct Socket(i32);
 
     impl Socket {
-        pub fn open(interface: &str, rx_id: u32, tx_id: u32) -> io::Result<Self> {
+        pub(crate) fn open(interface: &str, rx_id: u32, tx_id: u32) -> io::Result<Self> {
             let name = std::ffi::CString::new(interface)?;
             // SAFETY: plain socket calls on a descriptor owned by the returned Socket.
             unsafe {
@@ -353,7 +353,7 @@ mod isotp {
             }
         }
 
-        pub fn send(&self, payload: &[u8]) -> io::Result<()> {
+        pub(crate) fn send(&self, payload: &[u8]) -> io::Result<()> {
             // SAFETY: writing from a live slice.
             let n = unsafe { libc::write(self.0, payload.as_ptr().cast(), payload.len()) };
             if n < 0 {

@@ -228,7 +228,7 @@ impl<'a> LineIndex<'a> {
 
 /// The most a catalogue file may hold: far above any real one (the embedded
 /// catalogue's largest file is under 30 KB), far below what exhausts memory.
-pub const MAX_FILE_BYTES: u64 = 16 << 20;
+pub(crate) const MAX_FILE_BYTES: u64 = 16 << 20;
 
 /// How deeply flow collections (`[…]`, `{…}`) may nest.
 const MAX_FLOW_DEPTH: usize = 64;

@@ -26,7 +26,7 @@ fn ssh_keygen_command(certificate: &Path) -> String {
 }
 
 /// What `canif certify` runs: the implementation, on which side and profiles.
-pub struct CertifyRun<'a> {
+pub(crate) struct CertifyRun<'a> {
     pub profile_names: &'a [String],
     pub iut: &'a IutOptions,
     pub side: SideArg,
@@ -34,7 +34,7 @@ pub struct CertifyRun<'a> {
     pub seed: u64,
 }
 
-pub fn certify(
+pub(crate) fn certify(
     catalogue: &Catalogue,
     run: CertifyRun<'_>,
     out: &Path,
@@ -142,7 +142,7 @@ pub fn certify(
 }
 
 /// `certify --verify CERT --pubkey KEY.pub`: the signature, and the HTML's hash.
-pub fn verify_certificate(path: &Path, pubkey: &Path) -> ExitCode {
+pub(crate) fn verify_certificate(path: &Path, pubkey: &Path) -> ExitCode {
     let bytes = match std::fs::read(path) {
         Ok(bytes) => bytes,
         Err(error) => {
@@ -203,7 +203,7 @@ pub fn verify_certificate(path: &Path, pubkey: &Path) -> ExitCode {
     }
 }
 
-pub fn compare(
+pub(crate) fn compare(
     base: &Path,
     new: &Path,
     options: CompareOptions,

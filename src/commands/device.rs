@@ -12,7 +12,7 @@ use super::soft_device_faults;
 
 /// `canif device --stdio [--bus socketcan:IFACE]`: the soft device behind the
 /// adapter protocol.
-pub fn device(stdio: bool, faults: &[String], protocol: u64, bus: Option<&str>) -> ExitCode {
+pub(crate) fn device(stdio: bool, faults: &[String], protocol: u64, bus: Option<&str>) -> ExitCode {
     if !stdio {
         eprintln!("canif device needs --stdio: its process image is served over the adapter protocol (docs/adapter-protocol.md)");
         return ExitCode::from(2);
@@ -56,7 +56,7 @@ fn serve_on_bus(_: &Build<'_>, bus: &str) -> Result<(), String> {
 
 /// `canif coupler`: the simulated coupler behind socketcand on loopback TCP,
 /// or as a node on a SocketCAN interface.
-pub fn coupler(
+pub(crate) fn coupler(
     socketcand: Option<u16>,
     bus: Option<&str>,
     node: u8,
@@ -126,7 +126,7 @@ fn coupler_on_bus(bus: &str, _: &mut canif_model::canopen::coupler::Coupler) -> 
 }
 
 /// What `canif run --suite canopen` checks, and how.
-pub struct CanopenRun<'a> {
+pub(crate) struct CanopenRun<'a> {
     pub bus: &'a BusChoice,
     pub node: u8,
     pub fault: Option<&'a str>,
@@ -137,7 +137,7 @@ pub struct CanopenRun<'a> {
 /// `canif run --suite canopen`: the CANopen node checks (002, 004), on the
 /// simulated coupler or on a node on a SocketCAN interface, with the same
 /// reports as the interface suite.
-pub fn canopen_suite(
+pub(crate) fn canopen_suite(
     catalogue: &canif_spec::Catalogue,
     iut: &crate::cli::IutOptions,
     selection: &canif_harness::run::Selection,

@@ -1,10 +1,10 @@
 //! The commands, one module each; `main.rs` only parses and dispatches.
 
-pub mod certify;
-pub mod device;
-pub mod run;
-pub mod spec;
-pub mod tools;
+pub(crate) mod certify;
+pub(crate) mod device;
+pub(crate) mod run;
+pub(crate) mod spec;
+pub(crate) mod tools;
 
 use std::process::ExitCode;
 
@@ -16,7 +16,7 @@ use canif_softdevice::{Choice, Fault};
 use crate::cli::{IutArg, IutOptions};
 
 /// The soft-device faults named on the command line, or the exit code of a usage error.
-pub fn soft_device_faults(names: &[String]) -> Result<Vec<Fault>, ExitCode> {
+pub(crate) fn soft_device_faults(names: &[String]) -> Result<Vec<Fault>, ExitCode> {
     names
         .iter()
         .map(|name| {
@@ -42,7 +42,7 @@ fn soft_device_choices(names: &[String]) -> Result<Vec<Choice>, ExitCode> {
 }
 
 /// The IUT named on the command line, or the exit code of a usage error.
-pub fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
+pub(crate) fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
     let choices = soft_device_choices(&iut.choice)?;
     let arg = iut.iut.clone().unwrap_or(IutArg::SoftDevice);
     if !choices.is_empty() && !matches!(arg, IutArg::SoftDevice) {
@@ -88,7 +88,7 @@ pub fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
 
 /// The client named on the command line for `--side plc`, or the exit code
 /// of a usage error. A fault without `--iut` picks the soft client.
-pub fn resolve_client(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
+pub(crate) fn resolve_client(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
     let faults: Vec<ClientFault> = iut
         .fault
         .iter()

@@ -8,7 +8,7 @@ use canif_spec::{coverage, Catalogue, Status, Verification};
 
 use crate::cli::SpecCommand;
 
-pub fn spec(catalogue: &Catalogue, command: SpecCommand, out: &mut String) -> ExitCode {
+pub(crate) fn spec(catalogue: &Catalogue, command: SpecCommand, out: &mut String) -> ExitCode {
     match command {
         SpecCommand::List { area } => {
             for r in catalogue
@@ -72,7 +72,7 @@ pub fn spec(catalogue: &Catalogue, command: SpecCommand, out: &mut String) -> Ex
     ExitCode::SUCCESS
 }
 
-pub fn summary(catalogue: &Catalogue, out: &mut String) {
+pub(crate) fn summary(catalogue: &Catalogue, out: &mut String) {
     outln!(
         out,
         "{:<8} {:>9} {:>8} {:>10} {:>6}  title",
@@ -130,7 +130,12 @@ pub fn summary(catalogue: &Catalogue, out: &mut String) {
     );
 }
 
-pub fn spec_coverage(catalogue: &Catalogue, root: &Path, each: bool, out: &mut String) -> ExitCode {
+pub(crate) fn spec_coverage(
+    catalogue: &Catalogue,
+    root: &Path,
+    each: bool,
+    out: &mut String,
+) -> ExitCode {
     let sources = match coverage::test_sources(root) {
         Ok(sources) if !sources.is_empty() => sources,
         Ok(_) => {
@@ -230,7 +235,7 @@ pub fn spec_coverage(catalogue: &Catalogue, root: &Path, each: bool, out: &mut S
     }
 }
 
-pub fn profiles(catalogue: &Catalogue, out: &mut String) -> ExitCode {
+pub(crate) fn profiles(catalogue: &Catalogue, out: &mut String) -> ExitCode {
     for profile in &catalogue.profiles {
         outln!(out, "{:<22} {}", profile.name, profile.device);
         outln!(

@@ -8,7 +8,7 @@ use canif_model::timing::{frame_bits, frame_duration, BitRates, Stuffing};
 
 /// `canif size`: the manual's figure and the safe figure, the safe one
 /// recommended, and why (ruling R4, amended).
-pub fn size(bitrate: u32, cycle_us: u64, payload: u8, out: &mut String) -> ExitCode {
+pub(crate) fn size(bitrate: u32, cycle_us: u64, payload: u8, out: &mut String) -> ExitCode {
     let cycle = cycle_us * 1_000;
     let Some(advice) = sizing::advise(bitrate, cycle, payload) else {
         eprintln!("cannot size: payload must be 0..=8 and the bit rate above 0");
@@ -66,7 +66,7 @@ pub fn size(bitrate: u32, cycle_us: u64, payload: u8, out: &mut String) -> ExitC
     ExitCode::SUCCESS
 }
 
-pub fn frame_time(
+pub(crate) fn frame_time(
     bitrate: u32,
     data_bitrate: Option<u32>,
     payload: u8,

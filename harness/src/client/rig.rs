@@ -2,7 +2,6 @@
 //! device side, the master, the application and the client under test meet.
 //! Every task is judged as it ends; the first breach ends the scenario.
 
-use std::collections::VecDeque;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 use canif_model::config::{Capabilities, InterfaceConfig, Synchronization};
@@ -21,12 +20,10 @@ use crate::client::played_device::{DeviceSide, PlayedDevice};
 use crate::device::iut::BuildError;
 use crate::error::RunError;
 use crate::outcome::{BusFrame, CycleView, Failure, Outcome, ScenarioRun};
+use crate::run::Ring;
 
 /// The CAN interface cycle of every client scenario.
 pub const CYCLE: Nanos = 1_000_000;
-
-/// Tasks of history a failure shows.
-const CONTEXT: usize = 8;
 
 /// Builds a fresh client for an image (at the start and at each PLC restart).
 pub type BuildClient<'a> = dyn Fn(ImageLayout) -> Result<Box<dyn Client>, BuildError> + 'a;
@@ -97,11 +94,11 @@ struct Ended {
 struct Tracker {
     task: u64,
     time: Nanos,
-    context: VecDeque<Note>,
+    context: Ring<Note>,
     /// The same tasks as data, for the report's timing diagram: the client's
     /// outputs and the inputs it was handed (expected and actual alike: the
     /// device is the model), and the frames that ended since the task before.
-    timeline: VecDeque<(CycleView, Vec<Ended>)>,
+    timeline: Ring<(CycleView, Vec<Ended>)>,
     /// Frames that ended since the last task.
     frames: Vec<Ended>,
 }
@@ -135,10 +132,7 @@ impl Tracker {
     }
 
     fn note(&mut self, note: Note) {
-        if self.context.len() == CONTEXT {
-            self.context.pop_front();
-        }
-        self.context.push_back(note);
+        self.context.push(note);
     }
 
     /// The task just run: its images for the timeline and the history.
@@ -148,9 +142,6 @@ impl Tracker {
         let (Ok(inputs), Ok(outputs)) = (inputs, outputs) else {
             return;
         };
-        if self.timeline.len() == CONTEXT {
-            self.timeline.pop_front();
-        }
         let (seen, written) = (InputHeader::parse(&inputs), OutputHeader::parse(&outputs));
         let view = CycleView {
             cycle: self.task,
@@ -160,8 +151,7 @@ impl Tracker {
             actual: seen,
             frames: Vec::new(),
         };
-        self.timeline
-            .push_back((view, std::mem::take(&mut self.frames)));
+        self.timeline.push((view, std::mem::take(&mut self.frames)));
         self.note(Note::Task {
             task: self.task,
             inputs: seen,
@@ -237,8 +227,8 @@ fn run_with(
     let mut tracker = Tracker {
         task: 0,
         time: 0,
-        context: VecDeque::new(),
-        timeline: VecDeque::new(),
+        context: Ring::context(),
+        timeline: Ring::context(),
         frames: Vec::new(),
     };
     let result = drive(

@@ -1,16 +1,12 @@
 //! The last cycles and frames of a run, kept in bounded rings (memory does not
 //! grow with run length) and formatted only when a failure shows them.
 
-use std::collections::VecDeque;
-
 use canif_model::frame::Frame;
 use canif_model::image::{ImageLayout, InputHeader, InputImage, OutputHeader, OutputImage};
 use canif_model::Nanos;
 
 use crate::outcome::{BusFrame, CycleView};
-
-/// How many cycles of history a failure shows.
-pub const CONTEXT_CYCLES: usize = 6;
+use crate::run::Ring;
 
 /// How many frames of bus history a failure can show.
 const BUS_LOG: usize = 256;
@@ -38,12 +34,22 @@ struct Logged {
 }
 
 /// The bounded history of one scenario.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct History {
-    cycles: VecDeque<CycleRecord>,
-    bus: VecDeque<Logged>,
+    cycles: Ring<CycleRecord>,
+    bus: Ring<Logged>,
     /// Frames other nodes sent lately.
-    recent_rx: VecDeque<Frame>,
+    recent_rx: Ring<Frame>,
+}
+
+impl Default for History {
+    fn default() -> Self {
+        History {
+            cycles: Ring::context(),
+            bus: Ring::new(BUS_LOG),
+            recent_rx: Ring::new(RECENT_RX),
+        }
+    }
 }
 
 impl History {
@@ -58,7 +64,7 @@ impl History {
         actual: &[u8],
     ) {
         let input = |b: &[u8]| InputImage::new_checked(b, layout).map(|i| i.header());
-        self.cycles.push_back(CycleRecord {
+        self.cycles.push(CycleRecord {
             cycle,
             now,
             outputs: OutputImage::new_checked(outputs, layout)
@@ -67,33 +73,24 @@ impl History {
             expected: input(expected).unwrap_or_default(),
             actual: input(actual).unwrap_or_default(),
         });
-        if self.cycles.len() > CONTEXT_CYCLES {
-            self.cycles.pop_front();
-        }
     }
 
     /// A frame ended on the bus during `cycle`.
     pub fn frame(&mut self, cycle: u64, from_iut: bool, frame: Frame, end: Nanos) {
-        self.bus.push_back(Logged {
+        self.bus.push(Logged {
             cycle,
             from_iut,
             frame,
             end,
         });
-        if self.bus.len() > BUS_LOG {
-            self.bus.pop_front();
-        }
         if !from_iut {
-            self.recent_rx.push_back(frame);
-            if self.recent_rx.len() > RECENT_RX {
-                self.recent_rx.pop_front();
-            }
+            self.recent_rx.push(frame);
         }
     }
 
     /// Whether another node sent `frame` lately.
     pub fn received_lately(&self, frame: &Frame) -> bool {
-        self.recent_rx.contains(frame)
+        self.recent_rx.iter().any(|f| f == frame)
     }
 
     /// Frames that ended since the cycle before `cycle`.

@@ -19,7 +19,7 @@ use crate::outcome::{Failure, FrameDiff, Outcome};
 use crate::trace::TraceWriter;
 
 /// The IUT broke: the scenario ends in error, whatever the model expected.
-pub fn iut_broke(error: crate::error::IutError) -> Outcome {
+pub(crate) fn iut_broke(error: crate::error::IutError) -> Outcome {
     Outcome::Error(error.into())
 }
 

@@ -9,7 +9,7 @@ use std::fmt::Write as _;
 use canif_spec::Catalogue;
 
 use super::diagram::esc;
-pub use super::diagram::timing_diagram;
+pub(super) use super::diagram::timing_diagram;
 use super::summary::utc;
 use super::RunReport;
 use crate::verdict::{CheckResult, Evidence, Verdict, VerdictKind};

@@ -13,5 +13,5 @@ mod selection;
 
 pub use kill::{kill_matrix, KillRow};
 pub use profile::{run_profile, ProfileRun, Side};
-pub use ring::Ring;
+pub use ring::{Ring, CONTEXT};
 pub use selection::Selection;

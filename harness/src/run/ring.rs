@@ -3,6 +3,9 @@
 
 use std::collections::VecDeque;
 
+/// How many cycles (device side) or tasks (PLC side) of history a failure shows.
+pub const CONTEXT: usize = 6;
+
 /// At most `capacity` items, the oldest dropped first.
 #[derive(Debug, Clone)]
 pub struct Ring<T> {
@@ -16,6 +19,11 @@ impl<T> Ring<T> {
             items: VecDeque::with_capacity(capacity + 1),
             capacity,
         }
+    }
+
+    /// A ring of a failure's history: [`CONTEXT`] items.
+    pub fn context() -> Self {
+        Ring::new(CONTEXT)
     }
 
     pub fn push(&mut self, item: T) {

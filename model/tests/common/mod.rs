@@ -7,11 +7,11 @@ use canif_model::device::Device;
 use canif_model::frame::{CanId, Frame};
 use canif_model::image::{InputImage, MessageRepr, OutputImage};
 
-pub fn std_frame(id: u16, data: &[u8]) -> Frame {
+pub(crate) fn std_frame(id: u16, data: &[u8]) -> Frame {
     Frame::classic(CanId::Standard(id), data).unwrap()
 }
 
-pub fn message(frame: Frame, transaction_number: u16) -> MessageRepr {
+pub(crate) fn message(frame: Frame, transaction_number: u16) -> MessageRepr {
     MessageRepr {
         transaction_number,
         frame,
@@ -19,22 +19,22 @@ pub fn message(frame: Frame, transaction_number: u16) -> MessageRepr {
     }
 }
 
-pub fn caps() -> Capabilities {
+pub(crate) fn caps() -> Capabilities {
     Capabilities::everything()
 }
 
-pub fn config(format: FrameFormat, queue: QueueMode, slots: u8) -> InterfaceConfig {
+pub(crate) fn config(format: FrameFormat, queue: QueueMode, slots: u8) -> InterfaceConfig {
     let mut config = InterfaceConfig::new(format, slots);
     config.queue = queue;
     config
 }
 
-pub fn device(format: FrameFormat, queue: QueueMode, slots: u8) -> Device {
+pub(crate) fn device(format: FrameFormat, queue: QueueMode, slots: u8) -> Device {
     Device::new(&caps(), config(format, queue, slots)).unwrap()
 }
 
 /// A PLC and a device exchanging images directly (separate input update).
-pub struct Rig {
+pub(crate) struct Rig {
     pub device: Device,
     pub plc: PlcClient,
     pub now: u64,
@@ -44,7 +44,7 @@ pub struct Rig {
 }
 
 impl Rig {
-    pub fn new(device: Device) -> Self {
+    pub(crate) fn new(device: Device) -> Self {
         let plc = PlcClient::new(device.layout());
         Rig {
             device,
@@ -56,14 +56,14 @@ impl Rig {
     }
 
     /// One task cycle: PLC task, device cycle, then up to `completions` frames on the bus.
-    pub fn cycle(&mut self, completions: usize) {
+    pub(crate) fn cycle(&mut self, completions: usize) {
         let outputs = self.plc.task(self.device.inputs()).unwrap().to_vec();
         self.device.cycle(&outputs, self.now).unwrap();
         self.transmit(completions);
         self.now += self.cycle_time;
     }
 
-    pub fn transmit(&mut self, completions: usize) {
+    pub(crate) fn transmit(&mut self, completions: usize) {
         for _ in 0..completions {
             match self.device.poll_transmit(self.now) {
                 Some(frame) => {
@@ -76,7 +76,7 @@ impl Rig {
     }
 
     /// Identifiers of the messages the PLC has read so far (drains them).
-    pub fn received_ids(&mut self) -> Vec<u32> {
+    pub(crate) fn received_ids(&mut self) -> Vec<u32> {
         self.plc
             .take_received()
             .iter()
@@ -84,13 +84,13 @@ impl Rig {
             .collect()
     }
 
-    pub fn inputs(&self) -> InputImage<&[u8]> {
+    pub(crate) fn inputs(&self) -> InputImage<&[u8]> {
         InputImage::new_checked(self.device.inputs(), self.device.layout()).unwrap()
     }
 }
 
 /// Writes an output image by hand.
-pub fn outputs_with(
+pub(crate) fn outputs_with(
     device: &Device,
     tx_counter: u16,
     rx_counter: u16,
@@ -111,6 +111,6 @@ pub fn outputs_with(
     buffer
 }
 
-pub fn inputs_of(device: &Device) -> InputImage<&[u8]> {
+pub(crate) fn inputs_of(device: &Device) -> InputImage<&[u8]> {
     InputImage::new_checked(device.inputs(), device.layout()).unwrap()
 }

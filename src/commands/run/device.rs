@@ -16,7 +16,7 @@ use super::{finish, Plan};
 use crate::cli::{BusArg, IutOptions, RealTimeOptions};
 use crate::commands::resolve_iut;
 
-pub fn run(
+pub(crate) fn run(
     catalogue: &Catalogue,
     iut: &IutOptions,
     plan: &Plan<Options>,
@@ -46,7 +46,7 @@ pub fn run(
 
 /// Runs a plan: the lockstep on each profile, then the Gherkin scenarios, and
 /// judges every requirement once over all of them.
-pub fn execute(catalogue: &Catalogue, kind: &IutKind, plan: &Plan<Options>) -> RunReport {
+pub(crate) fn execute(catalogue: &Catalogue, kind: &IutKind, plan: &Plan<Options>) -> RunReport {
     let options = &plan.options;
     let started = std::time::Instant::now();
     let meta = RunMeta::new(
@@ -104,7 +104,7 @@ fn describe_bus(bus: &BusChoice) -> String {
 
 /// The bus the command line chose, with its real-time options.
 #[cfg_attr(not(feature = "socketcan"), allow(unused_variables))]
-pub fn bus_choice(bus: &BusArg, real_time: &RealTimeOptions) -> BusChoice {
+pub(crate) fn bus_choice(bus: &BusArg, real_time: &RealTimeOptions) -> BusChoice {
     match bus {
         BusArg::Sim => BusChoice::Sim,
         #[cfg(feature = "socketcan")]

@@ -4,8 +4,8 @@
 //! per requirement × profile, and reported. What differs between the sides
 //! is in `device` and `plc`; everything else is here, once.
 
-pub mod device;
-pub mod plc;
+pub(crate) mod device;
+pub(crate) mod plc;
 mod progress;
 
 use std::path::Path;
@@ -18,10 +18,10 @@ use canif_harness::verdict::NotRunReason;
 use canif_harness::GherkinRun;
 use canif_spec::{Catalogue, Profile, ReqId};
 
-pub use progress::Progress;
+pub(crate) use progress::Progress;
 
 /// A run of one side, checked before anything starts.
-pub struct Plan<'c, S> {
+pub(crate) struct Plan<'c, S> {
     pub profiles: Vec<&'c Profile>,
     pub options: S,
     pub product: Option<Product>,
@@ -31,7 +31,7 @@ pub struct Plan<'c, S> {
 
 impl<'c, S: Side> Plan<'c, S> {
     /// The plan, or the exit code of feature files that do not parse (said on stderr).
-    pub fn new(
+    pub(crate) fn new(
         profiles: Vec<&'c Profile>,
         options: S,
         product: Option<Product>,
@@ -69,7 +69,7 @@ impl<'c, S: Side> Plan<'c, S> {
     }
 
     /// An unknown requirement or a selection that matches nothing is a usage error.
-    pub fn check_selection(&self, catalogue: &Catalogue) -> Result<(), ExitCode> {
+    pub(crate) fn check_selection(&self, catalogue: &Catalogue) -> Result<(), ExitCode> {
         let selection = self.options.selection();
         for id in &selection.requirements {
             if catalogue.requirement(id).is_none() {
@@ -214,7 +214,7 @@ impl<'c, S: Side> Plan<'c, S> {
 }
 
 /// `canif list scenarios`: every check a run of these profiles can select.
-pub fn list_scenarios<S: Side>(
+pub(crate) fn list_scenarios<S: Side>(
     catalogue: &Catalogue,
     names: &[String],
     options: S,
@@ -235,7 +235,7 @@ pub fn list_scenarios<S: Side>(
 }
 
 /// The profiles named on the command line (`all`, or names), or the exit code of a usage error.
-pub fn profiles<'c>(
+pub(crate) fn profiles<'c>(
     catalogue: &'c Catalogue,
     names: &[String],
 ) -> Result<Vec<&'c Profile>, ExitCode> {
@@ -258,7 +258,7 @@ pub fn profiles<'c>(
 }
 
 /// Writes the reports and says the verdict: each failing requirement in one line.
-pub fn finish(catalogue: &Catalogue, report: &RunReport, report_dir: &Path) -> ExitCode {
+pub(crate) fn finish(catalogue: &Catalogue, report: &RunReport, report_dir: &Path) -> ExitCode {
     if let Err(error) = report.write(catalogue, report_dir) {
         eprintln!(
             "cannot write the reports to {}: {error}",
@@ -291,7 +291,7 @@ pub fn finish(catalogue: &Catalogue, report: &RunReport, report_dir: &Path) -> E
 }
 
 /// `canif self-check`: both kill matrices, every fault of each side on every profile.
-pub fn self_check(catalogue: &Catalogue, seed: u64) -> ExitCode {
+pub(crate) fn self_check(catalogue: &Catalogue, seed: u64) -> ExitCode {
     let options = canif_harness::device::Options {
         cases: 2,
         generated_cycles: 150,

@@ -14,7 +14,7 @@ use canif_spec::{Catalogue, Side};
 use super::{finish, Plan};
 
 /// The master models named on the command line (all when none), or the exit code of a usage error.
-pub fn masters(names: &[String]) -> Result<Vec<Master>, ExitCode> {
+pub(crate) fn masters(names: &[String]) -> Result<Vec<Master>, ExitCode> {
     if names.is_empty() {
         return Ok(Master::ALL.to_vec());
     }
@@ -32,7 +32,7 @@ pub fn masters(names: &[String]) -> Result<Vec<Master>, ExitCode> {
 
 /// The bus of `--side plc`: the simulated one, or one SocketCAN interface
 /// that the played device's controller and the other nodes share.
-pub fn client_bus(bus: &BusChoice) -> Result<ClientBus, ExitCode> {
+pub(crate) fn client_bus(bus: &BusChoice) -> Result<ClientBus, ExitCode> {
     match bus {
         BusChoice::Sim => Ok(ClientBus::Sim),
         #[cfg(feature = "socketcan")]
@@ -56,7 +56,7 @@ pub fn client_bus(bus: &BusChoice) -> Result<ClientBus, ExitCode> {
     }
 }
 
-pub fn run(
+pub(crate) fn run(
     catalogue: &Catalogue,
     kind: &ClientKind,
     plan: &Plan<ClientOptions>,
@@ -69,7 +69,11 @@ pub fn run(
 }
 
 /// Every profile's client run and the `@plc` Gherkin scenarios, judged and put in one report.
-pub fn execute(catalogue: &Catalogue, kind: &ClientKind, plan: &Plan<ClientOptions>) -> RunReport {
+pub(crate) fn execute(
+    catalogue: &Catalogue,
+    kind: &ClientKind,
+    plan: &Plan<ClientOptions>,
+) -> RunReport {
     let options = &plan.options;
     let started = std::time::Instant::now();
     let meta = RunMeta {

@@ -7,7 +7,7 @@ use canif_harness::run::ProfileRun;
 use canif_harness::{Outcome, ScenarioRun};
 use canif_spec::{Catalogue, Profile};
 
-pub struct Progress<'a> {
+pub(crate) struct Progress<'a> {
     n: usize,
     count: usize,
     profile: &'a str,
@@ -16,7 +16,7 @@ pub struct Progress<'a> {
 }
 
 impl<'a> Progress<'a> {
-    pub fn new(n: usize, count: usize, profile: &'a str) -> Self {
+    pub(crate) fn new(n: usize, count: usize, profile: &'a str) -> Self {
         Progress {
             n,
             count,
@@ -26,7 +26,7 @@ impl<'a> Progress<'a> {
         }
     }
 
-    pub fn scenario(&mut self, run: &ScenarioRun) {
+    pub(crate) fn scenario(&mut self, run: &ScenarioRun) {
         self.done += 1;
         if self.terminal {
             eprint!(
@@ -42,7 +42,13 @@ impl<'a> Progress<'a> {
     }
 
     /// The profile's line; `unit`: what its cycles are (device or task cycles).
-    pub fn done(self, result: &ProfileRun, catalogue: &Catalogue, profile: &Profile, unit: &str) {
+    pub(crate) fn done(
+        self,
+        result: &ProfileRun,
+        catalogue: &Catalogue,
+        profile: &Profile,
+        unit: &str,
+    ) {
         if self.terminal {
             eprint!("\r\x1b[2K");
         }

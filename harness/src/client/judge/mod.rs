@@ -15,7 +15,10 @@ use canif_spec::{req_ids, ReqId};
 use super::master::NEIGHBOUR_PATTERN;
 
 mod rx;
+mod tx;
+
 use rx::RxBatch;
+use tx::TxBatch;
 
 pub const TX_REQUEST: &[ReqId] = req_ids!["CL-TX-001"];
 pub const TX_UNTOUCHED: &[ReqId] = req_ids!["CL-TX-002"];
@@ -53,14 +56,6 @@ fn breach(
         expected: expected.into(),
         actual: actual.into(),
     })
-}
-
-/// A batch the client wrote and the device has not acknowledged in its view.
-#[derive(Debug, Clone, PartialEq, Eq)]
-struct TxBatch {
-    counter: u16,
-    count: u16,
-    slots: Vec<u8>,
 }
 
 /// One task as the judge sees it.
@@ -349,183 +344,6 @@ impl Judge {
         Ok(())
     }
 
-    fn judge_tx(
-        &mut self,
-        inputs: &InputImage<&[u8]>,
-        before: &OutputImage<&[u8]>,
-        after: &OutputImage<&[u8]>,
-    ) -> Result<(), Breach> {
-        if self
-            .pending
-            .as_ref()
-            .is_some_and(|p| p.counter == inputs.tx_counter())
-        {
-            self.pending = None;
-        }
-        // A restarted program may write a new batch under the counter the
-        // last one had: a new batch all the same, if one the device cannot see.
-        let changed = after.tx_counter() != before.tx_counter()
-            || (self.after_plc_restart && tx_batch(after) != tx_batch(before));
-        if let Some(pending) = &self.pending {
-            if !pending.is_in(after) {
-                let now = tx_batch(after);
-                let what = if changed {
-                    "a new batch before the last was acknowledged"
-                } else {
-                    "the Tx messages or NoOfTxMessages of an unacknowledged batch"
-                };
-                return breach(
-                    TX_UNTOUCHED,
-                    what,
-                    format!("TxCounter {} unchanged", pending.counter),
-                    format!("TxCounter {}, NoOfTxMessages {}", now.counter, now.count),
-                );
-            }
-            return Ok(());
-        }
-        if !changed {
-            return Ok(());
-        }
-        let count = after.no_of_tx_messages();
-        if self.restarted && count == 0 {
-            return Ok(()); // a restarted program's first image: a batch of nothing
-        }
-        if !handshake::ready_to_send(before.tx_counter(), inputs.tx_counter()) && !self.restarted {
-            return breach(
-                TX_REQUEST,
-                "a new batch while the counters differ",
-                format!(
-                    "Outputs.TxCounter {} = Inputs.TxCounter {}",
-                    before.tx_counter(),
-                    inputs.tx_counter()
-                ),
-                "a new batch",
-            );
-        }
-        let next = handshake::next(inputs.tx_counter());
-        if after.tx_counter() != next {
-            return breach(
-                TX_REQUEST,
-                "Outputs.TxCounter of a new batch",
-                format!("Inputs.TxCounter + 1 = {next}"),
-                after.tx_counter().to_string(),
-            );
-        }
-        if usize::from(count) > self.layout.tx_slots {
-            return breach(
-                TX_COUNT,
-                "NoOfTxMessages",
-                format!("at most the {} Tx slots", self.layout.tx_slots),
-                count.to_string(),
-            );
-        }
-        let mut numbers = Vec::new();
-        for slot in 0..usize::from(count) {
-            let view = after.tx_message(slot).expect("slot within the slots");
-            let request = self.requests.get(self.batched + slot);
-            let written = MessageRepr::parse(&view);
-            match (written, request) {
-                (Ok(written), Some(request)) if written.frame == request.frame => {
-                    numbers.push(written.transaction_number)
-                }
-                (_, None) => {
-                    return breach(
-                        TX_COUNT,
-                        format!("Tx message {slot}"),
-                        format!("{} requests to send", self.requests.len() - self.batched),
-                        format!("NoOfTxMessages {count}"),
-                    )
-                }
-                (written, Some(request)) => {
-                    let sent_before = written.as_ref().is_ok_and(|w| {
-                        self.requests[..self.batched + slot]
-                            .iter()
-                            .any(|r| r.frame == w.frame)
-                    });
-                    let actual = match &written {
-                        Ok(w) => w.frame.to_string(),
-                        Err(e) => e.to_string(),
-                    };
-                    let ids = if sent_before { TX_ONCE } else { TX_ENCODING };
-                    return breach(
-                        ids,
-                        format!("Tx message {slot}"),
-                        request.frame.to_string(),
-                        actual,
-                    );
-                }
-            }
-        }
-        if self.layout.transaction_number {
-            self.judge_numbers(&numbers)?;
-        }
-        self.on_bus.resize(self.on_bus.len() + numbers.len(), false);
-        self.numbers.extend(numbers);
-        if self.after_plc_restart && after.tx_counter() == self.device_tx {
-            // A restarted program cannot know the counter the device last
-            // took; a batch with that counter shows the device no change
-            // (G1), so it may never be sent (P3, an assumption).
-            self.may_lose
-                .extend(self.batched..self.batched + usize::from(count));
-        } else {
-            self.after_plc_restart = false;
-        }
-        self.batched += usize::from(count);
-        self.pending = Some(tx_batch(after));
-        Ok(())
-    }
-
-    /// CL-TN-002: a message is told sent once it is on the bus, once, in
-    /// the order sent. Skipping some is no breach: the client may tell only
-    /// of the last one Inputs.TransactionNumber names.
-    fn judge_sent(&mut self, sent: &[u16]) -> Result<(), Breach> {
-        for number in sent {
-            let at = (self.reported..self.numbers.len()).find(|&i| self.numbers[i] == *number);
-            let Some(at) = at else {
-                let actual = if self.numbers[..self.reported].contains(number) {
-                    "told again, or out of order"
-                } else {
-                    "no message handed over carries it"
-                };
-                return breach(
-                    SENT_REPORTS,
-                    format!("the message with transaction number {number} told sent"),
-                    "a message handed over and not yet told sent",
-                    actual,
-                );
-            };
-            if !self.on_bus[at] && !self.lost_in_restart.contains(&at) {
-                return breach(
-                    SENT_REPORTS,
-                    format!("the message with transaction number {number} told sent"),
-                    "on the bus: Inputs.TransactionNumber names it or a later message",
-                    format!(
-                        "not sent yet ({} of {} handed over are on the bus)",
-                        self.sent, self.batched
-                    ),
-                );
-            }
-            self.reported = at + 1;
-        }
-        Ok(())
-    }
-
-    /// CL-TN-001: numbers other than 0, unique among the messages in flight.
-    fn judge_numbers(&self, numbers: &[u16]) -> Result<(), Breach> {
-        let in_flight = &self.numbers[self.sent.min(self.batched)..];
-        for (slot, number) in numbers.iter().enumerate() {
-            if *number == 0 || in_flight.contains(number) || numbers[..slot].contains(number) {
-                return breach(
-                    TRANSACTION_NUMBERS,
-                    format!("the transaction number of Tx message {slot}"),
-                    "not 0 and not carried by another message in flight",
-                    number.to_string(),
-                );
-            }
-        }
-        Ok(())
-    }
-
     /// After the last task: what never arrived. `device_queued_rx`: messages
     /// the device received and has not entered in the image.
     pub fn finish(&self, device_queued_rx: usize) -> Result<(), Breach> {
@@ -578,35 +396,6 @@ impl Judge {
             );
         }
         Ok(())
-    }
-}
-
-impl TxBatch {
-    /// The image still holds this batch: counter, count and slots unchanged.
-    fn is_in(&self, image: &OutputImage<&[u8]>) -> bool {
-        let mut slots = self.slots.chunks(image.layout().tx_message.size);
-        image.tx_counter() == self.counter
-            && image.no_of_tx_messages() == self.count
-            && (0..usize::from(self.count)).all(|slot| {
-                match (image.tx_message(slot), slots.next()) {
-                    (Some(view), Some(kept)) => view.as_bytes() == kept,
-                    (None, None) => true,
-                    _ => false,
-                }
-            })
-    }
-}
-
-fn tx_batch(image: &OutputImage<&[u8]>) -> TxBatch {
-    let count = image.no_of_tx_messages();
-    let slots = (0..usize::from(count))
-        .filter_map(|slot| image.tx_message(slot))
-        .flat_map(|view| view.as_bytes().to_vec())
-        .collect();
-    TxBatch {
-        counter: image.tx_counter(),
-        count,
-        slots,
     }
 }
 
