@@ -161,6 +161,27 @@ pub(crate) enum Suite {
     Canopen,
 }
 
+/// Flags of `canif run` that only one side has: given with the other side,
+/// they are refused as a conflict, never ignored.
+pub(crate) fn side_conflicts(
+    side: SideArg,
+    device_only: &[(bool, &str)],
+    plc_only: &[(bool, &str)],
+) -> Result<(), clap::Error> {
+    use clap::CommandFactory;
+    let (given, other) = match side {
+        SideArg::Plc => (device_only, "the device side, not to --side plc"),
+        SideArg::Device => (plc_only, "--side plc"),
+    };
+    match given.iter().find(|(present, _)| *present) {
+        Some((_, flag)) => Err(Cli::command().error(
+            clap::error::ErrorKind::ArgumentConflict,
+            format!("{flag} applies to {other}"),
+        )),
+        None => Ok(()),
+    }
+}
+
 #[derive(Subcommand)]
 pub(crate) enum Command {
     /// Certify an implementation against the model, per profile, on the
@@ -175,9 +196,9 @@ pub(crate) enum Command {
         seed: u64,
         #[command(flatten)]
         product: ProductOptions,
-        /// Generated scenarios per interface.
-        #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u64).range(0..=10_000))]
-        cases: u64,
+        /// Generated scenarios per interface [default: 4].
+        #[arg(long, value_parser = clap::value_parser!(u64).range(0..=10_000))]
+        cases: Option<u64>,
         /// Virtual seconds of generated traffic per scenario (a soak run).
         #[arg(long, value_parser = seconds)]
         duration: Option<f64>,

@@ -86,19 +86,17 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                 scenarios: scenario,
                 requirements: requirement,
             };
-            if side == SideArg::Plc {
-                // What only the device side does is refused, not ignored.
-                let device_only = [
-                    (suite == Suite::Canopen, "--suite canopen"),
-                    (cases != 4, "--cases"),
-                    (duration.is_some(), "--duration"),
-                    (trace.is_some(), "--trace"),
-                    (no_fail_fast, "--no-fail-fast"),
-                ];
-                if let Some((_, flag)) = device_only.iter().find(|(given, _)| *given) {
-                    eprintln!("{flag} applies to the device side, not to --side plc");
-                    return Ok(ExitCode::from(2));
-                }
+            let device_only = [
+                (suite == Suite::Canopen, "--suite canopen"),
+                (cases.is_some(), "--cases"),
+                (duration.is_some(), "--duration"),
+                (trace.is_some(), "--trace"),
+                (no_fail_fast, "--no-fail-fast"),
+            ];
+            let plc_only = [(!master.is_empty(), "--master")];
+            if let Err(conflict) = cli::side_conflicts(side, &device_only, &plc_only) {
+                let _ = conflict.print();
+                return Ok(ExitCode::from(2));
             }
             if suite == Suite::Canopen {
                 let canopen = device::CanopenRun {
@@ -141,16 +139,16 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                     Err(code) => code,
                 });
             }
-            if !master.is_empty() {
-                eprintln!("--master applies to --side plc");
-                return Ok(ExitCode::from(2));
-            }
             let started = std::time::SystemTime::now()
                 .duration_since(std::time::UNIX_EPOCH)
                 .unwrap_or_default();
             let options = canif_harness::device::Options {
                 seed,
-                cases: if duration.is_some() { 1 } else { cases },
+                cases: if duration.is_some() {
+                    1
+                } else {
+                    cases.unwrap_or(4)
+                },
                 generated_cycles: duration.map_or(200, |s| (s * 1000.0).max(1.0) as u64),
                 counter_wrap: !no_counter_wrap && bus.is_sim(),
                 trace_dir: trace,

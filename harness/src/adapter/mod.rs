@@ -2,11 +2,13 @@
 //! under test in another process, in any language, joins the suite.
 //!
 //! - [`protocol`]: the messages, as serde types, written once.
-//! - [`client`]: the harness's side — an IUT process behind the [`crate::device::Iut`] trait.
+//! - [`process`]: an implementation in another process, in either role.
+//! - [`exec_iut`]: the harness's side of the device role — an IUT process behind the [`crate::device::Iut`] trait.
 //! - [`server`]: the device's side — an in-process IUT served over stdin/stdout.
 
-pub mod client;
 #[cfg(feature = "socketcan")]
 pub mod device_bus;
+pub mod exec_iut;
+pub mod process;
 pub mod protocol;
 pub mod server;

@@ -9,14 +9,14 @@ use canif_model::config::InterfaceConfig;
 use canif_model::image::{ImageLayout, MessageRepr};
 
 use super::{Client, IutError, TaskAnswer, TaskIo};
-use crate::adapter::client::ExecIut;
-use crate::adapter::protocol::{Answer, Config, Hex, Request, WireMessage};
+use crate::adapter::process::AdapterProcess;
+use crate::adapter::protocol::{Answer, Config, Hex, Request, Tasked, WireMessage};
 
 /// The client role's protocol version.
 pub const CLIENT_PROTOCOL: u64 = 1;
 
 pub struct ExecClient {
-    process: ExecIut,
+    process: AdapterProcess,
     layout: ImageLayout,
 }
 
@@ -28,14 +28,12 @@ impl ExecClient {
         config: &InterfaceConfig,
         layout: ImageLayout,
     ) -> Result<Self, IutError> {
-        let mut process = ExecIut::spawn(command, timeout, true)?;
+        let mut process = AdapterProcess::spawn(command, timeout, true)?;
         let request = Request::Start {
             protocol: CLIENT_PROTOCOL,
             config: Config::new(config, &layout),
         };
-        let Answer::Started { protocol } = process.exchange(&request, "started")? else {
-            unreachable!("exchange returns the expected type");
-        };
+        let protocol = process.exchange(&request, Answer::STARTED)?;
         if protocol != CLIENT_PROTOCOL {
             return Err(process.fail(format!(
                 "speaks client protocol version {protocol} (this harness speaks {CLIENT_PROTOCOL})"
@@ -53,15 +51,12 @@ impl Client for ExecClient {
             outputs: Hex(io.outputs[..size].to_vec()),
             requests: io.requests.iter().map(WireMessage::from).collect(),
         };
-        let Answer::Tasked {
+        let Tasked {
             outputs,
             delivered,
             refused,
             sent,
-        } = self.process.exchange(&request, "tasked")?
-        else {
-            unreachable!("exchange returns the expected type");
-        };
+        } = self.process.exchange(&request, Answer::TASKED)?;
         if outputs.0.len() != size {
             return Err(self.process.fail(format!(
                 "answered an output image of {} bytes; the interface's is {size}",

@@ -163,6 +163,94 @@ impl Answer {
             message: message.into(),
         }
     }
+
+    /// `configured`: the version agreed, accepted or not, and why not.
+    pub const CONFIGURED: Expected<(u64, bool, Option<String>)> = Expected {
+        name: "configured",
+        take: |answer| match answer {
+            Answer::Configured {
+                protocol,
+                accepted,
+                reason,
+            } => Ok((protocol, accepted, reason)),
+            other => Err(other),
+        },
+    };
+    /// `inputs`: the input image of a version 1 cycle.
+    pub const INPUTS: Expected<Hex> = Expected {
+        name: "inputs",
+        take: |answer| match answer {
+            Answer::Inputs { inputs } => Ok(inputs),
+            other => Err(other),
+        },
+    };
+    pub const OK: Expected<()> = Expected {
+        name: "ok",
+        take: |answer| match answer {
+            Answer::Ok => Ok(()),
+            other => Err(other),
+        },
+    };
+    /// `transmit`: the frame the controller starts, and when a held one is due.
+    pub const TRANSMIT: Expected<(Option<Transmitted>, Option<Nanos>)> = Expected {
+        name: "transmit",
+        take: |answer| match answer {
+            Answer::Transmit { frame, next_ns } => Ok((frame, next_ns)),
+            other => Err(other),
+        },
+    };
+    /// `stepped`: the input image and the plan of a version 2 step.
+    pub const STEPPED: Expected<(Hex, Vec<PlannedFrame>)> = Expected {
+        name: "stepped",
+        take: |answer| match answer {
+            Answer::Stepped { inputs, plan } => Ok((inputs, plan)),
+            other => Err(other),
+        },
+    };
+    /// `started`: the client role's version the program speaks.
+    pub const STARTED: Expected<u64> = Expected {
+        name: "started",
+        take: |answer| match answer {
+            Answer::Started { protocol } => Ok(protocol),
+            other => Err(other),
+        },
+    };
+    /// `tasked`: outputs, delivered messages, refused requests, messages told sent.
+    pub const TASKED: Expected<Tasked> = Expected {
+        name: "tasked",
+        take: |answer| match answer {
+            Answer::Tasked {
+                outputs,
+                delivered,
+                refused,
+                sent,
+            } => Ok(Tasked {
+                outputs,
+                delivered,
+                refused,
+                sent,
+            }),
+            other => Err(other),
+        },
+    };
+}
+
+/// The one answer the harness waits for after a request: its name on the
+/// wire, and how its fields are taken out (any other answer is given back,
+/// for the error that names it).
+#[derive(Clone, Copy)]
+pub struct Expected<T> {
+    pub name: &'static str,
+    pub take: fn(Answer) -> Result<T, Answer>,
+}
+
+/// The fields of a `tasked` answer.
+#[derive(Debug, Clone)]
+pub struct Tasked {
+    pub outputs: Hex,
+    pub delivered: Vec<WireMessage>,
+    pub refused: Vec<usize>,
+    pub sent: Vec<u16>,
 }
 
 #[cfg(test)]

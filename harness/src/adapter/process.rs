@@ -1,11 +1,10 @@
-//! The harness's side of the adapter protocol: an implementation under test in
-//! another process, in any language, one JSON object per line on its stdin
-//! and stdout; its stderr is its log.
+//! An implementation under test in another process, in any language: one
+//! JSON object per line on its stdin and stdout, its stderr its log. One
+//! type serves both roles of the adapter protocol.
 //!
-//! Whatever the process does — exit, hang, print garbage, speak another
-//! protocol version, return an image of the wrong size — becomes an error
-//! naming what happened and the last lines of its stderr; the harness never
-//! waits longer than the per-exchange timeout.
+//! Whatever the process does — exit, hang, print garbage, answer out of
+//! turn — becomes an error naming what happened and the last lines of its
+//! stderr; the harness never waits longer than the per-exchange timeout.
 
 use std::collections::VecDeque;
 use std::io::{BufRead, BufReader, Write};
@@ -13,17 +12,7 @@ use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use canif_model::config::{Capabilities, InterfaceConfig};
-use canif_model::frame::Frame;
-use canif_model::image::ImageLayout;
-use canif_model::info_data::ControllerStatus;
-use canif_model::Nanos;
-
-use super::protocol::{
-    Answer, BusEvent, Caps, Config, Hex, OwnedBus, PlannedFrame, Request, SteppedLine, Transmitted,
-    WireFrame, PROTOCOL_VERSION,
-};
-use crate::device::iut::{InvalidFrame, Iut, Planned, Transmit};
+use super::protocol::{Answer, Expected, Request};
 use crate::error::IutError;
 
 /// How many lines of the IUT's stderr an error shows.
@@ -134,39 +123,21 @@ fn share_cpu() {
     }
 }
 
-/// How an IUT answered a configuration.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum Configured {
-    Accepted,
-    /// A legitimate answer, judged by the refusal grid.
-    Refused(String),
-}
-
-/// A running IUT process, in a process group of its own: whatever it starts
-/// ends with it.
-pub struct ExecIut {
+/// An implementation under test in another process, in a process group of
+/// its own (whatever it starts ends with it), in either role: a device
+/// ([`super::exec_iut::ExecIut`]) or a client ([`crate::client::exec`]).
+pub struct AdapterProcess {
     command: String,
     child: Child,
     stdin: Option<ChildStdin>,
     lines: LineReader,
     stderr: Arc<Mutex<VecDeque<String>>>,
     timeout: Duration,
-    input_size: usize,
-    /// When a held frame (Distributed Clocks) becomes due, as the IUT said.
-    next_release: Option<Nanos>,
     /// The first failure; every later call reports it.
     failed: Option<String>,
-    /// The protocol version `configure` agreed.
-    version: u64,
-    /// Protocol 2: what happened on the bus since the last step.
-    events: Vec<BusEvent>,
-    /// Protocol 2: the frames the IUT will start next, and from when.
-    plan: VecDeque<Planned>,
-    /// Protocol 2: a frame of the plan is on the wire.
-    on_wire: bool,
 }
 
-impl ExecIut {
+impl AdapterProcess {
     /// Starts `command` (through `sh -c`) in a new process group; with
     /// `same_cpu`, the calling thread and the IUT share the CPU the thread is on.
     pub fn spawn(command: &str, timeout: Duration, same_cpu: bool) -> Result<Self, IutError> {
@@ -207,20 +178,14 @@ impl ExecIut {
             }
         });
         let stdin = child.stdin.take();
-        Ok(ExecIut {
+        Ok(AdapterProcess {
             command: command.to_string(),
             child,
             stdin,
             lines,
             stderr: log,
             timeout,
-            input_size: 0,
-            next_release: None,
             failed: None,
-            version: 1,
-            events: Vec::new(),
-            plan: VecDeque::new(),
-            on_wire: false,
         })
     }
 
@@ -259,23 +224,24 @@ impl ExecIut {
         }
     }
 
+    /// What broke, with the last lines of its stderr; every later call reports it too.
     pub(crate) fn fail(&mut self, what: String) -> IutError {
         let message = format!("IUT `{}`: {what}; {}", self.command, self.stderr_tail());
         IutError(self.failed.get_or_insert(message).clone())
     }
 
-    /// Sends one request and waits for the one-line answer of the expected type.
-    pub(crate) fn exchange(
+    /// Sends one request and waits for the one-line answer `expected`.
+    pub(crate) fn exchange<T>(
         &mut self,
         request: &Request,
-        expected: &str,
-    ) -> Result<Answer, IutError> {
+        expected: Expected<T>,
+    ) -> Result<T, IutError> {
         let line = self.exchange_line(request)?;
         self.answer_of(&line, expected)
     }
 
     /// Sends one request; its answer line, unread.
-    fn exchange_line(&mut self, request: &Request) -> Result<String, IutError> {
+    pub(crate) fn exchange_line(&mut self, request: &Request) -> Result<String, IutError> {
         if let Some(failure) = &self.failed {
             return Err(IutError(failure.clone()));
         }
@@ -325,8 +291,12 @@ impl ExecIut {
         Ok(line)
     }
 
-    /// The answer a line holds, of the expected type.
-    fn answer_of(&mut self, line: &str, expected: &str) -> Result<Answer, IutError> {
+    /// The answer `expected` a line holds.
+    pub(crate) fn answer_of<T>(
+        &mut self,
+        line: &str,
+        expected: Expected<T>,
+    ) -> Result<T, IutError> {
         // Straight into the typed answer; only a line that is not one is read
         // again, to say whether it is JSON at all.
         let answer =
@@ -340,60 +310,22 @@ impl ExecIut {
             Ok(answer) => answer,
             Err(what) => return Err(self.fail(format!("{what}: {}", truncate(line)))),
         };
-        match answer {
-            answer if answer.name() == expected => Ok(answer),
-            Answer::Error { message } => Err(self.fail(format!("reported an error: {message}"))),
-            other => Err(self.fail(format!(
-                "answered `{}` where `{expected}` was due: {}",
+        match (expected.take)(answer) {
+            Ok(fields) => Ok(fields),
+            Err(Answer::Error { message }) => {
+                Err(self.fail(format!("reported an error: {message}")))
+            }
+            Err(other) => Err(self.fail(format!(
+                "answered `{}` where `{}` was due: {}",
                 other.name(),
+                expected.name,
                 truncate(line)
             ))),
         }
     }
-
-    /// Offers a configuration; `Err`: the IUT failed (refusing is an answer).
-    pub fn configure(
-        &mut self,
-        caps: &Capabilities,
-        config: &InterfaceConfig,
-        bus: Option<&OwnedBus>,
-    ) -> Result<Configured, IutError> {
-        let layout = ImageLayout::new(config, caps.info_data);
-        // On a SocketCAN bus the IUT owns its CAN side: there is nothing to batch.
-        let offered = if bus.is_some() { 1 } else { PROTOCOL_VERSION };
-        let request = Request::Configure {
-            protocol: offered,
-            config: Config::new(config, &layout),
-            capabilities: Caps::from(caps),
-            bus: bus.cloned(),
-        };
-        let Answer::Configured {
-            protocol,
-            accepted,
-            reason,
-        } = self.exchange(&request, "configured")?
-        else {
-            unreachable!("exchange returns the expected type");
-        };
-        if !(1..=offered).contains(&protocol) {
-            return Err(self.fail(format!(
-                "speaks protocol version {protocol} (this harness offered 1 to {offered})"
-            )));
-        }
-        self.version = protocol;
-        self.events.clear();
-        self.plan.clear();
-        self.on_wire = false;
-        self.input_size = layout.input_size();
-        Ok(if accepted {
-            Configured::Accepted
-        } else {
-            Configured::Refused(reason.unwrap_or_else(|| "refused".into()))
-        })
-    }
 }
 
-impl Drop for ExecIut {
+impl Drop for AdapterProcess {
     /// `bye` and end of input tell a well-behaved IUT to leave; then its
     /// whole process group ends, whatever it started.
     fn drop(&mut self) {
@@ -414,159 +346,5 @@ fn truncate(line: &str) -> String {
         format!("{}…", line.chars().take(200).collect::<String>())
     } else {
         line.to_string()
-    }
-}
-
-impl ExecIut {
-    /// Protocol 2: the cycle, with the bus events since the last one; the new
-    /// plan replaces the old (frames not started are in it again).
-    fn step(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError> {
-        let request = Request::Step {
-            now_ns: now,
-            outputs: Hex(outputs.to_vec()),
-            events: std::mem::take(&mut self.events),
-        };
-        let line = self.exchange_line(&request)?;
-        let (inputs, plan) = match serde_json::from_str::<SteppedLine>(&line) {
-            Ok(stepped) => (stepped.inputs, stepped.plan),
-            Err(_) => match self.answer_of(&line, "stepped")? {
-                Answer::Stepped { inputs, plan } => (inputs, plan),
-                _ => unreachable!("answer_of returns the expected type"),
-            },
-        };
-        let mut planned = VecDeque::with_capacity(plan.len());
-        for PlannedFrame {
-            frame,
-            invalid,
-            not_before_ns,
-        } in plan
-        {
-            let frame = match (frame, invalid) {
-                (None, Some(invalid)) => Err(InvalidFrame(invalid)),
-                (Some(wire), None) => match wire.check() {
-                    Ok(()) => Frame::try_from(&wire).map_err(InvalidFrame),
-                    Err(lie) => {
-                        return Err(self.fail(format!("answered `step` with a broken frame: {lie}")))
-                    }
-                },
-                _ => {
-                    return Err(self.fail(
-                        "answered `step` with a plan entry that is not exactly one of \"frame\" and \"invalid\""
-                            .into(),
-                    ))
-                }
-            };
-            planned.push_back((frame, not_before_ns));
-        }
-        self.plan = planned;
-        Ok(inputs.0)
-    }
-}
-
-impl Iut for ExecIut {
-    fn cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError> {
-        let inputs = if self.version >= 2 {
-            self.step(outputs, now)?
-        } else {
-            let request = Request::Cycle {
-                now_ns: now,
-                outputs: Hex(outputs.to_vec()),
-            };
-            let Answer::Inputs {
-                inputs: Hex(inputs),
-            } = self.exchange(&request, "inputs")?
-            else {
-                unreachable!("exchange returns the expected type");
-            };
-            inputs
-        };
-        if inputs.len() != self.input_size {
-            return Err(self.fail(format!(
-                "returned an input image of {} bytes; the layout has {}",
-                inputs.len(),
-                self.input_size
-            )));
-        }
-        Ok(inputs)
-    }
-
-    fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) -> Result<(), IutError> {
-        if self.version >= 2 {
-            self.events.push(BusEvent::Received {
-                frame: WireFrame::from(frame),
-                end_ns: end_of_reception,
-            });
-            return Ok(());
-        }
-        let request = Request::Receive {
-            frame: WireFrame::from(frame),
-            end_ns: end_of_reception,
-        };
-        self.exchange(&request, "ok").map(|_| ())
-    }
-
-    fn poll_transmit(&mut self, now: Nanos) -> Result<Transmit, IutError> {
-        if self.version >= 2 {
-            if self.on_wire {
-                return Ok(None);
-            }
-            return Ok(match self.plan.front() {
-                Some((_, not_before)) if *not_before <= now => {
-                    let (frame, _) = self.plan.pop_front().expect("a front");
-                    self.on_wire = true;
-                    self.events.push(BusEvent::Started { at_ns: now });
-                    Some(frame)
-                }
-                _ => None,
-            });
-        }
-        let answer = self.exchange(&Request::PollTransmit { now_ns: now }, "transmit")?;
-        let Answer::Transmit { frame, next_ns } = answer else {
-            unreachable!("exchange returns the expected type");
-        };
-        self.next_release = next_ns;
-        match frame {
-            None => Ok(None),
-            Some(Transmitted::Invalid(frame)) => Ok(Some(Err(InvalidFrame(frame.invalid)))),
-            Some(Transmitted::Frame(wire)) => match wire.check() {
-                Ok(()) => Ok(Some(Frame::try_from(&wire).map_err(InvalidFrame))),
-                Err(lie) => Err(self.fail(format!(
-                    "answered `poll_transmit` with a broken frame: {lie}"
-                ))),
-            },
-        }
-    }
-
-    fn poll_timeout(&self) -> Option<Nanos> {
-        if self.version >= 2 {
-            return self
-                .plan
-                .front()
-                .filter(|_| !self.on_wire)
-                .map(|(_, not_before)| *not_before);
-        }
-        self.next_release
-    }
-
-    fn transmit_complete(&mut self) -> Result<(), IutError> {
-        if self.version >= 2 {
-            self.events.push(BusEvent::Completed);
-            self.on_wire = false;
-            return Ok(());
-        }
-        self.exchange(&Request::TransmitComplete, "ok").map(|_| ())
-    }
-
-    fn controller_status(&mut self, status: &ControllerStatus) -> Result<(), IutError> {
-        if self.version >= 2 {
-            self.events.push(BusEvent::Status {
-                status: status.into(),
-            });
-            return Ok(());
-        }
-        let request = Request::ControllerStatus {
-            status: status.into(),
-        };
-        self.exchange(&request, "ok").map(|_| ())
     }
 }

@@ -1,0 +1,241 @@
+//! The harness's side of the adapter protocol's device role: an IUT in
+//! another process ([`AdapterProcess`]) behind the [`crate::device::Iut`] trait.
+//! An image of the wrong size or a frame no controller can send is an error
+//! naming it, as is anything the process itself does wrong.
+
+use std::collections::VecDeque;
+use std::time::Duration;
+
+use canif_model::config::{Capabilities, InterfaceConfig};
+use canif_model::frame::Frame;
+use canif_model::image::ImageLayout;
+use canif_model::info_data::ControllerStatus;
+use canif_model::Nanos;
+
+use super::process::AdapterProcess;
+use super::protocol::{
+    Answer, BusEvent, Caps, Config, Hex, OwnedBus, PlannedFrame, Request, SteppedLine, Transmitted,
+    WireFrame, PROTOCOL_VERSION,
+};
+use crate::device::iut::{InvalidFrame, Iut, Planned, Transmit};
+use crate::error::IutError;
+
+/// How an IUT answered a configuration.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Configured {
+    Accepted,
+    /// A legitimate answer, judged by the refusal grid.
+    Refused(String),
+}
+
+/// A device under test in another process.
+pub struct ExecIut {
+    process: AdapterProcess,
+    input_size: usize,
+    /// When a held frame (Distributed Clocks) becomes due, as the IUT said.
+    next_release: Option<Nanos>,
+    /// The protocol version `configure` agreed.
+    version: u64,
+    /// Protocol 2: what happened on the bus since the last step.
+    events: Vec<BusEvent>,
+    /// Protocol 2: the frames the IUT will start next, and from when.
+    plan: VecDeque<Planned>,
+    /// Protocol 2: a frame of the plan is on the wire.
+    on_wire: bool,
+}
+
+impl ExecIut {
+    /// Starts `command` (see [`AdapterProcess::spawn`]).
+    pub fn spawn(command: &str, timeout: Duration, same_cpu: bool) -> Result<Self, IutError> {
+        Ok(ExecIut {
+            process: AdapterProcess::spawn(command, timeout, same_cpu)?,
+            input_size: 0,
+            next_release: None,
+            version: 1,
+            events: Vec::new(),
+            plan: VecDeque::new(),
+            on_wire: false,
+        })
+    }
+
+    fn fail(&mut self, what: String) -> IutError {
+        self.process.fail(what)
+    }
+
+    /// Offers a configuration; `Err`: the IUT failed (refusing is an answer).
+    pub fn configure(
+        &mut self,
+        caps: &Capabilities,
+        config: &InterfaceConfig,
+        bus: Option<&OwnedBus>,
+    ) -> Result<Configured, IutError> {
+        let layout = ImageLayout::new(config, caps.info_data);
+        // On a SocketCAN bus the IUT owns its CAN side: there is nothing to batch.
+        let offered = if bus.is_some() { 1 } else { PROTOCOL_VERSION };
+        let request = Request::Configure {
+            protocol: offered,
+            config: Config::new(config, &layout),
+            capabilities: Caps::from(caps),
+            bus: bus.cloned(),
+        };
+        let (protocol, accepted, reason) = self.process.exchange(&request, Answer::CONFIGURED)?;
+        if !(1..=offered).contains(&protocol) {
+            return Err(self.fail(format!(
+                "speaks protocol version {protocol} (this harness offered 1 to {offered})"
+            )));
+        }
+        self.version = protocol;
+        self.events.clear();
+        self.plan.clear();
+        self.on_wire = false;
+        self.input_size = layout.input_size();
+        Ok(if accepted {
+            Configured::Accepted
+        } else {
+            Configured::Refused(reason.unwrap_or_else(|| "refused".into()))
+        })
+    }
+
+    /// Protocol 2: the cycle, with the bus events since the last one; the new
+    /// plan replaces the old (frames not started are in it again).
+    fn step(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError> {
+        let request = Request::Step {
+            now_ns: now,
+            outputs: Hex(outputs.to_vec()),
+            events: std::mem::take(&mut self.events),
+        };
+        let line = self.process.exchange_line(&request)?;
+        let (inputs, plan) = match serde_json::from_str::<SteppedLine>(&line) {
+            Ok(stepped) => (stepped.inputs, stepped.plan),
+            Err(_) => self.process.answer_of(&line, Answer::STEPPED)?,
+        };
+        let mut planned = VecDeque::with_capacity(plan.len());
+        for PlannedFrame {
+            frame,
+            invalid,
+            not_before_ns,
+        } in plan
+        {
+            let frame = match (frame, invalid) {
+                (None, Some(invalid)) => Err(InvalidFrame(invalid)),
+                (Some(wire), None) => match wire.check() {
+                    Ok(()) => Frame::try_from(&wire).map_err(InvalidFrame),
+                    Err(lie) => {
+                        return Err(self.fail(format!("answered `step` with a broken frame: {lie}")))
+                    }
+                },
+                _ => {
+                    return Err(self.fail(
+                        "answered `step` with a plan entry that is not exactly one of \"frame\" and \"invalid\""
+                            .into(),
+                    ))
+                }
+            };
+            planned.push_back((frame, not_before_ns));
+        }
+        self.plan = planned;
+        Ok(inputs.0)
+    }
+}
+
+impl Iut for ExecIut {
+    fn cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError> {
+        let inputs = if self.version >= 2 {
+            self.step(outputs, now)?
+        } else {
+            let request = Request::Cycle {
+                now_ns: now,
+                outputs: Hex(outputs.to_vec()),
+            };
+            self.process.exchange(&request, Answer::INPUTS)?.0
+        };
+        if inputs.len() != self.input_size {
+            return Err(self.fail(format!(
+                "returned an input image of {} bytes; the layout has {}",
+                inputs.len(),
+                self.input_size
+            )));
+        }
+        Ok(inputs)
+    }
+
+    fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) -> Result<(), IutError> {
+        if self.version >= 2 {
+            self.events.push(BusEvent::Received {
+                frame: WireFrame::from(frame),
+                end_ns: end_of_reception,
+            });
+            return Ok(());
+        }
+        let request = Request::Receive {
+            frame: WireFrame::from(frame),
+            end_ns: end_of_reception,
+        };
+        self.process.exchange(&request, Answer::OK)
+    }
+
+    fn poll_transmit(&mut self, now: Nanos) -> Result<Transmit, IutError> {
+        if self.version >= 2 {
+            if self.on_wire {
+                return Ok(None);
+            }
+            return Ok(match self.plan.front() {
+                Some((_, not_before)) if *not_before <= now => {
+                    let (frame, _) = self.plan.pop_front().expect("a front");
+                    self.on_wire = true;
+                    self.events.push(BusEvent::Started { at_ns: now });
+                    Some(frame)
+                }
+                _ => None,
+            });
+        }
+        let (frame, next_ns) = self
+            .process
+            .exchange(&Request::PollTransmit { now_ns: now }, Answer::TRANSMIT)?;
+        self.next_release = next_ns;
+        match frame {
+            None => Ok(None),
+            Some(Transmitted::Invalid(frame)) => Ok(Some(Err(InvalidFrame(frame.invalid)))),
+            Some(Transmitted::Frame(wire)) => match wire.check() {
+                Ok(()) => Ok(Some(Frame::try_from(&wire).map_err(InvalidFrame))),
+                Err(lie) => Err(self.fail(format!(
+                    "answered `poll_transmit` with a broken frame: {lie}"
+                ))),
+            },
+        }
+    }
+
+    fn poll_timeout(&self) -> Option<Nanos> {
+        if self.version >= 2 {
+            return self
+                .plan
+                .front()
+                .filter(|_| !self.on_wire)
+                .map(|(_, not_before)| *not_before);
+        }
+        self.next_release
+    }
+
+    fn transmit_complete(&mut self) -> Result<(), IutError> {
+        if self.version >= 2 {
+            self.events.push(BusEvent::Completed);
+            self.on_wire = false;
+            return Ok(());
+        }
+        self.process
+            .exchange(&Request::TransmitComplete, Answer::OK)
+    }
+
+    fn controller_status(&mut self, status: &ControllerStatus) -> Result<(), IutError> {
+        if self.version >= 2 {
+            self.events.push(BusEvent::Status {
+                status: status.into(),
+            });
+            return Ok(());
+        }
+        let request = Request::ControllerStatus {
+            status: status.into(),
+        };
+        self.process.exchange(&request, Answer::OK)
+    }
+}
