@@ -121,8 +121,9 @@ fn a_library_of_another_version_or_without_a_function_is_an_error() {
         (no_destroy, "has no `canif_destroy`"),
     ] {
         match (IutKind::Lib { path: library }).build(&caps, &config) {
-            Err(canif_harness::device::BuildError::Failed(reason)) => {
-                assert!(reason.contains(words), "{reason}")
+            Err(canif_harness::device::BuildError::Failed(broke)) => {
+                assert_eq!(broke.cause, canif_harness::error::IutCause::NotStarted);
+                assert!(broke.what.contains(words), "{broke}")
             }
             Err(other) => panic!("{other}"),
             Ok(_) => panic!("{words}: accepted"),

@@ -594,12 +594,38 @@ fn conforms_despite_transport_delays(
 
 /// A trial that cannot run here: skipped with the reason, or failed inside the
 /// kernel lane, which promised what it needs.
-fn unavailable(name: &str, why: String) -> Trial {
-    match canif_kernel::skip_is_failure(&why) {
+fn unavailable(name: &str, why: Skip) -> Trial {
+    let (failure, reason) = match &why {
+        Skip::Kernel(error) => (
+            canif_kernel::skip_is_failure(error),
+            canif_kernel::skip_reason(error),
+        ),
+        Skip::Missing(what) => (canif_kernel::lane_failure(what), what.clone()),
+    };
+    match failure {
         Some(failure) => Trial::test(name, move || Err(failure.into())),
         None => Trial::test(name, || Ok(()))
-            .with_kind(format!("skipped: {why}"))
+            .with_kind(format!("skipped: {reason}"))
             .with_ignored_flag(true),
+    }
+}
+
+/// Why a trial cannot run here: the kernel's CAN stack, or a tool it needs.
+#[derive(Debug, Clone)]
+enum Skip {
+    Kernel(canif_kernel::KernelError),
+    Missing(String),
+}
+
+impl From<canif_kernel::KernelError> for Skip {
+    fn from(error: canif_kernel::KernelError) -> Self {
+        Skip::Kernel(error)
+    }
+}
+
+impl From<String> for Skip {
+    fn from(what: String) -> Self {
+        Skip::Missing(what)
     }
 }
 
@@ -612,13 +638,13 @@ type Judge = fn(&str, &str, &str, &[&str]) -> Result<(), Failed>;
 /// with the `attached` scenarios, then `canif device` on its own socket with the
 /// `device` scenarios, both with `flags`.
 fn on_pair(
-    pair: &Result<(String, String), String>,
+    pair: &Result<(String, String), canif_kernel::KernelError>,
     profile: &'static str,
     flags: &[&'static str],
     attached: &[&'static str],
     device: &[&'static str],
     judge: Judge,
-) -> Result<Check, String> {
+) -> Result<Check, Skip> {
     let (a, b) = pair.clone()?;
     let with = |scenarios: &[&'static str]| -> Vec<&'static str> {
         let mut args = flags.to_vec();
@@ -640,9 +666,13 @@ fn main() {
     let fd = canif_kernel::test_interface("CANIF_LANE_FD", "vcan0");
     let classic = canif_kernel::test_interface("CANIF_LANE_CLASSIC", "vcan1");
     let controllers = canif_kernel::test_interface_pair("CANIF_LANE_CONTROLLERS");
-    let mut trials: Vec<(&str, Result<Check, String>)> = Vec::new();
-    let on = |interface: &Result<String, String>, f: fn(&str) -> Result<(), Failed>| {
-        interface.clone().map(|i| Box::new(move || f(&i)) as Check)
+    let mut trials: Vec<(&str, Result<Check, Skip>)> = Vec::new();
+    let on = |interface: &Result<String, canif_kernel::KernelError>,
+              f: fn(&str) -> Result<(), Failed>| {
+        interface
+            .clone()
+            .map(|i| Box::new(move || f(&i)) as Check)
+            .map_err(Skip::from)
     };
     trials.push((
         "conformance_attached_over_vcan_fd",
@@ -711,7 +741,7 @@ fn main() {
     ));
     trials.push((
         "python_canopen_over_vcan",
-        classic.clone().and_then(|i| {
+        classic.clone().map_err(Skip::from).and_then(|i| {
             python_canopen_available()?;
             Ok(Box::new(move || python_canopen_over(&i)) as Check)
         }),

@@ -53,8 +53,9 @@ pub(crate) fn record_iut_error(message: &str) {
 /// error (not a failure) and the step ends.
 fn iut_said<T>(result: Result<T, canif_harness::IutError>) -> Result<T, String> {
     result.map_err(|e| {
-        record_iut_error(&e.0);
-        e.0
+        let said = e.to_string();
+        record_iut_error(&said);
+        said
     })
 }
 
@@ -195,8 +196,8 @@ impl CanWorld {
                 Ok(())
             }
             Err(error) => {
-                if let canif_harness::device::BuildError::Failed(reason) = &error {
-                    record_iut_error(reason);
+                if let canif_harness::device::BuildError::Failed(broke) = &error {
+                    record_iut_error(&broke.to_string());
                 }
                 let reason = error.to_string();
                 self.refused = Some(reason.clone());
@@ -299,8 +300,7 @@ impl CanWorld {
                     Some(Ok(frame)) => self.in_controller = Some(frame),
                     Some(Err(invalid)) => {
                         return Err(format!(
-                            "the IUT put an invalid frame on the bus: {}",
-                            invalid.0
+                            "the IUT put an invalid frame on the bus: {invalid}"
                         ))
                     }
                     None => {}
@@ -335,8 +335,7 @@ impl CanWorld {
                 }
                 Some(Err(invalid)) => {
                     return Err(format!(
-                        "the IUT put an invalid frame on the bus: {}",
-                        invalid.0
+                        "the IUT put an invalid frame on the bus: {invalid}"
                     ))
                 }
                 None if iut

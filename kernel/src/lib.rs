@@ -8,6 +8,10 @@
 //! kernel's receive time stamp and `MSG_CONFIRM` (this socket's own frame,
 //! echoed when the controller finished sending it).
 
+mod error;
+
+pub use error::{KernelError, Operation, OsError};
+
 use std::io;
 use std::os::fd::AsRawFd;
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
@@ -17,17 +21,17 @@ use canif_model::Nanos;
 use socketcan::{CanFdSocket, CanFilter, Socket, SocketOptions};
 
 /// Whether this kernel has CAN_RAW sockets; the error says why not, with the errno.
-pub fn probe() -> Result<(), String> {
+pub fn probe() -> Result<(), KernelError> {
     // SAFETY: a plain socket(2) call; the descriptor is closed right away.
     let (fd, error) = unsafe {
         let fd = libc::socket(libc::AF_CAN, libc::SOCK_RAW, libc::CAN_RAW);
         (fd, io::Error::last_os_error())
     };
     if fd < 0 {
-        return Err(format!(
-            "socket(AF_CAN, SOCK_RAW, CAN_RAW) fails on this kernel ({}): {error}",
-            kernel_release()
-        ));
+        return Err(KernelError::NoCan {
+            release: kernel_release(),
+            error: error.into(),
+        });
     }
     // SAFETY: closing the descriptor just opened.
     unsafe { libc::close(fd) };
@@ -144,8 +148,12 @@ struct RawFrame {
 impl KernelSocket {
     /// Opens a socket on `interface`; `own_frames` also delivers this socket's
     /// own frames back (as `own`) once they are on the bus.
-    pub fn open(interface: &str, own_frames: bool) -> Result<Self, String> {
-        let context = |e: io::Error| format!("{interface}: {e}");
+    pub fn open(interface: &str, own_frames: bool) -> Result<Self, KernelError> {
+        let context = |e: io::Error| KernelError::Interface {
+            interface: interface.to_string(),
+            operation: Operation::Open,
+            error: e.into(),
+        };
         let socket = CanFdSocket::open(interface).map_err(context)?;
         socket.set_nonblocking(true).map_err(context)?;
         socket.set_recv_timestamp(true).map_err(context)?;
@@ -335,59 +343,85 @@ fn from_raw(raw: &RawFrame, size: usize) -> Result<Frame, String> {
 /// The interface a SocketCAN test uses, named by environment variable
 /// `variable` (the kernel lane sets them), or why the test cannot run here:
 /// the kernel's errno when it has no CAN, or the missing interface.
-pub fn test_interface(variable: &str, default: &str) -> Result<String, String> {
+pub fn test_interface(variable: &str, default: &str) -> Result<String, KernelError> {
     let name = std::env::var(variable).unwrap_or_else(|_| default.to_string());
     interface_available(&name).map(|()| name)
 }
 
 /// A pair of interfaces named `A,B` by environment variable `variable`.
-pub fn test_interface_pair(variable: &str) -> Result<(String, String), String> {
-    let pair = std::env::var(variable).map_err(|_| {
-        format!("no interface pair ({variable}=IFACE,IFACE; scripts/kernel-can-lane sets it)")
+pub fn test_interface_pair(variable: &str) -> Result<(String, String), KernelError> {
+    let pair = std::env::var(variable).map_err(|_| KernelError::NotNamed {
+        variable: variable.to_string(),
+        value: None,
     })?;
-    let (a, b) = pair
-        .split_once(',')
-        .ok_or_else(|| format!("{variable}={pair:?} is not IFACE,IFACE"))?;
+    let (a, b) = pair.split_once(',').ok_or_else(|| KernelError::NotNamed {
+        variable: variable.to_string(),
+        value: Some(pair.clone()),
+    })?;
     interface_available(a)?;
     interface_available(b)?;
     Ok((a.to_string(), b.to_string()))
 }
 
 /// Whether a SocketCAN test can use interface `name` here, or why not.
-pub fn interface_available(name: &str) -> Result<(), String> {
-    probe()
-        .map_err(|e| format!("{e}; scripts/kernel-can-lane runs this under a kernel with CAN"))?;
+pub fn interface_available(name: &str) -> Result<(), KernelError> {
+    probe()?;
     if std::path::Path::new(&format!("/sys/class/net/{name}")).exists() {
         Ok(())
     } else {
-        Err(format!(
-            "no interface {name} (scripts/kernel-can-lane creates it)"
-        ))
+        Err(KernelError::NoInterface {
+            name: name.to_string(),
+        })
     }
 }
 
 /// Inside the kernel lane (CANIF_LANE set) a test that cannot run is a
 /// failure — the lane promised its interfaces — unless the lane said why it
 /// could not provide them (`CANIF_LANE_MISSING`, e.g. a driver that did not build).
-/// Outside the lane it is a skip with `why`.
-pub fn skip_is_failure(why: &str) -> Option<String> {
-    std::env::var("CANIF_LANE").ok()?;
+/// `CANIF_LANE_MISSING` is `VARIABLE: why`, the variable the lane could not set.
+/// Outside the lane it is a skip.
+pub fn skip_is_failure(why: &KernelError) -> Option<String> {
     let excused = std::env::var("CANIF_LANE_MISSING").unwrap_or_default();
-    if !excused.is_empty() && why.contains(excused.split(':').next().unwrap_or("-")) {
+    let excused = excused.split(':').next().unwrap_or_default();
+    if matches!(why, KernelError::NotNamed { variable, .. } if !excused.is_empty() && variable == excused)
+    {
         return None;
     }
+    lane_failure(why)
+}
+
+/// Inside the kernel lane, something else a test needs and does not find
+/// (a Python package) is a failure too; outside it, `None`: a skip.
+pub fn lane_failure(why: &dyn std::fmt::Display) -> Option<String> {
+    std::env::var("CANIF_LANE").ok()?;
     Some(format!("the kernel lane should provide this but: {why}"))
 }
 
+/// Why a SocketCAN test is skipped here, with where it does run.
+pub fn skip_reason(why: &KernelError) -> String {
+    match why {
+        KernelError::NoCan { .. } => {
+            format!("{why}; scripts/kernel-can-lane runs this under a kernel with CAN")
+        }
+        _ => why.to_string(),
+    }
+}
+
 /// `ip link set INTERFACE up|down`, over netlink (needs CAP_NET_ADMIN).
-pub fn set_link(interface: &str, up: bool) -> Result<(), String> {
-    let link = socketcan::CanInterface::open(interface).map_err(|e| format!("{interface}: {e}"))?;
+pub fn set_link(interface: &str, up: bool) -> Result<(), KernelError> {
+    let failed = |operation, error: String| KernelError::Interface {
+        interface: interface.to_string(),
+        operation,
+        error: io::Error::other(error).into(),
+    };
+    let link = socketcan::CanInterface::open(interface)
+        .map_err(|e| failed(Operation::Find, e.to_string()))?;
     if up {
         link.bring_up()
     } else {
         link.bring_down()
     }
-    .map_err(|e| format!("{interface}: set {}: {e}", if up { "up" } else { "down" }))
+    .map_err(|e| failed(Operation::SetLink(up), e.to_string()))
 }
 
 #[cfg(test)]

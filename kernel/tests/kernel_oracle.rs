@@ -9,7 +9,7 @@
 
 use std::time::{Duration, Instant};
 
-use canif_kernel::{test_interface, KernelSocket, Received};
+use canif_kernel::{test_interface, KernelError, KernelSocket, Received};
 use canif_model::dlc::fd_round_up;
 use canif_model::filter::{accepts, FilterAction, FilterMatch, FilterRow};
 use canif_model::frame::{CanId, Frame};
@@ -373,11 +373,11 @@ mod isotp {
 
 /// A trial that cannot run here: skipped with the reason, or failed inside the
 /// kernel lane, which promised what it needs.
-fn unavailable(name: &str, why: String) -> Trial {
+fn unavailable(name: &str, why: KernelError) -> Trial {
     match canif_kernel::skip_is_failure(&why) {
         Some(failure) => Trial::test(name, move || Err(failure.into())),
         None => Trial::test(name, || Ok(()))
-            .with_kind(format!("skipped: {why}"))
+            .with_kind(format!("skipped: {}", canif_kernel::skip_reason(&why)))
             .with_ignored_flag(true),
     }
 }

@@ -99,8 +99,8 @@ pub(crate) fn coupler(
 #[cfg(feature = "socketcan")]
 fn coupler_on_bus(bus: &str, coupler: &mut canif_model::canopen::coupler::Coupler) -> ExitCode {
     let opened = canif_kernel::BusSpec::parse(bus)
-        .and_then(|spec| canif_kernel::probe().map(|()| spec))
-        .and_then(|spec| canif_kernel::KernelSocket::open(&spec.iut, false));
+        .and_then(|spec| canif_kernel::probe().map(|()| spec).map_err(String::from))
+        .and_then(|spec| canif_kernel::KernelSocket::open(&spec.iut, false).map_err(String::from));
     let socket = match opened {
         Ok(socket) => socket,
         Err(error) => {

@@ -10,7 +10,7 @@ use canif_model::Nanos;
 use super::protocol::{Answer, Request};
 use super::server::{write_answer, Build, Server};
 use crate::device::iut::Iut;
-use crate::error::BusError;
+use crate::error::{BusCause, BusError};
 
 /// The device's controller on a SocketCAN interface.
 struct DeviceBus {
@@ -43,7 +43,7 @@ impl DeviceBus {
         while let Some(received) = self
             .socket
             .recv()
-            .map_err(|e| BusError(format!("{name}: {e}")))?
+            .map_err(|e| BusError::new(BusCause::Io, format!("{name}: {e}")))?
         {
             match received {
                 Received::Frame {
@@ -69,8 +69,7 @@ impl DeviceBus {
                     None => return Ok(()),
                     Some(Err(invalid)) => {
                         eprintln!(
-                            "{name}: the device produced an invalid frame, not sent: {}",
-                            invalid.0
+                            "{name}: the device produced an invalid frame, not sent: {invalid}"
                         );
                         continue;
                     }
@@ -85,14 +84,14 @@ impl DeviceBus {
                     self.written = false;
                     return Ok(());
                 }
-                Err(error) => return Err(BusError(format!("{name}: {error}"))),
+                Err(error) => return Err(BusError::new(BusCause::Io, format!("{name}: {error}"))),
             }
         }
     }
 }
 
 fn device_broke(error: crate::error::IutError) -> BusError {
-    BusError(format!("the device broke: {error}"))
+    BusError::new(BusCause::PlayedDevice, format!("the device broke: {error}"))
 }
 
 /// Serves an in-process IUT over the adapter protocol on stdin/stdout with its
@@ -108,7 +107,7 @@ pub fn serve_on_bus(build: &Build<'_>, interface: Option<&str>) -> Result<(), Bu
         }
     });
     let mut output = std::io::stdout();
-    let io = |e: std::io::Error| BusError(format!("stdout: {e}"));
+    let io = |e: std::io::Error| BusError::new(BusCause::Io, format!("stdout: {e}"));
     // The CAN side is the interface's own: one request per cycle is protocol 1.
     let mut server = Server::new(build, false).at_most(1);
     let mut bus: Option<DeviceBus> = None;

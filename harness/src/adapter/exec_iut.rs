@@ -18,7 +18,7 @@ use super::protocol::{
     WireFrame, PROTOCOL_VERSION,
 };
 use crate::device::iut::{InvalidFrame, Iut, Planned, Transmit};
-use crate::error::IutError;
+use crate::error::{IutCause, IutError};
 
 /// How an IUT answered a configuration.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -58,8 +58,8 @@ impl ExecIut {
         })
     }
 
-    fn fail(&mut self, what: String) -> IutError {
-        self.process.fail(what)
+    fn fail(&mut self, cause: IutCause, what: String) -> IutError {
+        self.process.fail(cause, what)
     }
 
     /// Offers a configuration; `Err`: the IUT failed (refusing is an answer).
@@ -80,9 +80,10 @@ impl ExecIut {
         };
         let (protocol, accepted, reason) = self.process.exchange(&request, Answer::CONFIGURED)?;
         if !(1..=offered).contains(&protocol) {
-            return Err(self.fail(format!(
-                "speaks protocol version {protocol} (this harness offered 1 to {offered})"
-            )));
+            return Err(self.fail(
+                IutCause::Protocol,
+                format!("speaks protocol version {protocol} (this harness offered 1 to {offered})"),
+            ));
         }
         self.version = protocol;
         self.events.clear();
@@ -117,15 +118,18 @@ impl ExecIut {
         } in plan
         {
             let frame = match (frame, invalid) {
-                (None, Some(invalid)) => Err(InvalidFrame(invalid)),
+                (None, Some(invalid)) => Err(InvalidFrame::Declared(invalid)),
                 (Some(wire), None) => match wire.check() {
-                    Ok(()) => Frame::try_from(&wire).map_err(InvalidFrame),
+                    Ok(()) => wire.to_frame(),
                     Err(lie) => {
-                        return Err(self.fail(format!("answered `step` with a broken frame: {lie}")))
+                        return Err(self.fail(
+                            IutCause::Impossible,
+                            format!("answered `step` with a broken frame: {lie}"),
+                        ))
                     }
                 },
                 _ => {
-                    return Err(self.fail(
+                    return Err(self.fail(IutCause::Protocol,
                         "answered `step` with a plan entry that is not exactly one of \"frame\" and \"invalid\""
                             .into(),
                     ))
@@ -150,11 +154,14 @@ impl Iut for ExecIut {
             self.process.exchange(&request, Answer::INPUTS)?.0
         };
         if inputs.len() != self.input_size {
-            return Err(self.fail(format!(
-                "returned an input image of {} bytes; the layout has {}",
-                inputs.len(),
-                self.input_size
-            )));
+            return Err(self.fail(
+                IutCause::Impossible,
+                format!(
+                    "returned an input image of {} bytes; the layout has {}",
+                    inputs.len(),
+                    self.input_size
+                ),
+            ));
         }
         Ok(inputs)
     }
@@ -195,12 +202,15 @@ impl Iut for ExecIut {
         self.next_release = next_ns;
         match frame {
             None => Ok(None),
-            Some(Transmitted::Invalid(frame)) => Ok(Some(Err(InvalidFrame(frame.invalid)))),
+            Some(Transmitted::Invalid(frame)) => {
+                Ok(Some(Err(InvalidFrame::Declared(frame.invalid))))
+            }
             Some(Transmitted::Frame(wire)) => match wire.check() {
-                Ok(()) => Ok(Some(Frame::try_from(&wire).map_err(InvalidFrame))),
-                Err(lie) => Err(self.fail(format!(
-                    "answered `poll_transmit` with a broken frame: {lie}"
-                ))),
+                Ok(()) => Ok(Some(wire.to_frame())),
+                Err(lie) => Err(self.fail(
+                    IutCause::Impossible,
+                    format!("answered `poll_transmit` with a broken frame: {lie}"),
+                )),
             },
         }
     }

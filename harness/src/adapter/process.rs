@@ -13,7 +13,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use super::protocol::{Answer, Expected, Request};
-use crate::error::IutError;
+use crate::error::{IutCause, IutError};
 
 /// How many lines of the IUT's stderr an error shows.
 const STDERR_LINES: usize = 20;
@@ -134,7 +134,7 @@ pub struct AdapterProcess {
     stderr: Arc<Mutex<VecDeque<String>>>,
     timeout: Duration,
     /// The first failure; every later call reports it.
-    failed: Option<String>,
+    failed: Option<IutError>,
 }
 
 impl AdapterProcess {
@@ -153,9 +153,20 @@ impl AdapterProcess {
             .stderr(Stdio::piped())
             .process_group(0)
             .spawn()
-            .map_err(|e| IutError(format!("cannot start `{command}`: {e}")))?;
-        let stdout = child.stdout.take().ok_or(IutError("no stdout".into()))?;
-        let stderr = child.stderr.take().ok_or(IutError("no stderr".into()))?;
+            .map_err(|e| {
+                IutError::new(
+                    IutCause::NotStarted,
+                    format!("cannot start `{command}`: {e}"),
+                )
+            })?;
+        let stdout = child
+            .stdout
+            .take()
+            .ok_or(IutError::new(IutCause::NotStarted, "no stdout"))?;
+        let stderr = child
+            .stderr
+            .take()
+            .ok_or(IutError::new(IutCause::NotStarted, "no stderr"))?;
         let lines = LineReader::new(stdout);
         let log = Arc::new(Mutex::new(VecDeque::new()));
         let log_writer = log.clone();
@@ -225,9 +236,13 @@ impl AdapterProcess {
     }
 
     /// What broke, with the last lines of its stderr; every later call reports it too.
-    pub(crate) fn fail(&mut self, what: String) -> IutError {
-        let message = format!("IUT `{}`: {what}; {}", self.command, self.stderr_tail());
-        IutError(self.failed.get_or_insert(message).clone())
+    pub(crate) fn fail(&mut self, cause: IutCause, what: String) -> IutError {
+        let error = IutError {
+            cause,
+            what: format!("IUT `{}`: {what}", self.command),
+            log: Some(self.stderr_tail()),
+        };
+        self.failed.get_or_insert(error).clone()
     }
 
     /// Sends one request and waits for the one-line answer `expected`.
@@ -243,7 +258,7 @@ impl AdapterProcess {
     /// Sends one request; its answer line, unread.
     pub(crate) fn exchange_line(&mut self, request: &Request) -> Result<String, IutError> {
         if let Some(failure) = &self.failed {
-            return Err(IutError(failure.clone()));
+            return Err(failure.clone());
         }
         let mut line = serde_json::to_vec(request).expect("requests serialize");
         line.push(b'\n');
@@ -260,24 +275,27 @@ impl AdapterProcess {
                 None => format!("cannot write to its stdin ({error}; killed)"),
             };
             self.kill();
-            return Err(self.fail(what));
+            return Err(self.fail(IutCause::Gone, what));
         }
         let line = match self.lines.next(self.timeout) {
             Line::Text(line) => line,
             Line::Broken(what) => {
                 self.kill();
-                return Err(self.fail(format!(
-                    "{what} instead of answering `{}` (killed)",
-                    request.name()
-                )));
+                return Err(self.fail(
+                    IutCause::Protocol,
+                    format!("{what} instead of answering `{}` (killed)", request.name()),
+                ));
             }
             Line::Silent => {
                 self.kill();
-                return Err(self.fail(format!(
-                    "no answer to `{}` within {} ms (hung; killed)",
-                    request.name(),
-                    self.timeout.as_millis()
-                )));
+                return Err(self.fail(
+                    IutCause::Silent,
+                    format!(
+                        "no answer to `{}` within {} ms (hung; killed)",
+                        request.name(),
+                        self.timeout.as_millis()
+                    ),
+                ));
             }
             Line::Closed => {
                 let what = match self.exit_status() {
@@ -285,7 +303,10 @@ impl AdapterProcess {
                     None => "closed its stdout (still running; killed)".to_string(),
                 };
                 self.kill();
-                return Err(self.fail(format!("{what} instead of answering `{}`", request.name())));
+                return Err(self.fail(
+                    IutCause::Gone,
+                    format!("{what} instead of answering `{}`", request.name()),
+                ));
             }
         };
         Ok(line)
@@ -308,19 +329,24 @@ impl AdapterProcess {
             });
         let answer = match answer {
             Ok(answer) => answer,
-            Err(what) => return Err(self.fail(format!("{what}: {}", truncate(line)))),
+            Err(what) => {
+                return Err(self.fail(IutCause::Protocol, format!("{what}: {}", truncate(line))))
+            }
         };
         match (expected.take)(answer) {
             Ok(fields) => Ok(fields),
             Err(Answer::Error { message }) => {
-                Err(self.fail(format!("reported an error: {message}")))
+                Err(self.fail(IutCause::Reported, format!("reported an error: {message}")))
             }
-            Err(other) => Err(self.fail(format!(
-                "answered `{}` where `{}` was due: {}",
-                other.name(),
-                expected.name,
-                truncate(line)
-            ))),
+            Err(other) => Err(self.fail(
+                IutCause::Protocol,
+                format!(
+                    "answered `{}` where `{}` was due: {}",
+                    other.name(),
+                    expected.name,
+                    truncate(line)
+                ),
+            )),
         }
     }
 }

@@ -12,7 +12,7 @@ use super::protocol::{
     WireFrame, PROTOCOL_VERSION,
 };
 use crate::device::iut::{BuildError, Iut, Planned};
-use crate::error::IutError;
+use crate::error::{IutCause, IutError};
 
 /// Builds the IUT a `configure` asks for.
 pub type Build<'a> =
@@ -103,7 +103,7 @@ impl<'a> Server<'a> {
                 Ok(inputs) => Answer::Inputs {
                     inputs: Hex(inputs),
                 },
-                Err(error) => Answer::error(error.0),
+                Err(error) => Answer::error(error.to_string()),
             },
             Request::Receive { frame, end_ns } => {
                 match canif_model::frame::Frame::try_from(frame) {
@@ -115,13 +115,13 @@ impl<'a> Server<'a> {
                 Ok(frame) => Answer::Transmit {
                     frame: frame.map(|frame| match frame {
                         Ok(frame) => Transmitted::Frame(WireFrame::from(&frame)),
-                        Err(invalid) => {
-                            Transmitted::Invalid(InvalidWireFrame { invalid: invalid.0 })
-                        }
+                        Err(invalid) => Transmitted::Invalid(InvalidWireFrame {
+                            invalid: invalid.to_string(),
+                        }),
                     }),
                     next_ns: iut.poll_timeout(),
                 },
-                Err(error) => Answer::error(error.0),
+                Err(error) => Answer::error(error.to_string()),
             },
             Request::TransmitComplete => ok_or_error(iut.transmit_complete()),
             Request::ControllerStatus { status } => {
@@ -133,7 +133,7 @@ impl<'a> Server<'a> {
                 events,
             } => match step(iut.as_mut(), *now_ns, &outputs.0, events) {
                 Ok(answer) => answer,
-                Err(error) => Answer::error(error.0),
+                Err(error) => Answer::error(error.to_string()),
             },
             Request::Configure { .. }
             | Request::Bye
@@ -175,15 +175,19 @@ fn step(
     for event in events {
         match event {
             BusEvent::Received { frame, end_ns } => {
-                let frame = canif_model::frame::Frame::try_from(frame)
-                    .map_err(|e| IutError(format!("a received frame: {e}")))?;
+                let frame = canif_model::frame::Frame::try_from(frame).map_err(|e| {
+                    IutError::new(IutCause::HarnessBug, format!("a received frame: {e}"))
+                })?;
                 iut.receive(&frame, *end_ns)?;
             }
             BusEvent::Started { at_ns } => {
                 if iut.poll_transmit(*at_ns)?.is_none() {
-                    return Err(IutError(format!(
-                        "the harness started a frame at {at_ns} ns that the plan did not hold"
-                    )));
+                    return Err(IutError::new(
+                        IutCause::HarnessBug,
+                        format!(
+                            "the harness started a frame at {at_ns} ns that the plan did not hold"
+                        ),
+                    ));
                 }
             }
             BusEvent::Completed => iut.transmit_complete()?,
@@ -191,9 +195,12 @@ fn step(
         }
     }
     let inputs = iut.cycle(outputs, now)?;
-    let plan = iut
-        .transmit_plan(now)
-        .ok_or_else(|| IutError("this device cannot tell its plan (protocol 2)".into()))?;
+    let plan = iut.transmit_plan(now).ok_or_else(|| {
+        IutError::new(
+            IutCause::Impossible,
+            "this device cannot tell its plan (protocol 2)",
+        )
+    })?;
     Ok(Answer::Stepped {
         inputs: Hex(inputs),
         plan: plan.into_iter().map(planned).collect(),
@@ -203,7 +210,7 @@ fn step(
 fn planned((frame, not_before_ns): Planned) -> PlannedFrame {
     let (frame, invalid) = match frame {
         Ok(frame) => (Some(WireFrame::from(&frame)), None),
-        Err(invalid) => (None, Some(invalid.0)),
+        Err(invalid) => (None, Some(invalid.to_string())),
     };
     PlannedFrame {
         frame,
@@ -215,7 +222,7 @@ fn planned((frame, not_before_ns): Planned) -> PlannedFrame {
 fn ok_or_error(result: Result<(), crate::error::IutError>) -> Answer {
     match result {
         Ok(()) => Answer::Ok,
-        Err(error) => Answer::error(error.0),
+        Err(error) => Answer::error(error.to_string()),
     }
 }
 

@@ -23,7 +23,7 @@ use crate::adapter::protocol::OwnedBus;
 use crate::device::blame;
 use crate::device::diff::{hex, Difference};
 use crate::device::pair::Pair;
-use crate::error::BusError;
+use crate::error::{BusCause, BusError};
 use crate::outcome::Outcome;
 
 /// How scenarios run on a SocketCAN bus.
@@ -162,7 +162,7 @@ pub struct KernelBus {
 impl KernelBus {
     /// Opens the sockets; `owned`: the IUT opens its own.
     pub fn open(options: &KernelBusOptions, owned: bool) -> Result<Self, BusError> {
-        Self::open_sockets(options, owned).map_err(BusError)
+        Self::open_sockets(options, owned).map_err(|e| BusError::new(BusCause::Unavailable, e))
     }
 
     fn open_sockets(options: &KernelBusOptions, owned: bool) -> Result<Self, String> {
@@ -280,7 +280,7 @@ fn arrived(queue: &mut VecDeque<InFlight>, frame: Frame) -> bool {
 }
 
 fn bus_error(message: String) -> Outcome {
-    Outcome::Error(BusError(message).into())
+    Outcome::Error(BusError::new(BusCause::Io, message).into())
 }
 
 impl Bus for KernelBus {

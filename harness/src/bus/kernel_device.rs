@@ -16,7 +16,7 @@ use canif_model::image::{ImageLayout, SizeError};
 use canif_model::Nanos;
 
 use crate::client::played_device::{Ended, PlayedDevice};
-use crate::error::BusError;
+use crate::error::{BusCause, BusError};
 
 pub struct KernelDeviceSide {
     device: Device,
@@ -59,7 +59,8 @@ impl KernelDeviceSide {
         } else {
             (&self.nodes, &self.controller)
         };
-        let error = |what: String| BusError(format!("{}: {what}", sender.interface));
+        let error =
+            |what: String| BusError::new(BusCause::Io, format!("{}: {what}", sender.interface));
         let deadline = Instant::now() + self.timeout;
         loop {
             match sender.send(frame) {

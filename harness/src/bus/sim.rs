@@ -218,12 +218,15 @@ impl Controller for Pair {
     }
     fn stalled(&self, steps: usize) -> Outcome {
         Outcome::Error(
-            crate::error::IutError(format!(
-                "the IUT asked to be polled {steps} times within one cycle: its due time \
+            crate::error::IutError::new(
+                crate::error::IutCause::Impossible,
+                format!(
+                    "the IUT asked to be polled {steps} times within one cycle: its due time \
                  (next_ns {:?}) does not advance past {} ns",
-                self.iut.poll_timeout(),
-                self.now
-            ))
+                    self.iut.poll_timeout(),
+                    self.now
+                ),
+            )
             .into(),
         )
     }

@@ -3,7 +3,7 @@
 use canif_kernel::{KernelSocket, Received};
 use canif_model::canopen::coupler::Coupler;
 
-use crate::error::BusError;
+use crate::error::{BusCause, BusError};
 
 /// Runs `coupler` on `socket` until an error: frames in, answers and its own
 /// frames (heartbeats) out.
@@ -19,7 +19,9 @@ pub fn serve(socket: &KernelSocket, coupler: &mut Coupler) -> BusError {
                 }
                 Ok(Some(_)) => {}
                 Ok(None) => break,
-                Err(error) => return BusError(format!("{}: {error}", socket.interface)),
+                Err(error) => {
+                    return BusError::new(BusCause::Io, format!("{}: {error}", socket.interface))
+                }
             }
         }
         out.extend(coupler.poll(canif_kernel::realtime_ns().saturating_sub(epoch)));

@@ -51,7 +51,7 @@ pub fn quick_start(
         for _ in 0..cycles {
             now = cycle();
             let outputs = plc.outputs().to_vec();
-            let inputs = iut.cycle(&outputs, now).map_err(|e| e.0)?;
+            let inputs = iut.cycle(&outputs, now).map_err(|e| e.to_string())?;
             plc.device_cycle_done(&inputs);
             plc.task(task_cycle, TaskStimulus::default())
                 .map_err(|e| format!("{e:?}"))?;

@@ -11,6 +11,7 @@ use canif_model::image::{ImageLayout, MessageRepr};
 use super::{Client, IutError, TaskAnswer, TaskIo};
 use crate::adapter::process::AdapterProcess;
 use crate::adapter::protocol::{Answer, Config, Hex, Request, Tasked, WireMessage};
+use crate::error::IutCause;
 
 /// The client role's protocol version.
 pub const CLIENT_PROTOCOL: u64 = 1;
@@ -35,9 +36,12 @@ impl ExecClient {
         };
         let protocol = process.exchange(&request, Answer::STARTED)?;
         if protocol != CLIENT_PROTOCOL {
-            return Err(process.fail(format!(
+            return Err(process.fail(
+                IutCause::Protocol,
+                format!(
                 "speaks client protocol version {protocol} (this harness speaks {CLIENT_PROTOCOL})"
-            )));
+            ),
+            ));
         }
         Ok(ExecClient { process, layout })
     }
@@ -58,16 +62,22 @@ impl Client for ExecClient {
             sent,
         } = self.process.exchange(&request, Answer::TASKED)?;
         if outputs.0.len() != size {
-            return Err(self.process.fail(format!(
-                "answered an output image of {} bytes; the interface's is {size}",
-                outputs.0.len()
-            )));
+            return Err(self.process.fail(
+                IutCause::Impossible,
+                format!(
+                    "answered an output image of {} bytes; the interface's is {size}",
+                    outputs.0.len()
+                ),
+            ));
         }
         if let Some(index) = refused.iter().find(|i| **i >= io.requests.len()) {
-            return Err(self.process.fail(format!(
-                "refused request {index} of the {} it was given",
-                io.requests.len()
-            )));
+            return Err(self.process.fail(
+                IutCause::Impossible,
+                format!(
+                    "refused request {index} of the {} it was given",
+                    io.requests.len()
+                ),
+            ));
         }
         io.outputs[..size].copy_from_slice(&outputs.0);
         let mut answer = TaskAnswer {

@@ -185,9 +185,9 @@ impl FaultyClient {
     fn read(&mut self, inputs: &[u8], delivered: &mut Vec<MessageRepr>) -> Result<(), IutError> {
         let layout = self.layout;
         let image = InputImage::new_checked(&inputs[..layout.input_size()], layout)
-            .map_err(|e| IutError(e.to_string()))?;
+            .map_err(|e| IutError::new(crate::error::IutCause::Impossible, e.to_string()))?;
         let outputs = OutputImage::new_checked(&self.image[..], layout)
-            .map_err(|e| IutError(e.to_string()))?;
+            .map_err(|e| IutError::new(crate::error::IutCause::Impossible, e.to_string()))?;
         let (seen, mine, tx_count) = (
             image.rx_counter(),
             outputs.rx_counter(),
@@ -220,7 +220,7 @@ impl FaultyClient {
                 break;
             };
             let view = MessageView::new_checked(bytes, layout.rx_message)
-                .map_err(|e| IutError(e.to_string()))?;
+                .map_err(|e| IutError::new(crate::error::IutCause::Impossible, e.to_string()))?;
             let mut message = MessageRepr::parse_clamped(&view).0;
             if self.has(ClientFault::IgnoresExtendedFlag) {
                 if let CanId::Extended(raw) = message.frame.id {
@@ -231,7 +231,7 @@ impl FaultyClient {
         }
         let fault = self.fault;
         let mut outputs = OutputImage::new_checked(&mut self.image[..], layout)
-            .map_err(|e| IutError(e.to_string()))?;
+            .map_err(|e| IutError::new(crate::error::IutCause::Impossible, e.to_string()))?;
         match fault {
             Some(ClientFault::OwnRxCounter) => {
                 let own = handshake::next(self.own_rx_counter);
@@ -249,10 +249,10 @@ impl FaultyClient {
     fn learn_sent(&mut self, inputs: &[u8]) -> Result<Vec<u16>, IutError> {
         let layout = self.layout;
         let image = InputImage::new_checked(&inputs[..layout.input_size()], layout)
-            .map_err(|e| IutError(e.to_string()))?;
+            .map_err(|e| IutError::new(crate::error::IutCause::Impossible, e.to_string()))?;
         if self.has(ClientFault::SentOnAcknowledge) {
             let mine = OutputImage::new_checked(&self.image[..], layout)
-                .map_err(|e| IutError(e.to_string()))?
+                .map_err(|e| IutError::new(crate::error::IutCause::Impossible, e.to_string()))?
                 .tx_counter();
             if handshake::ready_to_send(mine, image.tx_counter()) {
                 return Ok(self.unconfirmed.drain(..).collect());
@@ -271,9 +271,9 @@ impl FaultyClient {
     fn write(&mut self, inputs: &[u8], buffer: &mut [u8]) -> Result<(), IutError> {
         let layout = self.layout;
         let image = InputImage::new_checked(&inputs[..layout.input_size()], layout)
-            .map_err(|e| IutError(e.to_string()))?;
+            .map_err(|e| IutError::new(crate::error::IutCause::Impossible, e.to_string()))?;
         let mine = OutputImage::new_checked(&self.image[..], layout)
-            .map_err(|e| IutError(e.to_string()))?
+            .map_err(|e| IutError::new(crate::error::IutCause::Impossible, e.to_string()))?
             .tx_counter();
         let ready = match self.fault {
             Some(ClientFault::WritesBeforeAcknowledge) => true,
@@ -321,13 +321,13 @@ impl FaultyClient {
                 break;
             };
             let mut view = MessageView::new_checked(target, layout.tx_message)
-                .map_err(|e| IutError(e.to_string()))?;
+                .map_err(|e| IutError::new(crate::error::IutCause::Impossible, e.to_string()))?;
             message
                 .emit(&mut view)
-                .map_err(|e| IutError(e.to_string()))?;
+                .map_err(|e| IutError::new(crate::error::IutCause::Impossible, e.to_string()))?;
         }
         let mut outputs = OutputImage::new_checked(&mut self.image[..], layout)
-            .map_err(|e| IutError(e.to_string()))?;
+            .map_err(|e| IutError::new(crate::error::IutCause::Impossible, e.to_string()))?;
         let declared = match self.fault {
             Some(ClientFault::NoOfTxMessagesIsTheSlotCount) => layout.tx_slots,
             _ => count,
@@ -349,8 +349,9 @@ impl Client for FaultyClient {
     fn task(&mut self, io: TaskIo<'_>) -> Result<TaskAnswer, IutError> {
         let layout = self.layout;
         if io.inputs.len() < layout.input_size() || io.outputs.len() < layout.output_size() {
-            return Err(IutError(
-                "the images handed to the client are too short".into(),
+            return Err(IutError::new(
+                crate::error::IutCause::Impossible,
+                "the images handed to the client are too short",
             ));
         }
         let size = layout.output_size();

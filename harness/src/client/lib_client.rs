@@ -12,6 +12,7 @@ use canif_model::image::{ImageLayout, MessageRepr};
 
 use super::{Client, IutError, TaskAnswer, TaskIo};
 use crate::device::lib_iut::{c_config, from_c, to_c};
+use crate::error::IutCause;
 
 pub struct LibClient {
     program: ClientProgram,
@@ -25,14 +26,15 @@ impl LibClient {
         config: &InterfaceConfig,
         layout: ImageLayout,
     ) -> Result<Self, IutError> {
-        let library = ClientLibrary::open(path).map_err(IutError)?;
+        let library =
+            ClientLibrary::open(path).map_err(|e| IutError::new(IutCause::NotStarted, e))?;
         let mut c_config = c_config(&Capabilities::everything(), config);
         // The sizes of this interface's images, InfoData or not.
         c_config.input_size = layout.input_size() as u32;
         c_config.output_size = layout.output_size() as u32;
         let program = library
             .start(&c_config)
-            .map_err(|e| IutError(format!("{}: {e}", path.display())))?;
+            .map_err(|e| IutError::new(IutCause::NotStarted, format!("{}: {e}", path.display())))?;
         Ok(LibClient {
             program,
             layout,
@@ -63,7 +65,7 @@ impl Client for LibClient {
                 &requests,
                 capacity,
             )
-            .map_err(|e| IutError(format!("{}: {e}", self.path)))?;
+            .map_err(|e| IutError::new(IutCause::Reported, format!("{}: {e}", self.path)))?;
         let mut answer = TaskAnswer {
             refused: result.refused,
             sent: result.sent,
@@ -79,7 +81,7 @@ impl Client for LibClient {
                 Ok(frame) => answer
                     .not_frames
                     .push(format!("(after one that is no frame) {frame}")),
-                Err(e) => answer.not_frames.push(e.0),
+                Err(e) => answer.not_frames.push(e.to_string()),
             }
         }
         Ok(answer)

@@ -99,14 +99,17 @@ impl Client for ReferenceClient {
             io.outputs.get_mut(..self.layout.output_size()),
         );
         let (Some(inputs), Some(outputs)) = (inputs, outputs) else {
-            return Err(IutError(
-                "the images handed to the client are too short".into(),
+            return Err(IutError::new(
+                crate::error::IutCause::Impossible,
+                "the images handed to the client are too short",
             ));
         };
-        let written = self
-            .client
-            .task(inputs)
-            .map_err(|e| IutError(format!("the reference client: {e}")))?;
+        let written = self.client.task(inputs).map_err(|e| {
+            IutError::new(
+                crate::error::IutCause::Reported,
+                format!("the reference client: {e}"),
+            )
+        })?;
         outputs.copy_from_slice(written);
         Ok(TaskAnswer {
             delivered: self.client.take_received(),

@@ -13,7 +13,7 @@ use canif_model::Nanos;
 
 use crate::bus::sim::{Controller, SimBus};
 use crate::bus::Bus;
-use crate::error::BusError;
+use crate::error::{BusCause, BusError};
 
 /// The device as the harness plays it for a client: on the simulated bus
 /// ([`DeviceSide`]) or with its controller on a SocketCAN interface
@@ -90,9 +90,10 @@ impl Controller for ModelController {
         Ok(())
     }
     fn stalled(&self, steps: usize) -> BusError {
-        BusError(format!(
-            "the model device took {steps} bus events in one cycle (a harness bug)"
-        ))
+        BusError::new(
+            BusCause::PlayedDevice,
+            format!("the model device took {steps} bus events in one cycle (a harness bug)"),
+        )
     }
 }
 

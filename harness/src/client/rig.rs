@@ -18,7 +18,7 @@ use super::master::{Master, MasterRun};
 use super::{Client, IutError, TaskIo};
 use crate::client::played_device::{DeviceSide, PlayedDevice};
 use crate::device::iut::BuildError;
-use crate::error::RunError;
+use crate::error::{HarnessError, IutCause, Refusal, RunError};
 use crate::outcome::{BusFrame, CycleView, Failure, Outcome, ScenarioRun};
 use crate::run::Ring;
 
@@ -40,7 +40,7 @@ pub fn simulated(
 ) -> Result<Box<dyn PlayedDevice>, RunError> {
     DeviceSide::new(caps, config, bit_rates)
         .map(|d| Box::new(d) as Box<dyn PlayedDevice>)
-        .map_err(|e| RunError::Configuration(e.to_string()))
+        .map_err(|e| RunError::Configuration(Refusal::Model(e)))
 }
 
 /// A line of a failure's history, kept as data: most runs pass, and a
@@ -278,12 +278,19 @@ fn drive(
             sync1_shift: CYCLE / 2,
         };
     }
-    let configuration =
-        |e: canif_model::config::ConfigError| Stop::Error(RunError::Configuration(e.to_string()));
+    let configuration = |e: canif_model::config::ConfigError| {
+        Stop::Error(RunError::Configuration(Refusal::Model(e)))
+    };
     let mut device = open(caps, config.clone(), scenario.bit_rates).map_err(Stop::Error)?;
     let layout = device.layout();
-    let built =
-        |layout| build(layout).map_err(|e| Stop::Error(RunError::Iut(IutError(e.to_string()))));
+    let built = |layout| {
+        build(layout).map_err(|e| {
+            Stop::Error(match e {
+                BuildError::Failed(error) => RunError::Iut(error),
+                BuildError::Refused(reason) => RunError::Configuration(Refusal::Iut(reason)),
+            })
+        })
+    };
     let mut client = built(layout)?;
     let mut exchange = MasterRun::new(master, layout);
     let mut judge = Judge::new(layout, config.queue);
@@ -348,7 +355,7 @@ fn drive(
                     requests: &asked,
                 })
             }))
-            .unwrap_or_else(|panic| Err(IutError(panic_message(&panic))))
+            .unwrap_or_else(|panic| Err(IutError::new(IutCause::Panicked, panic_message(&panic))))
             .map_err(|e| Stop::Error(RunError::Iut(e)))?;
             let accepted: Vec<MessageRepr> = asked
                 .iter()
@@ -384,7 +391,7 @@ fn drive(
             judge.device_saw(device_saw);
             let mut inputs = device
                 .cycle(outputs)
-                .map_err(|e| Stop::Error(RunError::Harness(e.to_string())))?;
+                .map_err(|e| Stop::Error(RunError::Harness(HarnessError::Model(e.to_string()))))?;
             if overstate && overstated(&mut inputs, layout, judge.device_rx_counter()) {
                 overstate = false;
             }

@@ -17,7 +17,7 @@ use super::master::Master;
 use super::{judge, rig, Client, ReferenceClient};
 use crate::client::played_device::PlayedDevice;
 use crate::device::iut::BuildError;
-use crate::error::RunError;
+use crate::error::{BusCause, BusError, RunError};
 use crate::outcome::{Outcome, ScenarioRun};
 
 use crate::run::{self, KillRow, ProfileRun, Selection, Side as RunSide};
@@ -56,15 +56,15 @@ impl ClientKind {
         Ok(match self {
             ClientKind::Reference => Box::new(ReferenceClient::new(layout)),
             ClientKind::Faulty(fault) => Box::new(FaultyClient::new(layout, config.queue, *fault)),
-            ClientKind::Lib { path } => Box::new(
-                LibClient::start(path, config, layout).map_err(|e| BuildError::Failed(e.0))?,
-            ),
+            ClientKind::Lib { path } => {
+                Box::new(LibClient::start(path, config, layout).map_err(BuildError::Failed)?)
+            }
             ClientKind::Exec {
                 command,
                 timeout_ms,
             } => Box::new(
                 ExecClient::start(command, Duration::from_millis(*timeout_ms), config, layout)
-                    .map_err(|e| BuildError::Failed(e.0))?,
+                    .map_err(BuildError::Failed)?,
             ),
         })
     }
@@ -109,7 +109,7 @@ impl ClientBus {
             ClientBus::SocketCan { interface, timeout } => {
                 crate::bus::kernel_device::KernelDeviceSide::open(caps, config, interface, *timeout)
                     .map(|d| Box::new(d) as Box<dyn PlayedDevice>)
-                    .map_err(|e| RunError::Bus(crate::error::BusError(e)))
+                    .map_err(|e| RunError::Bus(BusError::new(BusCause::Unavailable, e)))
             }
         }
     }

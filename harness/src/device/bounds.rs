@@ -59,7 +59,7 @@ impl Bounds {
                 candidates: blame::TX_INVALID,
                 what: "frame handed to the controller".into(),
                 expected: "a valid CAN frame (at most 8 classic, 64 FD data bytes)".into(),
-                actual: format!("invalid frame: {}", invalid.0),
+                actual: format!("invalid frame: {invalid}"),
             }),
             Some(Ok(frame)) if self.allowance == 0 => Err(Difference {
                 frames: None,

@@ -11,11 +11,10 @@ use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 use canif_softdevice::{CanFrame, FilterRule, Format, Offer, Queue, Settings, SoftDevice};
 
+use crate::error::IutCause;
 pub use crate::error::IutError;
 
-/// A frame an IUT put on the bus that is no valid CAN frame (e.g. 36 FD bytes).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct InvalidFrame(pub String);
+pub use crate::error::InvalidFrame;
 
 /// What the next frame of a controller is: a frame, none, or something that
 /// is no valid frame (judged as the device's non-conformance).
@@ -87,14 +86,14 @@ pub enum BuildError {
     /// The IUT refuses the configuration: a legitimate answer, judged by the refusal grid.
     Refused(String),
     /// The IUT could not be started or broke the protocol.
-    Failed(String),
+    Failed(IutError),
 }
 
 impl std::fmt::Display for BuildError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             BuildError::Refused(reason) => write!(f, "refused: {reason}"),
-            BuildError::Failed(reason) => f.write_str(reason),
+            BuildError::Failed(error) => error.fmt(f),
         }
     }
 }
@@ -107,7 +106,7 @@ impl Iut for ModelIut {
         self.0
             .cycle(outputs, now)
             .map(<[u8]>::to_vec)
-            .map_err(|e| IutError(e.to_string()))
+            .map_err(|e| IutError::new(IutCause::Impossible, e.to_string()))
     }
     fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) -> Result<(), IutError> {
         self.0.handle_received(*frame, end_of_reception);
@@ -147,7 +146,7 @@ impl Iut for SoftDeviceIut {
         self.0
             .sync_manager_event(outputs, now)
             .map(<[u8]>::to_vec)
-            .map_err(|e| IutError(e.to_string()))
+            .map_err(|e| IutError::new(IutCause::Impossible, e.to_string()))
     }
     fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) -> Result<(), IutError> {
         self.0.rx_interrupt(to_soft(frame), end_of_reception);
@@ -219,7 +218,10 @@ fn from_soft(soft: &CanFrame) -> Result<Frame, InvalidFrame> {
     } else {
         CanId::standard(soft.id)
     };
-    let id = id.ok_or_else(|| InvalidFrame(format!("identifier 0x{:X} out of range", soft.id)))?;
+    let id = id.ok_or(InvalidFrame::Identifier {
+        id: soft.id,
+        extended: soft.extended,
+    })?;
     let frame = if soft.fd {
         Frame::fd(id, soft.brs, soft.esi, &soft.data[..soft.len.min(64)])
     } else if soft.remote {
@@ -227,13 +229,7 @@ fn from_soft(soft: &CanFrame) -> Result<Frame, InvalidFrame> {
     } else {
         Frame::classic(id, &soft.data[..soft.len.min(64)])
     };
-    frame.map_err(|e| {
-        InvalidFrame(format!(
-            "{e} ({} data bytes{})",
-            soft.len,
-            if soft.fd { ", FD" } else { "" }
-        ))
-    })
+    frame.map_err(InvalidFrame::Parts)
 }
 
 /// The soft device's settings for a model configuration and profile.

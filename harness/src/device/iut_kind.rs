@@ -83,10 +83,10 @@ impl IutKind {
             } => {
                 let mut iut =
                     ExecIut::spawn(command, Duration::from_millis(*timeout_ms), *same_cpu)
-                        .map_err(|e| BuildError::Failed(e.0))?;
+                        .map_err(BuildError::Failed)?;
                 match iut
                     .configure(caps, config, bus)
-                    .map_err(|e| BuildError::Failed(e.0))?
+                    .map_err(BuildError::Failed)?
                 {
                     Configured::Accepted => Ok(Box::new(iut)),
                     Configured::Refused(reason) => Err(BuildError::Refused(reason)),
@@ -112,12 +112,12 @@ impl IutKind {
                         Some(iut) => iut,
                         None => process.insert(
                             ExecIut::spawn(&command, timeout, same_cpu)
-                                .map_err(|e| BuildError::Failed(e.0))?,
+                                .map_err(BuildError::Failed)?,
                         ),
                     };
                     match iut
                         .configure(caps, config, None)
-                        .map_err(|e| BuildError::Failed(e.0))?
+                        .map_err(BuildError::Failed)?
                     {
                         Configured::Accepted => Ok(()),
                         Configured::Refused(reason) => Err(BuildError::Refused(reason)),

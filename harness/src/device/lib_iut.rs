@@ -12,7 +12,7 @@ use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 
 use crate::device::iut::{BuildError, InvalidFrame, Iut, Transmit};
-use crate::error::IutError;
+use crate::error::{IutCause, IutError};
 
 /// A library's device behind the [`Iut`] trait.
 pub struct LibIut {
@@ -26,7 +26,8 @@ pub fn build(
     caps: &Capabilities,
     config: &InterfaceConfig,
 ) -> Result<LibIut, BuildError> {
-    let library = Library::open(path).map_err(BuildError::Failed)?;
+    let library = Library::open(path)
+        .map_err(|e| BuildError::Failed(IutError::new(IutCause::NotStarted, e)))?;
     let c_config = c_config(caps, config);
     let c_caps = CCapabilities {
         base11: u8::from(caps.base11),
@@ -126,7 +127,10 @@ pub(crate) fn from_c(c: &CFrame) -> Result<Frame, InvalidFrame> {
     } else {
         CanId::standard(c.id)
     }
-    .ok_or_else(|| InvalidFrame(format!("identifier 0x{:X} out of range", c.id)))?;
+    .ok_or(InvalidFrame::Identifier {
+        id: c.id,
+        extended: c.extended != 0,
+    })?;
     let len = usize::from(c.len).min(64);
     let frame = if flag(c.fd) {
         Frame::fd(id, flag(c.brs), flag(c.esi), &c.data[..len])
@@ -135,12 +139,14 @@ pub(crate) fn from_c(c: &CFrame) -> Result<Frame, InvalidFrame> {
     } else {
         Frame::classic(id, &c.data[..len])
     };
-    frame.map_err(|e| InvalidFrame(format!("{e} ({} data bytes)", c.len)))
+    frame.map_err(InvalidFrame::Parts)
 }
 
 impl Iut for LibIut {
     fn cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError> {
-        self.device.cycle(now, outputs).map_err(IutError)
+        self.device
+            .cycle(now, outputs)
+            .map_err(|e| IutError::new(IutCause::Reported, e))
     }
     fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) -> Result<(), IutError> {
         self.device.receive(&to_c(frame), end_of_reception);

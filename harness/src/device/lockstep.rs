@@ -19,7 +19,7 @@ use crate::device::pair::Pair;
 use crate::device::played_plc::{PlcSide, TaskStimulus};
 use crate::device::protocol_order::Ordered;
 use crate::device::scenario::{Judgement, Scenario, Step};
-use crate::error::{IutError, RunError};
+use crate::error::{HarnessError, IutCause, IutError, Refusal, RunError};
 use crate::outcome::{Outcome, ScenarioRun};
 use crate::trace::TraceWriter;
 
@@ -73,11 +73,8 @@ fn start(
     caps: &Capabilities,
     scenario: &Scenario,
 ) -> Result<(Pair, Box<dyn Bus>), RunError> {
-    let model = Device::new(caps, scenario.interface.clone()).map_err(|e| {
-        RunError::Configuration(format!(
-            "the model refuses the scenario's configuration: {e}"
-        ))
-    })?;
+    let model = Device::new(caps, scenario.interface.clone())
+        .map_err(|e| RunError::Configuration(Refusal::Model(e)))?;
     let bus = scenario
         .bus
         .open(scenario.bit_rates, matches!(kind, IutKind::Exec { .. }))?;
@@ -86,11 +83,9 @@ fn start(
         Ok(iut) if bus.real_time() => iut,
         Ok(iut) => Box::new(Ordered::new(iut)),
         Err(BuildError::Refused(reason)) => {
-            return Err(RunError::Configuration(format!(
-                "the IUT refuses a configuration the profile allows: {reason}"
-            )))
+            return Err(RunError::Configuration(Refusal::Iut(reason)))
         }
-        Err(BuildError::Failed(reason)) => return Err(IutError(reason).into()),
+        Err(BuildError::Failed(error)) => return Err(error.into()),
     };
     let trace = scenario.trace.as_ref().and_then(|(dir, name, epoch)| {
         TraceWriter::create(dir, name, &bus.interface_name(), *epoch).ok()
@@ -142,9 +137,8 @@ impl Lockstep<'_> {
         }
         for message in step.send {
             if self.plc.send(message).is_err() {
-                return Err(Outcome::Error(RunError::Harness(format!(
-                    "scenario bug: a message that does not fit {}",
-                    layout.tx_message.name
+                return Err(Outcome::Error(RunError::Harness(HarnessError::Scenario(
+                    format!("a message that does not fit {}", layout.tx_message.name),
                 ))));
             }
         }
@@ -163,9 +157,10 @@ impl Lockstep<'_> {
                 raw_outputs: step.raw_outputs.as_deref(),
             };
             let report = self.plc.task(k, stimulus).map_err(|e| {
-                Outcome::Error(RunError::Iut(IutError(format!(
-                    "the PLC cannot read the IUT's input image: {e}"
-                ))))
+                Outcome::Error(RunError::Iut(IutError::new(
+                    IutCause::Impossible,
+                    format!("the PLC cannot read the IUT's input image: {e}"),
+                )))
             })?;
             let wanted = u64::from(scenario.exchange.confirmation_cycles());
             match report.confirmed_after {
@@ -195,8 +190,8 @@ impl Lockstep<'_> {
         let expected = match self.pair.model.cycle(&outputs, t) {
             Ok(inputs) => inputs.to_vec(),
             Err(e) => {
-                return Err(Outcome::Error(RunError::Harness(format!(
-                    "harness bug: {e}"
+                return Err(Outcome::Error(RunError::Harness(HarnessError::Model(
+                    e.to_string(),
                 ))))
             }
         };

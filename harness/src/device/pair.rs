@@ -184,7 +184,7 @@ impl Pair {
                 candidates: blame::TX_INVALID,
                 what,
                 expected: e.map_or("no frame".into(), |f| f.to_string()),
-                actual: format!("invalid frame: {}", invalid.0),
+                actual: format!("invalid frame: {invalid}"),
             },
             (Some(e), None) => Difference {
                 frames: None,

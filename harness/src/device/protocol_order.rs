@@ -11,7 +11,7 @@ use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 
 use crate::device::iut::{Iut, Planned, Transmit};
-use crate::error::IutError;
+use crate::error::{IutCause, IutError};
 
 /// An IUT whose requests are checked against the protocol's promises before
 /// they reach it.
@@ -45,9 +45,10 @@ impl Ordered {
 }
 
 fn broken(what: String) -> IutError {
-    IutError(format!(
-        "harness bug: the harness broke docs/adapter-protocol.md: {what}"
-    ))
+    IutError::new(
+        IutCause::HarnessBug,
+        format!("harness bug: the harness broke docs/adapter-protocol.md: {what}"),
+    )
 }
 
 impl Iut for Ordered {
@@ -138,7 +139,7 @@ mod tests {
         let frame = Frame::classic(CanId::Standard(1), &[]).unwrap();
         iut.receive(&frame, 10_000).unwrap();
         let error = iut.cycle(&one_frame_to_send(), 0).unwrap_err();
-        assert!(error.0.contains("non-decreasing"), "{}", error.0);
+        assert!(error.what.contains("non-decreasing"), "{}", error.what);
     }
 
     #[test]
@@ -147,7 +148,7 @@ mod tests {
         iut.cycle(&one_frame_to_send(), 0).unwrap();
         assert!(iut.poll_transmit(0).unwrap().is_some());
         let error = iut.poll_transmit(100).unwrap_err();
-        assert!(error.0.contains("idle"), "{}", error.0);
+        assert!(error.what.contains("idle"), "{}", error.what);
         iut.transmit_complete().unwrap();
         assert!(iut.poll_transmit(200).unwrap().is_none());
     }

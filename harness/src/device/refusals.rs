@@ -125,9 +125,7 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
             let actual = match configure(caps, &config) {
                 Ok(()) => Ok(()),
                 Err(BuildError::Refused(reason)) => Err(reason),
-                Err(BuildError::Failed(reason)) => {
-                    return Some(Outcome::Error(crate::error::IutError(reason).into()))
-                }
+                Err(BuildError::Failed(reason)) => return Some(Outcome::Error(reason.into())),
             };
             (expected.is_ok() != actual.is_ok())
                 .then(|| Outcome::Fail(Box::new(mismatch(&config, expected, actual))))

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use canif_spec::{Catalogue, Profile, ReqId};
 
 use super::Selection;
-use crate::error::RunError;
+use crate::error::{Broke, RunError};
 use crate::outcome::{Failure, Outcome, ScenarioRun};
 use crate::verdict::{self, Check, CheckResult, Evidence, Finding, Reach, Verdict, VerdictKind};
 
@@ -136,7 +136,7 @@ pub fn run_profile<S: Side>(
     mut progress: impl FnMut(&ScenarioRun),
 ) -> ProfileRun {
     let mut runs = Vec::new();
-    let mut broken: Option<String> = None;
+    let mut broken: Option<Broke> = None;
     for case in side.cases(profile) {
         let name = S::name(&case);
         if !side
@@ -152,7 +152,7 @@ pub fn run_profile<S: Side>(
             Some(after) => ScenarioRun {
                 scenario: name,
                 covers: S::covers(&case).to_vec(),
-                outcome: Outcome::Error(RunError::Skipped(after.clone())),
+                outcome: Outcome::Error(RunError::Skipped(Box::new(after.clone()))),
                 cycles: 0,
                 frames_checked: 0,
                 tolerated: 0,
@@ -177,14 +177,13 @@ pub fn run_profile<S: Side>(
 
 /// Where and how what is under test broke in `run`, if it did: what the
 /// profile's later cases are skipped after.
-fn broke_in<S: Side>(run: &ScenarioRun) -> Option<String> {
+fn broke_in<S: Side>(run: &ScenarioRun) -> Option<Broke> {
     match &run.outcome {
-        Outcome::Error(RunError::Iut(error)) => Some(format!(
-            "{} broke in `{}`: {}",
-            S::UNDER_TEST,
-            run.scenario,
-            error.headline()
-        )),
+        Outcome::Error(RunError::Iut(error)) => Some(Broke {
+            under_test: S::UNDER_TEST,
+            scenario: run.scenario.clone(),
+            error: error.clone(),
+        }),
         _ => None,
     }
 }

@@ -1,6 +1,8 @@
 //! Frames and bytes on the protocol's lines.
 
 use canif_model::frame::{CanId, Frame, FrameKind};
+
+use crate::error::InvalidFrame;
 use serde::{Deserialize, Serialize};
 
 /// A frame the controller starts sending: a valid frame, or what the device
@@ -136,25 +138,36 @@ impl WireFrame {
     }
 }
 
+impl WireFrame {
+    /// The CAN frame a consistent message (see [`WireFrame::check`])
+    /// describes; `Err` for one that no controller can send (9 classic bytes,
+    /// 36 FD bytes, a remote frame above 8, an identifier beyond its format).
+    pub fn to_frame(&self) -> Result<Frame, InvalidFrame> {
+        let id = if self.extended {
+            CanId::extended(self.id)
+        } else {
+            CanId::standard(self.id)
+        }
+        .ok_or(InvalidFrame::Identifier {
+            id: self.id,
+            extended: self.extended,
+        })?;
+        let frame = if self.fd {
+            Frame::fd(id, self.brs, self.esi, &self.data.0)
+        } else if self.rtr {
+            Frame::remote(id, self.len)
+        } else {
+            Frame::classic(id, &self.data.0)
+        };
+        frame.map_err(InvalidFrame::Parts)
+    }
+}
+
 impl TryFrom<&WireFrame> for Frame {
     type Error = String;
-    /// The CAN frame a consistent message describes; `Err` for one that no
-    /// controller can send (9 classic bytes, 36 FD bytes, a remote frame above 8).
+    /// A consistent message's frame, or why there is none, in words.
     fn try_from(wire: &WireFrame) -> Result<Frame, String> {
         wire.check()?;
-        let id = if wire.extended {
-            CanId::extended(wire.id)
-        } else {
-            CanId::standard(wire.id)
-        }
-        .ok_or_else(|| format!("identifier 0x{:X} out of range", wire.id))?;
-        let frame = if wire.fd {
-            Frame::fd(id, wire.brs, wire.esi, &wire.data.0)
-        } else if wire.rtr {
-            Frame::remote(id, wire.len)
-        } else {
-            Frame::classic(id, &wire.data.0)
-        };
-        frame.map_err(|e| e.to_string())
+        wire.to_frame().map_err(|e| e.to_string())
     }
 }
