@@ -231,3 +231,149 @@ impl Controller for Pair {
         )
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn classic(id: CanId) -> Frame {
+        Frame::classic(id, &[1, 2]).unwrap()
+    }
+
+    fn standard(id: u16) -> Frame {
+        classic(CanId::Standard(id))
+    }
+
+    #[test]
+    fn arbitration_follows_the_bits_on_the_wire() {
+        let key = arbitration_key;
+        assert!(key(&standard(0x100)) < key(&standard(0x101)));
+        // A data frame wins over a remote frame of the same identifier (RTR is recessive).
+        assert!(key(&standard(0x100)) < key(&Frame::remote(CanId::Standard(0x100), 2).unwrap()));
+        // A standard frame wins over an extended one with the same base identifier (SRR, IDE).
+        let extended = classic(CanId::Extended(0x100 << 18));
+        assert!(key(&standard(0x100)) < key(&extended));
+        // An extended frame with a lower base identifier wins over a standard one.
+        assert!(key(&classic(CanId::Extended(0x0FF << 18))) < key(&standard(0x100)));
+    }
+
+    #[test]
+    fn nodes_release_frames_when_ready_and_lowest_key_first() {
+        let mut nodes = Nodes::default();
+        nodes.schedule(10, standard(0x300));
+        nodes.schedule(0, standard(0x200));
+        nodes.schedule(0, standard(0x100));
+        assert_eq!(nodes.len(), 3);
+        assert_eq!(nodes.take_best(5), Some(standard(0x100)));
+        assert_eq!(nodes.next_ready_after(5), Some(10));
+        assert_eq!(nodes.take_best(5), Some(standard(0x200)));
+        assert_eq!(nodes.take_best(5), None, "0x300 is not ready before 10 ns");
+        assert_eq!(nodes.take_best(10), Some(standard(0x300)));
+        assert!(nodes.is_empty());
+    }
+
+    /// A controller with one frame to send, recording what ended on the bus.
+    #[derive(Default)]
+    struct Node {
+        now: Nanos,
+        pending: Option<Frame>,
+        to_send: Vec<Frame>,
+        ended: Vec<(Frame, bool, Nanos)>,
+        due: Option<Nanos>,
+    }
+
+    impl Controller for Node {
+        type Error = String;
+        fn now(&mut self) -> &mut Nanos {
+            &mut self.now
+        }
+        fn pending(&mut self) -> &mut Option<Frame> {
+            &mut self.pending
+        }
+        fn poll(&mut self) -> Result<(), String> {
+            if self.pending.is_none() {
+                self.pending = self.to_send.pop();
+            }
+            Ok(())
+        }
+        fn due(&self) -> Option<Nanos> {
+            self.due
+        }
+        fn ended(&mut self, frame: Frame, own: bool, end: Nanos) -> Result<(), String> {
+            self.ended.push((frame, own, end));
+            Ok(())
+        }
+        fn stalled(&self, steps: usize) -> String {
+            format!("stalled after {steps}")
+        }
+    }
+
+    #[test]
+    fn the_lower_identifier_takes_the_bus_and_the_other_follows_back_to_back() {
+        let rates = BitRates::classic(500_000);
+        let mut bus = SimBus::new(rates);
+        bus.schedule(0, standard(0x100));
+        let mut node = Node {
+            to_send: vec![standard(0x200)],
+            ..Node::default()
+        };
+        bus.drive(&mut node, 1_000_000).unwrap();
+        let first = duration(&standard(0x100), rates);
+        let second = duration(&standard(0x200), rates);
+        assert_eq!(
+            node.ended,
+            [
+                (standard(0x100), false, first),
+                (standard(0x200), true, first + second)
+            ]
+        );
+        assert_eq!(node.now, 1_000_000, "the bus runs to the end of the cycle");
+    }
+
+    #[test]
+    fn a_frame_still_on_the_wire_at_the_end_of_the_cycle_ends_in_the_next() {
+        let rates = BitRates::classic(125_000);
+        let mut bus = SimBus::new(rates);
+        let mut node = Node {
+            to_send: vec![standard(0x123)],
+            ..Node::default()
+        };
+        bus.drive(&mut node, 10_000).unwrap();
+        assert!(node.ended.is_empty());
+        bus.drive(&mut node, 1_000_000).unwrap();
+        assert_eq!(node.ended.len(), 1);
+        assert_eq!(node.ended[0].2, duration(&standard(0x123), rates));
+    }
+
+    #[test]
+    fn a_node_whose_due_time_never_advances_stalls_the_bus() {
+        let mut bus = SimBus::new(BitRates::classic(500_000));
+        // A due time always just ahead of now: polled again and again.
+        struct Stuck(Node);
+        impl Controller for Stuck {
+            type Error = String;
+            fn now(&mut self) -> &mut Nanos {
+                self.0.now()
+            }
+            fn pending(&mut self) -> &mut Option<Frame> {
+                self.0.pending()
+            }
+            fn poll(&mut self) -> Result<(), String> {
+                Ok(())
+            }
+            fn due(&self) -> Option<Nanos> {
+                Some(self.0.now + 1)
+            }
+            fn ended(&mut self, frame: Frame, own: bool, end: Nanos) -> Result<(), String> {
+                self.0.ended(frame, own, end)
+            }
+            fn stalled(&self, steps: usize) -> String {
+                self.0.stalled(steps)
+            }
+        }
+        let error = bus
+            .drive(&mut Stuck(Node::default()), 1_000_000_000)
+            .unwrap_err();
+        assert_eq!(error, format!("stalled after {MOST_EVENTS_PER_CYCLE}"));
+    }
+}

@@ -151,3 +151,31 @@ pub fn narrow_tags(tags: &[String], witnessed: &[ReqId]) -> Vec<String> {
         narrowed
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_difference_blames_what_the_scenario_exercises_of_the_field_else_the_field() {
+        let covers = req_ids!["LAY-GEN-003", "HS-TX-001"];
+        assert_eq!(narrow(covers, BYTE_ORDER), req_ids!["LAY-GEN-003"]);
+        assert_eq!(narrow(covers, COB_WORD), req_ids!["LAY-GEN-003"]);
+        assert_eq!(narrow(req_ids!["HS-TX-001"], COB_RTR), COB_RTR);
+    }
+
+    #[test]
+    fn a_gherkin_check_blames_only_witnessed_tags_else_every_tag() {
+        let tags = vec!["HS-RX-005".to_string(), "HS-TX-005".to_string()];
+        assert_eq!(narrow_tags(&tags, RX_COUNTING), ["HS-RX-005"]);
+        assert_eq!(narrow_tags(&tags, TIME_STAMP), tags);
+    }
+
+    #[test]
+    fn every_info_data_word_has_its_requirement() {
+        for index in 0..canif_model::image::field::INFO_DATA_WORDS {
+            assert!(!info_data(index).is_empty(), "InfoData[{index}]");
+        }
+        assert_eq!(info_data(3), req_ids!["INFO-004"]);
+    }
+}

@@ -153,3 +153,49 @@ impl History {
             .collect()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use canif_model::config::{FrameFormat, InterfaceConfig};
+    use canif_model::frame::CanId;
+
+    use super::*;
+    use crate::run::CONTEXT;
+
+    #[test]
+    fn a_failure_shows_the_last_cycles_with_the_frames_that_ended_before_each() {
+        let layout = ImageLayout::new(&InterfaceConfig::new(FrameFormat::Base11, 2), false);
+        let (outputs, inputs) = (vec![0; layout.output_size()], vec![0; layout.input_size()]);
+        let mut history = History::default();
+        let frame = Frame::classic(CanId::Standard(0x321), &[7]).unwrap();
+        for cycle in 0..10u64 {
+            history.cycle(layout, (cycle, cycle * 1_000), &outputs, &inputs, &inputs);
+            if cycle == 8 {
+                history.frame(cycle, false, frame, cycle * 1_000 + 500);
+            }
+        }
+        let timeline = history.timeline();
+        assert_eq!(timeline.len(), CONTEXT);
+        assert_eq!(timeline.first().map(|c| c.cycle), Some(10 - CONTEXT as u64));
+        let cycle9 = timeline.iter().find(|c| c.cycle == 9).unwrap();
+        assert_eq!(
+            cycle9.frames.len(),
+            1,
+            "the frame of cycle 8 shows before cycle 9"
+        );
+        assert!(!cycle9.frames[0].from_iut);
+        let context = history.context();
+        assert_eq!(context.len(), CONTEXT);
+        assert!(context.last().unwrap().contains("rx"), "{context:?}");
+        assert!(history.received_lately(&frame));
+        assert!(!history.received_lately(&Frame::classic(CanId::Standard(1), &[]).unwrap()));
+    }
+
+    #[test]
+    fn an_image_of_the_wrong_size_is_remembered_as_an_empty_header() {
+        let layout = ImageLayout::new(&InterfaceConfig::new(FrameFormat::Base11, 2), false);
+        let mut history = History::default();
+        history.cycle(layout, (0, 0), &[1, 2], &[3], &[4]);
+        assert_eq!(history.timeline()[0].actual, InputHeader::default());
+    }
+}

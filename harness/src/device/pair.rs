@@ -281,3 +281,79 @@ impl Pair {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig};
+    use canif_model::frame::CanId;
+    use canif_model::info_data::ControllerStatus;
+
+    use super::*;
+    use crate::device::iut::Transmit;
+
+    /// A device that offers one frame to its controller whenever polled.
+    struct Babbler(Frame);
+
+    impl Iut for Babbler {
+        fn cycle(&mut self, _: &[u8], _: Nanos) -> Result<Vec<u8>, crate::error::IutError> {
+            Ok(Vec::new())
+        }
+        fn receive(&mut self, _: &Frame, _: Nanos) -> Result<(), crate::error::IutError> {
+            Ok(())
+        }
+        fn poll_transmit(&mut self, _: Nanos) -> Result<Transmit, crate::error::IutError> {
+            Ok(Some(Ok(self.0)))
+        }
+        fn poll_timeout(&self) -> Option<Nanos> {
+            None
+        }
+        fn transmit_complete(&mut self) -> Result<(), crate::error::IutError> {
+            Ok(())
+        }
+        fn controller_status(
+            &mut self,
+            _: &ControllerStatus,
+        ) -> Result<(), crate::error::IutError> {
+            Ok(())
+        }
+    }
+
+    fn pair(iut: Box<dyn Iut>) -> Pair {
+        let config = InterfaceConfig::new(FrameFormat::Base11, 4);
+        let model = Device::new(&Capabilities::everything(), config).unwrap();
+        let covers = canif_spec::req_ids!["HS-TX-006"];
+        Pair::new(iut, model, ("babble", covers), None)
+    }
+
+    fn frame() -> Frame {
+        Frame::classic(CanId::Standard(0x55), &[1]).unwrap()
+    }
+
+    #[test]
+    fn a_frame_the_model_does_not_send_fails_on_what_the_scenario_exercises_of_it() {
+        let mut pair = pair(Box::new(Babbler(frame())));
+        let Err(Outcome::Fail(failure)) = pair.poll() else {
+            panic!("an extra frame passed")
+        };
+        assert_eq!(failure.requirements, canif_spec::req_ids!["HS-TX-006"]);
+        assert_eq!(failure.what, "frame handed to the controller");
+        assert_eq!(failure.expected, "no frame");
+    }
+
+    #[test]
+    fn agreement_hands_the_frame_on_and_each_disagreement_has_its_blame() {
+        let pair = pair(Box::new(Babbler(frame())));
+        assert_eq!(pair.transmit_difference(None, None), Ok(None));
+        assert_eq!(
+            pair.transmit_difference(Some(frame()), Some(Ok(frame()))),
+            Ok(Some(frame()))
+        );
+        let missing = pair.transmit_difference(Some(frame()), None).unwrap_err();
+        assert_eq!(missing.candidates, blame::TX_MISSING);
+        let invalid = pair
+            .transmit_difference(None, Some(Err(InvalidFrame::Declared("36 bytes".into()))))
+            .unwrap_err();
+        assert_eq!(invalid.candidates, blame::TX_INVALID);
+        assert_eq!(invalid.actual, "invalid frame: 36 bytes");
+    }
+}
