@@ -330,7 +330,7 @@ fn the_configure_of_a_socketcan_bus_fits_the_schema() {
         env!("CARGO_BIN_EXE_canif")
     );
     let mut iut =
-        canif_harness::adapter::exec_iut::ExecIut::spawn(&command, Duration::from_secs(5), false)
+        canif_harness::device::exec_iut::ExecIut::spawn(&command, Duration::from_secs(5), false)
             .unwrap();
     let bus = canif_harness::adapter::protocol::OwnedBus {
         interface: "vcan0".into(),
@@ -345,7 +345,7 @@ fn the_configure_of_a_socketcan_bus_fits_the_schema() {
         .unwrap();
     assert_eq!(
         answer,
-        canif_harness::adapter::exec_iut::Configured::Accepted
+        canif_harness::device::exec_iut::Configured::Accepted
     );
     drop(iut);
     std::thread::sleep(Duration::from_millis(100));

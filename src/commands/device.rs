@@ -4,8 +4,8 @@
 use std::io::Write as _;
 use std::process::ExitCode;
 
-use canif_harness::adapter::server::{self, Build};
-use canif_harness::bus::BusChoice;
+use canif_harness::device::bus::BusChoice;
+use canif_harness::device::server::{self, Build};
 use canif_harness::device::IutKind;
 
 use super::soft_device_faults;
@@ -43,7 +43,7 @@ pub(crate) fn device(stdio: bool, faults: &[String], protocol: u64, bus: Option<
 fn serve_on_bus(build: &Build<'_>, bus: &str) -> Result<(), String> {
     let spec = canif_kernel::BusSpec::parse(bus).map_err(|e| format!("--bus {e}"))?;
     canif_kernel::probe().map_err(|e| format!("--bus {bus}: {e}"))?;
-    canif_harness::adapter::device_bus::serve_on_bus(build, Some(&spec.iut))
+    canif_harness::device::server_bus::serve_on_bus(build, Some(&spec.iut))
         .map_err(|e| e.to_string())
 }
 

@@ -3,12 +3,10 @@
 //!
 //! - [`protocol`]: the messages, as serde types, written once.
 //! - [`process`]: an implementation in another process, in either role.
-//! - [`exec_iut`]: the harness's side of the device role — an IUT process behind the [`crate::device::Iut`] trait.
-//! - [`server`]: the device's side — an in-process IUT served over stdin/stdout.
+//!
+//! Each side's use of it is the side's own: `device::exec_iut` (a device
+//! process), `device::server` (an in-process device served over stdin and
+//! stdout), `client::exec` (a client process).
 
-#[cfg(feature = "socketcan")]
-pub mod device_bus;
-pub mod exec_iut;
 pub mod process;
 pub mod protocol;
-pub mod server;

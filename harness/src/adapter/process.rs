@@ -125,7 +125,7 @@ fn share_cpu() {
 
 /// An implementation under test in another process, in a process group of
 /// its own (whatever it starts ends with it), in either role: a device
-/// ([`super::exec_iut::ExecIut`]) or a client ([`crate::client::exec`]).
+/// (`device::exec_iut`) or a client (`client::exec`).
 pub struct AdapterProcess {
     command: String,
     child: Child,

@@ -9,10 +9,6 @@ use canif_model::frame::{CanId, Frame, FrameKind};
 use canif_model::timing::{frame_duration, BitRates, Stuffing};
 use canif_model::Nanos;
 
-use super::Bus;
-use crate::device::pair::Pair;
-use crate::outcome::Outcome;
-
 /// The bits a frame sends during arbitration, as a number: lower wins.
 /// Standard: id(11) RTR IDE=0; extended: base(11) SRR=1 IDE=1 ext(18) RTR.
 pub fn arbitration_key(frame: &Frame) -> u64 {
@@ -91,8 +87,8 @@ impl Nodes {
 }
 
 /// What the simulated bus needs of the node whose controller it serves: the
-/// device under test beside the model (the lockstep's pair), or the model
-/// device alone (the device side, when a PLC-side client is under test).
+/// device under test beside the model (the device side's pair), or the model
+/// device alone (the played device, when a PLC-side client is under test).
 pub trait Controller {
     /// Why the run cannot go on.
     type Error;
@@ -131,6 +127,11 @@ impl SimBus {
             bit_rates,
             on_bus: None,
         }
+    }
+
+    /// Another node's frame, ready to send from `at`.
+    pub fn schedule(&mut self, at: Nanos, frame: Frame) {
+        self.nodes.schedule(at, frame);
     }
 
     /// The controller resets (a device restart): its frame on the wire, if
@@ -186,49 +187,6 @@ impl SimBus {
             }
         }
         Err(node.stalled(MOST_EVENTS_PER_CYCLE))
-    }
-}
-
-impl Bus for SimBus {
-    fn schedule(&mut self, at: Nanos, frame: Frame) {
-        self.nodes.schedule(at, frame);
-    }
-
-    fn run_until(&mut self, pair: &mut Pair, until: Nanos) -> Result<(), Outcome> {
-        self.drive(pair, until)
-    }
-}
-
-impl Controller for Pair {
-    type Error = Outcome;
-    fn now(&mut self) -> &mut Nanos {
-        &mut self.now
-    }
-    fn pending(&mut self) -> &mut Option<Frame> {
-        &mut self.iut_pending
-    }
-    fn poll(&mut self) -> Result<(), Outcome> {
-        Pair::poll(self)
-    }
-    fn due(&self) -> Option<Nanos> {
-        Pair::due(self)
-    }
-    fn ended(&mut self, frame: Frame, own: bool, end: Nanos) -> Result<(), Outcome> {
-        self.complete(frame, own, end)
-    }
-    fn stalled(&self, steps: usize) -> Outcome {
-        Outcome::Error(
-            crate::error::IutError::new(
-                crate::error::IutCause::Impossible,
-                format!(
-                    "the IUT asked to be polled {steps} times within one cycle: its due time \
-                 (next_ns {:?}) does not advance past {} ns",
-                    self.iut.poll_timeout(),
-                    self.now
-                ),
-            )
-            .into(),
-        )
     }
 }
 

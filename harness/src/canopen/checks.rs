@@ -61,7 +61,7 @@ pub fn node_check_ids() -> Vec<&'static str> {
     .clone()
 }
 
-pub(super) fn sdo_request(node: NodeId, request: SdoRequest) -> Frame {
+pub fn sdo_request(node: NodeId, request: SdoRequest) -> Frame {
     Frame::classic(
         CanId::Standard(default_cob_id(Channel::SdoRequest, node)),
         &request.to_bytes(),

@@ -10,13 +10,11 @@
 mod checks;
 #[cfg(feature = "socketcan")]
 pub mod on_bus;
-mod quick_start;
 #[cfg(feature = "socketcan")]
 mod socketcan;
 pub mod socketcand;
 
-pub use checks::{check_node, node_check_ids, NodeCheck};
-pub use quick_start::quick_start;
+pub use checks::{check_node, node_check_ids, sdo_request, NodeCheck};
 #[cfg(feature = "socketcan")]
 pub use socketcan::SocketCanNode;
 

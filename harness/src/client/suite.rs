@@ -17,7 +17,7 @@ use super::master::Master;
 use super::{judge, rig, Client, ReferenceClient};
 use crate::client::played_device::PlayedDevice;
 use crate::device::iut::BuildError;
-use crate::error::{BusCause, BusError, RunError};
+use crate::error::RunError;
 use crate::outcome::{Outcome, ScenarioRun};
 
 use crate::run::{self, KillRow, ProfileRun, Selection, Side as RunSide};
@@ -107,9 +107,14 @@ impl ClientBus {
             ClientBus::Sim => rig::simulated(caps, config, bit_rates),
             #[cfg(feature = "socketcan")]
             ClientBus::SocketCan { interface, timeout } => {
-                crate::bus::kernel_device::KernelDeviceSide::open(caps, config, interface, *timeout)
-                    .map(|d| Box::new(d) as Box<dyn PlayedDevice>)
-                    .map_err(|e| RunError::Bus(BusError::new(BusCause::Unavailable, e)))
+                crate::client::played_device::kernel::KernelDeviceSide::open(
+                    caps, config, interface, *timeout,
+                )
+                .map(|d| Box::new(d) as Box<dyn PlayedDevice>)
+                .map_err(|e| {
+                    use crate::error::{BusCause, BusError};
+                    RunError::Bus(BusError::new(BusCause::Unavailable, e))
+                })
             }
         }
     }

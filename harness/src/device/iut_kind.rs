@@ -8,8 +8,8 @@ use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_model::device::Device;
 use canif_softdevice::{Choice, Fault, SoftDevice};
 
-use crate::adapter::exec_iut::{Configured, ExecIut};
 use crate::adapter::protocol::OwnedBus;
+use crate::device::exec_iut::{Configured, ExecIut};
 use crate::device::iut::{soft_settings, BuildError, Iut, ModelIut, SoftDeviceIut};
 
 /// Which implementation to run.

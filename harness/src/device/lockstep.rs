@@ -9,9 +9,9 @@ use canif_model::device::Device;
 use canif_model::image::{InputImage, OutputImage};
 use canif_model::Nanos;
 
-use crate::bus::Bus;
 use crate::device::blame;
 use crate::device::bounds::Bounds;
+use crate::device::bus::Bus;
 use crate::device::diff::{Difference, InputCheck, RxState};
 use crate::device::iut::BuildError;
 use crate::device::iut_kind::IutKind;

@@ -4,24 +4,35 @@
 //! same stimulus ([`lockstep`], [`pair`]) and blames each difference on the
 //! requirements of the field that differs ([`diff`], [`blame`], [`bounds`]).
 //!
-//! The arrows run one way: `suite` → `cases`, `refusals`, `lockstep` → `played_plc`, `pair`,
-//! `crate::bus` → `diff`, `blame`, `history`; `iut_kind` → `crate::adapter`,
-//! `iut`, `lib_iut`.
+//! The arrows run one way: `suite` → `cases`, `refusals`, `lockstep` →
+//! `played_plc`, `pair`, `bus` (`crate::bus::sim`, `kernel_bus`) → `diff`,
+//! `blame`, `history`; `iut_kind` → `iut`, `exec_iut` (`crate::adapter`),
+//! `lib_iut`. `server` (and `server_bus`) serve an in-process device over the
+//! adapter protocol; `quick_start` drives the CANopen quick start through an
+//! IUT's process image.
 
 pub mod blame;
 pub mod bounds;
+pub mod bus;
 pub mod cases;
 pub mod diff;
+pub mod exec_iut;
 pub(crate) mod history;
 pub mod iut;
 pub mod iut_kind;
+#[cfg(feature = "socketcan")]
+pub mod kernel_bus;
 pub mod lib_iut;
 pub mod lockstep;
 pub(crate) mod pair;
 pub mod played_plc;
 pub mod protocol_order;
+pub mod quick_start;
 pub mod refusals;
 pub mod scenario;
+pub mod server;
+#[cfg(feature = "socketcan")]
+pub mod server_bus;
 pub mod suite;
 
 pub use iut::{BuildError, Iut};

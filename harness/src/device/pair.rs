@@ -10,6 +10,7 @@ use canif_model::image::{ImageLayout, LengthField};
 use canif_model::Nanos;
 use canif_spec::ReqId;
 
+use crate::bus::sim::Controller;
 use crate::device::blame;
 use crate::device::bounds::Bounds;
 use crate::device::diff::{frame_difference, Difference};
@@ -279,6 +280,39 @@ impl Pair {
         if let Some(trace) = self.trace.take() {
             let _ = trace.finish();
         }
+    }
+}
+
+impl Controller for Pair {
+    type Error = Outcome;
+    fn now(&mut self) -> &mut Nanos {
+        &mut self.now
+    }
+    fn pending(&mut self) -> &mut Option<Frame> {
+        &mut self.iut_pending
+    }
+    fn poll(&mut self) -> Result<(), Outcome> {
+        Pair::poll(self)
+    }
+    fn due(&self) -> Option<Nanos> {
+        Pair::due(self)
+    }
+    fn ended(&mut self, frame: Frame, own: bool, end: Nanos) -> Result<(), Outcome> {
+        self.complete(frame, own, end)
+    }
+    fn stalled(&self, steps: usize) -> Outcome {
+        Outcome::Error(
+            crate::error::IutError::new(
+                crate::error::IutCause::Impossible,
+                format!(
+                    "the IUT asked to be polled {steps} times within one cycle: its due time \
+                 (next_ns {:?}) does not advance past {} ns",
+                    self.iut.poll_timeout(),
+                    self.now
+                ),
+            )
+            .into(),
+        )
     }
 }
 

@@ -11,7 +11,7 @@ use super::iut_kind::IutKind;
 use super::lockstep::run_scenario;
 use super::refusals::{check_refusals, REFUSALS, REFUSAL_IDS};
 use super::scenario::Scenario;
-use crate::bus::BusChoice;
+use crate::device::bus::BusChoice;
 use crate::outcome::ScenarioRun;
 use crate::run::{self, KillRow, ProfileRun, Selection, Side};
 use crate::verdict::{NotRunReason, Reach};

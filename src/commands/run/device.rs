@@ -4,9 +4,9 @@
 use std::path::Path;
 use std::process::ExitCode;
 
+use canif_harness::device::bus::BusChoice;
 #[cfg(feature = "socketcan")]
-use canif_harness::bus::kernel::KernelBusOptions;
-use canif_harness::bus::BusChoice;
+use canif_harness::device::kernel_bus::KernelBusOptions;
 use canif_harness::device::{IutKind, Options};
 use canif_harness::report::{RunMeta, RunReport};
 use canif_harness::{Outcome, RunError};

@@ -5,9 +5,9 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use canif_harness::bus::BusChoice;
 use canif_harness::client::master::Master;
 use canif_harness::client::suite::{ClientBus, ClientKind, ClientOptions};
+use canif_harness::device::bus::BusChoice;
 use canif_harness::report::{RunMeta, RunReport};
 use canif_spec::{Catalogue, Side};
 

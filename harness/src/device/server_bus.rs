@@ -7,8 +7,8 @@ use canif_kernel::{KernelSocket, Received};
 use canif_model::frame::Frame;
 use canif_model::Nanos;
 
-use super::protocol::{Answer, Request};
 use super::server::{write_answer, Build, Server};
+use crate::adapter::protocol::{Answer, Request};
 use crate::device::iut::Iut;
 use crate::error::{BusCause, BusError};
 

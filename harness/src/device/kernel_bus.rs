@@ -18,7 +18,7 @@ use canif_kernel::{BusSpec, KernelSocket, Received};
 use canif_model::frame::{Frame, FrameKind};
 use canif_model::Nanos;
 
-use super::Bus;
+use super::bus::Bus;
 use crate::adapter::protocol::OwnedBus;
 use crate::device::blame;
 use crate::device::diff::{hex, Difference};

@@ -4,6 +4,9 @@
 //! [`crate::device::played_plc::PlcSide`]; swapping which side is the IUT swaps which of the
 //! two the harness plays.
 
+#[cfg(feature = "socketcan")]
+pub mod kernel;
+
 use canif_model::config::{Capabilities, ConfigError, InterfaceConfig};
 use canif_model::device::Device;
 use canif_model::frame::Frame;
@@ -12,12 +15,11 @@ use canif_model::timing::BitRates;
 use canif_model::Nanos;
 
 use crate::bus::sim::{Controller, SimBus};
-use crate::bus::Bus;
 use crate::error::{BusCause, BusError};
 
 /// The device as the harness plays it for a client: on the simulated bus
 /// ([`DeviceSide`]) or with its controller on a SocketCAN interface
-/// ([`crate::bus::kernel_device::KernelDeviceSide`]).
+/// ([`crate::client::played_device::kernel::KernelDeviceSide`]).
 pub trait PlayedDevice {
     fn layout(&self) -> ImageLayout;
     /// Another node's frame, ready to send from `at`.

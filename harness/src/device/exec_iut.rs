@@ -12,8 +12,8 @@ use canif_model::image::ImageLayout;
 use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 
-use super::process::AdapterProcess;
-use super::protocol::{
+use crate::adapter::process::AdapterProcess;
+use crate::adapter::protocol::{
     Answer, BusEvent, Caps, Config, Hex, OwnedBus, PlannedFrame, Request, SteppedLine, Transmitted,
     WireFrame, PROTOCOL_VERSION,
 };

@@ -9,7 +9,7 @@ use canif_model::canopen::NodeId;
 use canif_model::frame::{CanId, Frame};
 use canif_model::Nanos;
 
-use super::checks::{sdo_request, NodeCheck};
+use crate::canopen::{sdo_request, NodeCheck};
 
 /// Sends a request (if any) and runs cycles until an answer on the given
 /// identifier arrives or the cycles are over: the last cycle's time and what came.

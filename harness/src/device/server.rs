@@ -7,7 +7,7 @@ use canif_model::config::{Capabilities, InterfaceConfig};
 
 use canif_model::Nanos;
 
-use super::protocol::{
+use crate::adapter::protocol::{
     Answer, BusEvent, Hex, InvalidWireFrame, PlannedFrame, Request, StepLine, Transmitted,
     WireFrame, PROTOCOL_VERSION,
 };
