@@ -17,7 +17,7 @@
 #![forbid(unsafe_code)]
 
 pub mod adapter;
-pub mod bus;
+mod bus;
 pub mod canopen;
 pub mod certificate;
 pub mod client;
@@ -28,7 +28,7 @@ pub mod interrupt;
 pub mod outcome;
 pub mod report;
 pub mod run;
-pub mod trace;
+mod trace;
 pub mod verdict;
 
 pub use error::{BusError, IutError, RunError};

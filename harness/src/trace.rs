@@ -21,7 +21,7 @@ use pcap_file::pcapng::PcapNgWriter;
 use pcap_file::DataLink;
 
 /// The interface name the traces give the simulated bus.
-pub const SIM_INTERFACE: &str = "canif-sim";
+pub(crate) const SIM_INTERFACE: &str = "canif-sim";
 
 /// EPB flags, bits 0-1: the direction of the packet (pcapng §4.3.1).
 mod direction {

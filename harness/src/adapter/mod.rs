@@ -8,5 +8,5 @@
 //! process), `device::server` (an in-process device served over stdin and
 //! stdout), `client::exec` (a client process).
 
-pub mod process;
+pub(crate) mod process;
 pub mod protocol;

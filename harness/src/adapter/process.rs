@@ -21,7 +21,7 @@ const STDERR_LINES: usize = 20;
 /// The longest line an IUT may print: far above any answer the protocol has
 /// (an input image of 32 FD slots is about 5 KB of hex), far below what could
 /// exhaust the harness's memory.
-pub const MAX_LINE: usize = 1 << 20;
+pub(crate) const MAX_LINE: usize = 1 << 20;
 
 /// What reading the IUT's next line gave.
 enum Line {
@@ -126,7 +126,7 @@ fn share_cpu() {
 /// An implementation under test in another process, in a process group of
 /// its own (whatever it starts ends with it), in either role: a device
 /// (`device::exec_iut`) or a client (`client::exec`).
-pub struct AdapterProcess {
+pub(crate) struct AdapterProcess {
     command: String,
     child: Child,
     stdin: Option<ChildStdin>,
@@ -140,7 +140,11 @@ pub struct AdapterProcess {
 impl AdapterProcess {
     /// Starts `command` (through `sh -c`) in a new process group; with
     /// `same_cpu`, the calling thread and the IUT share the CPU the thread is on.
-    pub fn spawn(command: &str, timeout: Duration, same_cpu: bool) -> Result<Self, IutError> {
+    pub(crate) fn spawn(
+        command: &str,
+        timeout: Duration,
+        same_cpu: bool,
+    ) -> Result<Self, IutError> {
         use std::os::unix::process::CommandExt;
         if same_cpu {
             share_cpu();

@@ -11,7 +11,7 @@ use canif_model::Nanos;
 
 /// The bits a frame sends during arbitration, as a number: lower wins.
 /// Standard: id(11) RTR IDE=0; extended: base(11) SRR=1 IDE=1 ext(18) RTR.
-pub fn arbitration_key(frame: &Frame) -> u64 {
+pub(crate) fn arbitration_key(frame: &Frame) -> u64 {
     let rtr = u64::from(matches!(frame.kind, FrameKind::Classic { rtr: true }));
     match frame.id {
         CanId::Standard(id) => (u64::from(id) << 21) | (rtr << 20),
@@ -24,7 +24,7 @@ pub fn arbitration_key(frame: &Frame) -> u64 {
 }
 
 /// How long `frame` occupies the bus (nominal bit count, intermission included).
-pub fn duration(frame: &Frame, rates: BitRates) -> Nanos {
+pub(crate) fn duration(frame: &Frame, rates: BitRates) -> Nanos {
     frame_duration(frame, rates, Stuffing::Nominal)
 }
 
@@ -32,7 +32,7 @@ pub fn duration(frame: &Frame, rates: BitRates) -> Nanos {
 /// Frames not yet ready wait by time; ready ones by arbitration key (then by
 /// order of scheduling), so each arbitration costs O(log n).
 #[derive(Debug, Default)]
-pub struct Nodes {
+pub(crate) struct Nodes {
     later: BinaryHeap<Reverse<(Nanos, u64)>>,
     ready: BinaryHeap<Reverse<(u64, u64)>>,
     frames: HashMap<u64, Frame>,
@@ -40,7 +40,7 @@ pub struct Nodes {
 }
 
 impl Nodes {
-    pub fn schedule(&mut self, ready_at: Nanos, frame: Frame) {
+    pub(crate) fn schedule(&mut self, ready_at: Nanos, frame: Frame) {
         self.sequence += 1;
         self.frames.insert(self.sequence, frame);
         self.later.push(Reverse((ready_at, self.sequence)));
@@ -58,38 +58,30 @@ impl Nodes {
     }
 
     /// The arbitration key of the frame that would win at `now`, if any is ready.
-    pub fn best_key(&mut self, now: Nanos) -> Option<u64> {
+    pub(crate) fn best_key(&mut self, now: Nanos) -> Option<u64> {
         self.mature(now);
         self.ready.peek().map(|Reverse((key, _))| *key)
     }
 
     /// Takes the winner at `now`.
-    pub fn take_best(&mut self, now: Nanos) -> Option<Frame> {
+    pub(crate) fn take_best(&mut self, now: Nanos) -> Option<Frame> {
         self.mature(now);
         let Reverse((_, sequence)) = self.ready.pop()?;
         self.frames.remove(&sequence)
     }
 
-    pub fn next_ready_after(&self, now: Nanos) -> Option<Nanos> {
+    pub(crate) fn next_ready_after(&self, now: Nanos) -> Option<Nanos> {
         self.later
             .peek()
             .map(|Reverse((ready_at, _))| *ready_at)
             .filter(|t| *t > now)
-    }
-
-    pub fn len(&self) -> usize {
-        self.later.len() + self.ready.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
     }
 }
 
 /// What the simulated bus needs of the node whose controller it serves: the
 /// device under test beside the model (the device side's pair), or the model
 /// device alone (the played device, when a PLC-side client is under test).
-pub trait Controller {
+pub(crate) trait Controller {
     /// Why the run cannot go on.
     type Error;
     /// Scenario time.
@@ -109,11 +101,11 @@ pub trait Controller {
 
 /// How many bus events one cycle may take: a 1 ms cycle at 1 Mbit/s carries
 /// about 20 frames, so only a device whose due times do not advance reaches it.
-pub const MOST_EVENTS_PER_CYCLE: usize = 10_000;
+pub(crate) const MOST_EVENTS_PER_CYCLE: usize = 10_000;
 
 /// The simulated bus of one scenario: the other nodes, and the frame on the wire.
 #[derive(Debug)]
-pub struct SimBus {
+pub(crate) struct SimBus {
     nodes: Nodes,
     bit_rates: BitRates,
     /// The frame on the bus: its end, whether the controller sent it.
@@ -121,7 +113,7 @@ pub struct SimBus {
 }
 
 impl SimBus {
-    pub fn new(bit_rates: BitRates) -> Self {
+    pub(crate) fn new(bit_rates: BitRates) -> Self {
         SimBus {
             nodes: Nodes::default(),
             bit_rates,
@@ -130,20 +122,24 @@ impl SimBus {
     }
 
     /// Another node's frame, ready to send from `at`.
-    pub fn schedule(&mut self, at: Nanos, frame: Frame) {
+    pub(crate) fn schedule(&mut self, at: Nanos, frame: Frame) {
         self.nodes.schedule(at, frame);
     }
 
     /// The controller resets (a device restart): its frame on the wire, if
     /// any, is destroyed and never ends.
-    pub fn abort_own(&mut self) {
+    pub(crate) fn abort_own(&mut self) {
         if self.on_bus.as_ref().is_some_and(|(_, _, own)| *own) {
             self.on_bus = None;
         }
     }
 
     /// Completes frames and starts the next winner of arbitration, until `until`.
-    pub fn drive<C: Controller>(&mut self, node: &mut C, until: Nanos) -> Result<(), C::Error> {
+    pub(crate) fn drive<C: Controller>(
+        &mut self,
+        node: &mut C,
+        until: Nanos,
+    ) -> Result<(), C::Error> {
         for _ in 0..MOST_EVENTS_PER_CYCLE {
             node.poll()?;
             let now = *node.now();
@@ -221,13 +217,12 @@ mod tests {
         nodes.schedule(10, standard(0x300));
         nodes.schedule(0, standard(0x200));
         nodes.schedule(0, standard(0x100));
-        assert_eq!(nodes.len(), 3);
         assert_eq!(nodes.take_best(5), Some(standard(0x100)));
         assert_eq!(nodes.next_ready_after(5), Some(10));
         assert_eq!(nodes.take_best(5), Some(standard(0x200)));
         assert_eq!(nodes.take_best(5), None, "0x300 is not ready before 10 ns");
         assert_eq!(nodes.take_best(10), Some(standard(0x300)));
-        assert!(nodes.is_empty());
+        assert_eq!(nodes.take_best(u64::MAX), None);
     }
 
     /// A controller with one frame to send, recording what ended on the bus.

@@ -14,16 +14,16 @@ use crate::adapter::protocol::{Answer, Config, Hex, Request, Tasked, WireMessage
 use crate::error::IutCause;
 
 /// The client role's protocol version.
-pub const CLIENT_PROTOCOL: u64 = 1;
+pub(super) const CLIENT_PROTOCOL: u64 = 1;
 
-pub struct ExecClient {
+pub(super) struct ExecClient {
     process: AdapterProcess,
     layout: ImageLayout,
 }
 
 impl ExecClient {
     /// Starts `command` as the program of an interface configured as `config`.
-    pub fn start(
+    pub(super) fn start(
         command: &str,
         timeout: Duration,
         config: &InterfaceConfig,

@@ -14,14 +14,14 @@ use super::{Client, IutError, TaskAnswer, TaskIo};
 use crate::device::lib_iut::{c_config, from_c, to_c};
 use crate::error::IutCause;
 
-pub struct LibClient {
+pub(super) struct LibClient {
     program: ClientProgram,
     layout: ImageLayout,
     path: String,
 }
 
 impl LibClient {
-    pub fn start(
+    pub(super) fn start(
         path: &Path,
         config: &InterfaceConfig,
         layout: ImageLayout,

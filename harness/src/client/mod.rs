@@ -11,10 +11,10 @@
 //! the faulty clients of `faulty`).
 
 pub mod application;
-pub mod exec;
+mod exec;
 pub mod faulty;
-pub mod judge;
-pub mod lib_client;
+mod judge;
+mod lib_client;
 pub mod master;
 pub mod played_device;
 pub mod rig;

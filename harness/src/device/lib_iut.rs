@@ -15,13 +15,13 @@ use crate::device::iut::{BuildError, InvalidFrame, Iut, Transmit};
 use crate::error::{IutCause, IutError};
 
 /// A library's device behind the [`Iut`] trait.
-pub struct LibIut {
+pub(crate) struct LibIut {
     device: Device,
     next: Option<Nanos>,
 }
 
 /// Loads the library and makes its device for a configuration.
-pub fn build(
+pub(crate) fn build(
     path: &Path,
     caps: &Capabilities,
     config: &InterfaceConfig,

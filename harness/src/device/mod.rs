@@ -12,7 +12,7 @@
 //! IUT's process image.
 
 pub mod blame;
-pub mod bounds;
+mod bounds;
 pub mod bus;
 pub mod cases;
 pub mod diff;
@@ -22,13 +22,13 @@ pub mod iut;
 pub mod iut_kind;
 #[cfg(feature = "socketcan")]
 pub mod kernel_bus;
-pub mod lib_iut;
-pub mod lockstep;
+pub(crate) mod lib_iut;
+mod lockstep;
 pub(crate) mod pair;
 pub mod played_plc;
 pub mod protocol_order;
 pub mod quick_start;
-pub mod refusals;
+mod refusals;
 pub mod scenario;
 pub mod server;
 #[cfg(feature = "socketcan")]

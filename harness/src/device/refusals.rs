@@ -34,10 +34,10 @@ fn refusal_ids(error: &ConfigError) -> &'static [ReqId] {
 }
 
 /// The refusal check's name.
-pub const REFUSALS: &str = "configuration refusals";
+pub(super) const REFUSALS: &str = "configuration refusals";
 
 /// Requirements the refusal check exercises.
-pub const REFUSAL_IDS: &[ReqId] = req_ids![
+pub(super) const REFUSAL_IDS: &[ReqId] = req_ids![
     "PROF-001",
     "PROF-002",
     "PROF-003",
@@ -115,7 +115,7 @@ fn grid() -> impl Iterator<Item = InterfaceConfig> {
 }
 
 /// Every configuration in the grid: the IUT must accept exactly what the model accepts.
-pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
+pub(super) fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
     let mut checked = 0;
     let mut configure = kind.configurer();
     let outcome = grid()

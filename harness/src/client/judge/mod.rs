@@ -20,24 +20,24 @@ mod tx;
 use rx::RxBatch;
 use tx::TxBatch;
 
-pub const TX_REQUEST: &[ReqId] = req_ids!["CL-TX-001"];
-pub const TX_UNTOUCHED: &[ReqId] = req_ids!["CL-TX-002"];
-pub const TX_ONCE: &[ReqId] = req_ids!["CL-TX-003"];
-pub const TX_ENCODING: &[ReqId] = req_ids!["CL-TX-004"];
-pub const TX_COUNT: &[ReqId] = req_ids!["CL-TX-005"];
-pub const RX_ACKNOWLEDGE: &[ReqId] = req_ids!["CL-RX-001"];
-pub const RX_ONCE: &[ReqId] = req_ids!["CL-RX-002"];
-pub const RX_DECODING: &[ReqId] = req_ids!["CL-RX-003"];
-pub const IMAGE_BOUNDS: &[ReqId] = req_ids!["CL-IMG-001"];
-pub const FAST_QUEUE: &[ReqId] = req_ids!["CL-FQ-001"];
-pub const PLC_RESTART: &[ReqId] = req_ids!["CL-RST-001"];
-pub const DEVICE_RESTART: &[ReqId] = req_ids!["CL-RST-002"];
-pub const TRANSACTION_NUMBERS: &[ReqId] = req_ids!["CL-TN-001"];
-pub const SENT_REPORTS: &[ReqId] = req_ids!["CL-TN-002"];
+pub(super) const TX_REQUEST: &[ReqId] = req_ids!["CL-TX-001"];
+pub(super) const TX_UNTOUCHED: &[ReqId] = req_ids!["CL-TX-002"];
+pub(super) const TX_ONCE: &[ReqId] = req_ids!["CL-TX-003"];
+pub(super) const TX_ENCODING: &[ReqId] = req_ids!["CL-TX-004"];
+pub(super) const TX_COUNT: &[ReqId] = req_ids!["CL-TX-005"];
+pub(super) const RX_ACKNOWLEDGE: &[ReqId] = req_ids!["CL-RX-001"];
+pub(super) const RX_ONCE: &[ReqId] = req_ids!["CL-RX-002"];
+pub(super) const RX_DECODING: &[ReqId] = req_ids!["CL-RX-003"];
+pub(super) const IMAGE_BOUNDS: &[ReqId] = req_ids!["CL-IMG-001"];
+pub(super) const FAST_QUEUE: &[ReqId] = req_ids!["CL-FQ-001"];
+pub(super) const PLC_RESTART: &[ReqId] = req_ids!["CL-RST-001"];
+pub(super) const DEVICE_RESTART: &[ReqId] = req_ids!["CL-RST-002"];
+pub(super) const TRANSACTION_NUMBERS: &[ReqId] = req_ids!["CL-TN-001"];
+pub(super) const SENT_REPORTS: &[ReqId] = req_ids!["CL-TN-002"];
 
 /// What a client did wrong, before the rig adds where.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Breach {
+pub(super) struct Breach {
     pub requirements: &'static [ReqId],
     pub what: String,
     pub expected: String,
@@ -60,7 +60,7 @@ fn breach(
 
 /// One task as the judge sees it.
 #[derive(Debug, Clone, Copy)]
-pub struct TaskSeen<'a> {
+pub(super) struct TaskSeen<'a> {
     /// The input image the task was handed (without the neighbour bytes).
     pub inputs: &'a [u8],
     /// The output image the device held before the task.
@@ -78,7 +78,7 @@ pub struct TaskSeen<'a> {
 
 /// The judge of one client run.
 #[derive(Debug, Clone)]
-pub struct Judge {
+pub(super) struct Judge {
     layout: ImageLayout,
     queue: QueueMode,
     /// Accepted requests, in order.
@@ -128,7 +128,7 @@ pub struct Judge {
 }
 
 impl Judge {
-    pub fn new(layout: ImageLayout, queue: QueueMode) -> Self {
+    pub(super) fn new(layout: ImageLayout, queue: QueueMode) -> Self {
         Judge {
             layout,
             queue,
@@ -157,17 +157,17 @@ impl Judge {
     }
 
     /// The device's RxCounter after its last cycle.
-    pub fn device_rx_counter(&self) -> u16 {
+    pub(super) fn device_rx_counter(&self) -> u16 {
         self.device_rx_counter
     }
 
     /// Requests accepted and not yet handed over (what a restart loses).
-    pub fn waiting(&self) -> usize {
+    pub(super) fn waiting(&self) -> usize {
         self.requests.len() - self.batched
     }
 
     /// The device's cycle left this input image.
-    pub fn device_cycle(&mut self, inputs: &[u8]) {
+    pub(super) fn device_cycle(&mut self, inputs: &[u8]) {
         let Ok(image) = InputImage::new_checked(inputs, self.layout) else {
             return;
         };
@@ -186,11 +186,11 @@ impl Judge {
 
     /// The device sent a frame on the bus.
     /// The device's cycle saw Outputs.TxCounter `counter`.
-    pub fn device_saw(&mut self, counter: u16) {
+    pub(super) fn device_saw(&mut self, counter: u16) {
         self.device_tx = counter;
     }
 
-    pub fn device_sent(&mut self, frame: &Frame) -> Result<(), Breach> {
+    pub(super) fn device_sent(&mut self, frame: &Frame) -> Result<(), Breach> {
         while self.may_lose.contains(&self.sent)
             && self.requests.get(self.sent).map(|r| &r.frame) != Some(frame)
         {
@@ -232,7 +232,7 @@ impl Judge {
     /// The PLC restarted: its program and what it had not handed over are
     /// gone, and its last batch too if the device had not seen it yet (the
     /// device's last cycle saw Outputs.TxCounter `device_saw`).
-    pub fn plc_restarted(&mut self, device_saw: u16) {
+    pub(super) fn plc_restarted(&mut self, device_saw: u16) {
         let unseen = self.pending.as_ref().filter(|p| p.counter != device_saw);
         if let Some(pending) = unseen {
             self.batched -= usize::from(pending.count);
@@ -255,7 +255,7 @@ impl Judge {
     /// lost, and it takes the batch in the output image once more. Of the
     /// batches it had entered, the client can still see those up to the one
     /// with RxCounter `visible` (the master read it already); the others are lost.
-    pub fn device_restarted(&mut self, task: u64, outputs: &[u8], visible: u16) {
+    pub(super) fn device_restarted(&mut self, task: u64, outputs: &[u8], visible: u16) {
         self.lost_in_restart
             .extend((self.sent..self.batched).filter(|&i| self.on_bus.get(i) == Some(&false)));
         self.sent = self.batched;
@@ -285,7 +285,12 @@ impl Judge {
     }
 
     /// One task the client ran.
-    pub fn task(&mut self, task: u64, seen: TaskSeen<'_>, deadline: u64) -> Result<(), Breach> {
+    pub(super) fn task(
+        &mut self,
+        task: u64,
+        seen: TaskSeen<'_>,
+        deadline: u64,
+    ) -> Result<(), Breach> {
         let layout = self.layout;
         let size = layout.output_size();
         if seen.after[size..].iter().any(|b| *b != NEIGHBOUR_PATTERN) {
@@ -346,7 +351,7 @@ impl Judge {
 
     /// After the last task: what never arrived. `device_queued_rx`: messages
     /// the device received and has not entered in the image.
-    pub fn finish(&self, device_queued_rx: usize) -> Result<(), Breach> {
+    pub(super) fn finish(&self, device_queued_rx: usize) -> Result<(), Breach> {
         // What a device restart left stuck is the restart's (CL-RST-002).
         self.finish_unblamed(device_queued_rx)
             .map_err(|breach| match self.device_restarted {

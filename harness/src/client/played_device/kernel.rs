@@ -18,7 +18,7 @@ use canif_model::Nanos;
 use crate::client::played_device::{Ended, PlayedDevice};
 use crate::error::{BusCause, BusError};
 
-pub struct KernelDeviceSide {
+pub(crate) struct KernelDeviceSide {
     device: Device,
     caps: Capabilities,
     config: InterfaceConfig,
@@ -31,7 +31,7 @@ pub struct KernelDeviceSide {
 
 impl KernelDeviceSide {
     /// The model device's controller and the other nodes, both on `interface`.
-    pub fn open(
+    pub(crate) fn open(
         caps: &Capabilities,
         config: InterfaceConfig,
         interface: &str,

@@ -5,7 +5,7 @@
 //! two the harness plays.
 
 #[cfg(feature = "socketcan")]
-pub mod kernel;
+pub(crate) mod kernel;
 
 use canif_model::config::{Capabilities, ConfigError, InterfaceConfig};
 use canif_model::device::Device;
