@@ -36,7 +36,7 @@ fn soft_device(args: &str) -> IutKind {
 fn failures_and_errors(kind: &IutKind, profile: &str) -> (Vec<String>, Vec<String>) {
     let catalogue = Catalogue::embedded().unwrap();
     let profile = catalogue.profile(profile).unwrap();
-    let run = run_profile(&catalogue, profile, kind, &quick(), |_| {});
+    let run = run_profile(profile, kind, &quick(), |_| {});
     let failed = run.failed_requirements(&catalogue, profile);
     let errors = run
         .runs
@@ -159,13 +159,7 @@ fn an_image_of_the_wrong_size_is_an_error() {
 fn a_command_that_does_not_exist_is_an_error_and_the_report_says_error() {
     let catalogue = Catalogue::embedded().unwrap();
     let profile = catalogue.profile("fc510x-before-fw2.14").unwrap();
-    let run = run_profile(
-        &catalogue,
-        profile,
-        &exec("/nonexistent/iut", 400),
-        &quick(),
-        |_| {},
-    );
+    let run = run_profile(profile, &exec("/nonexistent/iut", 400), &quick(), |_| {});
     let verdicts = run.verdicts(&catalogue, profile);
     assert!(verdicts.values().any(|v| v.kind() == VerdictKind::Error));
     assert!(

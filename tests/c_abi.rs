@@ -48,7 +48,6 @@ fn the_c_example_is_certified_in_process() {
     let catalogue = Catalogue::embedded().unwrap();
     let profile = catalogue.profile("fc510x-before-fw2.14").unwrap();
     let run = run_profile(
-        &catalogue,
         profile,
         &IutKind::Lib { path: library },
         &Options::quick(3),

@@ -47,7 +47,7 @@ fn the_c_example_client_conforms_in_process() {
     };
     for profile in ["fc532x", "el6751-mdp"] {
         let profile = catalogue.profile(profile).unwrap();
-        let run = run_profile(&catalogue, profile, &kind, &options(), |_| {});
+        let run = run_profile(profile, &kind, &options(), |_| {});
         let bad: Vec<String> = run
             .runs
             .iter()
@@ -78,7 +78,7 @@ fn a_c_client_that_tells_nothing_sent_is_not_judged_on_it() {
         path: build("without_sent", &["-DCANIF_WITHOUT_SENT"]),
     };
     let profile = catalogue.profile("fc532x").unwrap();
-    let run = run_profile(&catalogue, profile, &kind, &options(), |_| {});
+    let run = run_profile(profile, &kind, &options(), |_| {});
     assert!(run.failed_requirements(&catalogue, profile).is_empty());
     let verdict = &run.verdicts(&catalogue, profile)["CL-TN-002"];
     assert_eq!(verdict.kind(), VerdictKind::NotRun);
@@ -131,7 +131,7 @@ fn a_c_client_that_reads_past_its_image_is_caught() {
         path: build("no_bound", &["-DCANIF_FAULT_NO_BOUND"]),
     };
     let profile = catalogue.profile("fc510x").unwrap();
-    let run = run_profile(&catalogue, profile, &kind, &options(), |_| {});
+    let run = run_profile(profile, &kind, &options(), |_| {});
     assert_eq!(run.failed_requirements(&catalogue, profile), ["CL-IMG-001"]);
     assert!(run
         .runs
@@ -156,7 +156,6 @@ fn a_library_without_the_client_role_is_an_error_naming_the_symbol() {
     assert!(status.success());
     let catalogue = Catalogue::embedded().unwrap();
     let run = run_profile(
-        &catalogue,
         catalogue.profile("fc510x").unwrap(),
         &ClientKind::Lib { path: device },
         &options(),

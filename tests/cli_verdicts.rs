@@ -75,6 +75,21 @@ fn a_partial_run_says_so() {
     assert_eq!(verdicts["FD-LEN-005"]["verdict"], "pass");
     assert_eq!(verdicts["FLT-001"]["verdict"], "not run");
     assert_eq!(r["meta"]["complete"], false);
+    // A device run reports on device requirements of the interface suite
+    // only: no PLC-side requirement, no CANopen node requirement it cannot
+    // reach, and so no "not run" for what another side or suite judges.
+    let ids: Vec<&str> = verdicts
+        .as_object()
+        .unwrap()
+        .keys()
+        .map(String::as_str)
+        .collect();
+    assert!(!ids.iter().any(|id| id.starts_with("CL-")), "{ids:?}");
+    assert!(!ids.contains(&"HB-005"), "the CANopen suite's: {ids:?}");
+    assert!(
+        ids.contains(&"SDO-001"),
+        "exercised by the Gherkin quick start: {ids:?}"
+    );
     let _ = std::fs::remove_dir_all(dir);
 }
 
@@ -96,6 +111,8 @@ fn the_canopen_suite_writes_reports_and_refuses_iut_options() {
     let r = report(&dir);
     assert_eq!(r["meta"]["suite"], "canopen");
     assert_eq!(r["profiles"][0]["verdicts"]["NMT-006"]["verdict"], "fail");
+    // The node's requirements only: none of the interface's.
+    assert!(r["profiles"][0]["verdicts"].get("HS-TX-001").is_none());
     assert!(std::fs::read_to_string(dir.join("junit.xml"))
         .unwrap()
         .contains("NMT-006"));
@@ -175,6 +192,12 @@ fn the_plc_side_on_the_command_line() {
     assert_eq!(output.status.code(), Some(0), "{output:?}");
     let report = report(&dir);
     assert_eq!(report["meta"]["side"], "plc");
+    // The PLC side's requirements only: no device requirement as "not run".
+    let verdicts = report["profiles"][0]["verdicts"].as_object().unwrap();
+    assert!(
+        verdicts.keys().all(|id| id.starts_with("CL-")),
+        "{verdicts:?}"
+    );
     assert_eq!(report["meta"]["masters"][0], "lrw");
     assert!(report["meta"]["masters"].as_array().unwrap().len() >= 7);
     // The certificate names what the client was driven under, not only the side.

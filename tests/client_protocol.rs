@@ -37,7 +37,7 @@ fn the_python_example_client_written_from_the_document_conforms() {
     // FD, 11- and 29-bit with transaction numbers and time stamps; the Fast CAN Queue.
     for profile in ["fc532x", "el6751-mdp"] {
         let profile = catalogue.profile(profile).unwrap();
-        let run = run_profile(&catalogue, profile, &kind, &options, |_| {});
+        let run = run_profile(profile, &kind, &options, |_| {});
         let bad: Vec<String> = run
             .runs
             .iter()

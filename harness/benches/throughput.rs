@@ -44,14 +44,7 @@ fn main() {
     let started = Instant::now();
     let mut frames = 0;
     for profile in &catalogue.profiles {
-        frames += run_profile(
-            &catalogue,
-            profile,
-            &softdevice,
-            &Options::default(),
-            |_| {},
-        )
-        .frames_checked();
+        frames += run_profile(profile, &softdevice, &Options::default(), |_| {}).frames_checked();
     }
     let seconds = started.elapsed().as_secs_f64();
     println!(

@@ -9,7 +9,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt;
 
-use canif_spec::{Catalogue, Profile, Side, Verification};
+use canif_spec::{Catalogue, Profile, Scope, Side, Suite, Verification};
 use serde::{Deserialize, Serialize};
 
 /// One check that ran against the implementation, named stably (no line
@@ -201,12 +201,6 @@ pub enum NotRunReason {
     Selection(String),
     /// The run left out a stage, as it said (Gherkin scenarios not run, a signal).
     LeftOut(String),
-    /// A requirement of the other side of the interface.
-    OtherSide(Side),
-    /// Only the CANopen suite exercises it, against a CANopen node.
-    CanopenSuite,
-    /// Only the interface suite exercises it (for a CANopen suite run).
-    InterfaceSuite,
     /// The checks that exercise it ran, but the implementation gave them nothing to judge.
     NothingToJudge(Unobserved),
 }
@@ -224,18 +218,6 @@ impl fmt::Display for NotRunReason {
             NotRunReason::NotSelected => f.write_str("not selected"),
             NotRunReason::Selection(flags) => write!(f, "left out by the selection ({flags})"),
             NotRunReason::LeftOut(what) => f.write_str(what),
-            NotRunReason::OtherSide(Side::Plc) => {
-                f.write_str("a PLC-side requirement: exercised by `canif run --side plc`")
-            }
-            NotRunReason::OtherSide(Side::Device) => {
-                f.write_str("a device requirement: exercised by `canif run --side device`")
-            }
-            NotRunReason::CanopenSuite => f.write_str(
-                "exercised by `canif run --suite canopen` against a CANopen node",
-            ),
-            NotRunReason::InterfaceSuite => {
-                f.write_str("exercised by the interface suite (`canif run`)")
-            }
             NotRunReason::NothingToJudge(Unobserved::SentMessages) => f.write_str(
                 "the client told its application of no Tx message sent (it does not use Inputs.TransactionNumber that way): nothing to judge",
             ),
@@ -246,10 +228,10 @@ impl fmt::Display for NotRunReason {
 /// What the suite can exercise on a profile, beyond what this run did.
 #[derive(Debug, Clone)]
 pub struct Reach {
+    /// The side and suite the run judges: requirements outside it get no verdict.
+    pub scope: Scope,
     /// Requirements this run's suite exercises on the profile when nothing is left out.
     pub here: BTreeSet<String>,
-    /// Requirements only another suite or side exercises, with where.
-    pub elsewhere: BTreeMap<String, NotRunReason>,
     /// Requirements whose checks ran and had nothing to judge, with why.
     pub unobserved: BTreeMap<String, NotRunReason>,
     /// Why this run left out what it could have run (the selection, an error, a signal).
@@ -259,8 +241,11 @@ pub struct Reach {
 impl Default for Reach {
     fn default() -> Self {
         Reach {
+            scope: Scope {
+                side: Side::Device,
+                suite: Suite::Interface,
+            },
             here: BTreeSet::new(),
-            elsewhere: BTreeMap::new(),
             unobserved: BTreeMap::new(),
             left_out: NotRunReason::NotSelected,
         }
@@ -307,6 +292,9 @@ pub fn judge(
     let mut verdicts = BTreeMap::new();
     for requirement in catalogue.requirements() {
         let id = requirement.id.as_str();
+        if !reach.scope.reports(requirement, reach.here.contains(id)) {
+            continue;
+        }
         let missing = profile.lacks(&requirement.capabilities);
         let verdict = if !missing.is_empty() {
             Verdict::NotApplicable(format!("{} lacks {}", profile.name, missing.join(", ")))
@@ -320,8 +308,6 @@ pub fn judge(
             Verdict::NotRun(why.clone())
         } else if reach.here.contains(id) {
             Verdict::NotRun(reach.left_out.clone())
-        } else if let Some(where_) = reach.elsewhere.get(id) {
-            Verdict::NotRun(where_.clone())
         } else {
             Verdict::NotTestable(match (&requirement.reason, requirement.verification) {
                 (Some(reason), _) => reason.clone(),
@@ -395,7 +381,6 @@ mod tests {
         let profile = catalogue.profile("fc532x").unwrap();
         let reach = Reach {
             here: ["HS-TX-001".to_string()].into(),
-            elsewhere: [("NMT-001".to_string(), NotRunReason::CanopenSuite)].into(),
             left_out: NotRunReason::Selection("--scenario x".into()),
             ..Reach::default()
         };
@@ -404,10 +389,34 @@ mod tests {
             verdicts["HS-TX-001"].reason().unwrap(),
             "left out by the selection (--scenario x)"
         );
-        assert_eq!(
-            verdicts["NMT-001"],
-            Verdict::NotRun(NotRunReason::CanopenSuite)
-        );
         assert!(!verdicts.values().any(|v| v.kind() == VerdictKind::Pass));
+    }
+
+    #[test]
+    fn a_run_reports_only_its_side_and_suite_and_what_it_exercises_of_another_suite() {
+        let catalogue = catalogue();
+        let profile = catalogue.profile("fc532x").unwrap();
+        let reach = Reach {
+            here: ["NMT-001".to_string()].into(),
+            ..Reach::default()
+        };
+        let verdicts = judge(&catalogue, profile, &[], &reach);
+        assert!(verdicts.contains_key("HS-TX-001"));
+        assert!(verdicts.contains_key("NMT-001"), "exercised here");
+        assert!(!verdicts.contains_key("NMT-002"), "the CANopen suite's");
+        assert!(
+            !verdicts.keys().any(|id| id.starts_with("CL-")),
+            "the PLC side's"
+        );
+        let client = Reach {
+            scope: Scope {
+                side: Side::Plc,
+                suite: Suite::Interface,
+            },
+            ..Reach::default()
+        };
+        let verdicts = judge(&catalogue, profile, &[], &client);
+        assert!(verdicts.keys().all(|id| id.starts_with("CL-")));
+        assert!(!verdicts.is_empty());
     }
 }

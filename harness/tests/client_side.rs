@@ -21,7 +21,7 @@ fn problems(kind: &ClientKind, options: &ClientOptions) -> Vec<String> {
     let catalogue = Catalogue::embedded().unwrap();
     let mut bad = Vec::new();
     for profile in &catalogue.profiles {
-        let run = run_profile(&catalogue, profile, kind, options, |_| {});
+        let run = run_profile(profile, kind, options, |_| {});
         assert!(
             run.runs.len() >= 25,
             "{}: {} runs",
@@ -56,7 +56,6 @@ fn both_counters_wrap_at_0xffff_under_the_reference_client() {
     let catalogue = Catalogue::embedded().unwrap();
     let profile = catalogue.profile("fc510x-before-fw2.14").unwrap();
     let run = run_profile(
-        &catalogue,
         profile,
         &ClientKind::Reference,
         &ClientOptions::new(1),

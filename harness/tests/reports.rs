@@ -28,7 +28,6 @@ fn report(profile: &str, faults: Vec<Fault>, seed: u64, gherkin: Vec<GherkinRun>
     let profile = catalogue.profile(profile).unwrap();
     let options = Options::quick(seed);
     let run = run_profile(
-        &catalogue,
         profile,
         &IutKind::SoftDevice {
             faults,
@@ -113,7 +112,6 @@ fn a_run_that_checked_nothing_does_not_conform() {
         ..Options::quick(1)
     };
     let run = run_profile(
-        &catalogue,
         profile,
         &IutKind::SoftDevice {
             faults: vec![],

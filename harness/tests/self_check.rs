@@ -19,13 +19,7 @@ fn quick() -> Options {
 
 fn run(kind: &IutKind, profile: &str, options: &Options) -> ProfileRun {
     let catalogue = Catalogue::embedded().unwrap();
-    run_profile(
-        &catalogue,
-        catalogue.profile(profile).unwrap(),
-        kind,
-        options,
-        |_| {},
-    )
+    run_profile(catalogue.profile(profile).unwrap(), kind, options, |_| {})
 }
 
 fn problems(run: &ProfileRun) -> Vec<String> {

@@ -7,6 +7,7 @@ use serde::Deserialize;
 
 use crate::error::{SpecError, SpecErrors};
 use crate::profile::Profile;
+use crate::scope::{Side, Suite};
 
 /// How firmly a requirement is grounded (see shared/RULINGS.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Deserialize)]
@@ -29,35 +30,6 @@ pub enum Verification {
     Test,
     /// Not by running anything; `reason` says why.
     Inspection,
-}
-
-/// Which side of the interface a requirement binds: the device (EL6751,
-/// FC51xx, CCAT, FC532x and what behaves like them) or the PLC-side client
-/// that fills and reads the image.
-#[derive(
-    Debug, Clone, Copy, Default, PartialEq, Eq, Hash, PartialOrd, Ord, Deserialize, serde::Serialize,
-)]
-#[serde(rename_all = "lowercase")]
-pub enum Side {
-    #[default]
-    Device,
-    Plc,
-}
-
-impl Side {
-    /// As the command line and the reports spell it.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Side::Device => "device",
-            Side::Plc => "plc",
-        }
-    }
-}
-
-impl std::fmt::Display for Side {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.as_str())
-    }
 }
 
 /// Where a statement comes from.
@@ -101,6 +73,9 @@ pub struct Requirement {
     /// The side its area binds (not in the requirement's YAML: the area's `side`).
     #[serde(skip)]
     pub side: Side,
+    /// The suite that judges it (the area's `suite`).
+    #[serde(skip)]
+    pub suite: Suite,
     /// The line of its `id:` (not in the YAML).
     #[serde(skip)]
     pub line: usize,
@@ -127,6 +102,9 @@ pub struct Area {
     /// The side the area's requirements bind; `device` when left out.
     #[serde(default)]
     pub side: Side,
+    /// The suite that judges them; `interface` when left out.
+    #[serde(default)]
+    pub suite: Suite,
     pub requirements: Vec<Requirement>,
     #[serde(skip)]
     pub file: String,
@@ -452,6 +430,7 @@ impl Catalogue {
                     for requirement in &mut area.requirements {
                         requirement.file = path.clone();
                         requirement.side = area.side;
+                        requirement.suite = area.suite;
                         requirement.line = lines
                             .find(&format!("id: {}", requirement.id), from)
                             .unwrap_or(0);

@@ -16,14 +16,15 @@ pub mod coverage;
 mod error;
 mod profile;
 mod req_id;
+mod scope;
 
 pub use catalogue::{
-    Area, Capability, Catalogue, Requirement, Ruling, Side, Source, SourceDocument, Status,
-    Verification,
+    Area, Capability, Catalogue, Requirement, Ruling, Source, SourceDocument, Status, Verification,
 };
 pub use error::{SpecError, SpecErrors};
 pub use profile::Profile;
 pub use req_id::ReqId;
+pub use scope::{Scope, Side, Suite};
 
 /// The embedded catalogue's files (path, text), in load order: what a
 /// certificate's catalogue hash covers.

@@ -233,33 +233,16 @@ pub(crate) fn canopen_suite(
         .iter()
         .map(|c| c.name.clone())
         .collect();
-    // What the interface suite (lockstep and Gherkin) exercises on any profile.
-    let all: Vec<&canif_spec::Profile> = catalogue.profiles.iter().collect();
-    let gherkin = match canif_features::scenarios() {
-        Ok(scenarios) => {
-            canif_features::schedule::targets(&scenarios, &all, canif_spec::Side::Device)
-        }
-        Err(error) => {
-            eprintln!("the feature files do not parse: {error}");
-            return ExitCode::from(2);
-        }
-    };
-    let lockstep = all.iter().flat_map(|p| {
-        canif_harness::device::suite::checked_ids(
-            &p.model_capabilities(),
-            &canif_harness::device::Options::default(),
-        )
-    });
-    let elsewhere = lockstep
-        .chain(gherkin.into_iter().flat_map(|(_, s)| s.requirements))
-        .map(|id| (id, canif_harness::verdict::NotRunReason::InterfaceSuite))
-        .collect();
+    // The node's requirements only: the interface's are the interface suite's.
     let reach = canif_harness::verdict::Reach {
+        scope: canif_spec::Scope {
+            side: canif_spec::Side::Device,
+            suite: canif_spec::Suite::Canopen,
+        },
         here: canif_harness::canopen::node_check_ids()
             .iter()
             .map(|s| s.to_string())
             .collect(),
-        elsewhere,
         left_out: selection.not_run(),
         ..canif_harness::verdict::Reach::default()
     };

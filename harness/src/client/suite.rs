@@ -7,7 +7,7 @@ use std::time::Duration;
 use canif_model::config::{Capabilities, InterfaceConfig, QueueMode};
 use canif_model::image::ImageLayout;
 use canif_model::timing::BitRates;
-use canif_spec::{Catalogue, Profile, ReqId, Side};
+use canif_spec::{Catalogue, Profile, ReqId, Scope, Side, Suite};
 
 use super::application::{self, ClientScenario};
 use super::exec::ExecClient;
@@ -238,8 +238,8 @@ impl RunSide for ClientOptions {
         true
     }
 
-    fn reach(&self, catalogue: &Catalogue, profile: &Profile, runs: &[ScenarioRun]) -> Reach {
-        let mut reach = reach(catalogue, &profile.model_capabilities(), self);
+    fn reach(&self, profile: &Profile, runs: &[ScenarioRun]) -> Reach {
+        let mut reach = reach(&profile.model_capabilities(), self);
         if told_nothing_sent(runs) {
             for told in judge::SENT_REPORTS {
                 reach.unobserved.insert(
@@ -254,13 +254,12 @@ impl RunSide for ClientOptions {
 
 /// Runs every selected case of a profile against a client.
 pub fn run_profile(
-    catalogue: &Catalogue,
     profile: &Profile,
     kind: &ClientKind,
     options: &ClientOptions,
     progress: impl FnMut(&ScenarioRun),
 ) -> ProfileRun {
-    run::run_profile(catalogue, profile, options, kind, progress)
+    run::run_profile(profile, options, kind, progress)
 }
 
 /// CL-TN-002 judges what a client tells its application was sent: where a
@@ -275,15 +274,14 @@ fn told_nothing_sent(runs: &[ScenarioRun]) -> bool {
     })
 }
 
-/// What a client run can judge, and where the device's requirements are judged.
-pub fn reach(catalogue: &Catalogue, caps: &Capabilities, options: &ClientOptions) -> Reach {
+/// What a client run can judge: the PLC side's requirements its cases exercise.
+pub fn reach(caps: &Capabilities, options: &ClientOptions) -> Reach {
     Reach {
+        scope: Scope {
+            side: Side::Plc,
+            suite: Suite::Interface,
+        },
         here: checked_ids(caps, options).into_iter().collect(),
-        elsewhere: catalogue
-            .requirements()
-            .filter(|r| r.side == Side::Device)
-            .map(|r| (r.id.clone(), NotRunReason::OtherSide(Side::Device)))
-            .collect(),
         left_out: options.selection.not_run(),
         ..Reach::default()
     }

@@ -4,7 +4,7 @@
 
 use canif_model::config::Capabilities;
 use canif_model::Nanos;
-use canif_spec::{Catalogue, Profile, ReqId, Side as SideName};
+use canif_spec::{Catalogue, Profile, ReqId, Scope, Side as SideName, Suite};
 
 use super::cases::scenarios;
 use super::iut_kind::IutKind;
@@ -14,7 +14,7 @@ use super::scenario::Scenario;
 use crate::device::bus::BusChoice;
 use crate::outcome::ScenarioRun;
 use crate::run::{self, KillRow, ProfileRun, Selection, Side};
-use crate::verdict::{NotRunReason, Reach};
+use crate::verdict::Reach;
 
 /// What to run.
 #[derive(Debug, Clone)]
@@ -140,19 +140,15 @@ impl Side for Options {
         self.fail_fast
     }
 
-    fn reach(&self, catalogue: &Catalogue, profile: &Profile, _: &[ScenarioRun]) -> Reach {
-        let plc_side = catalogue
-            .requirements()
-            .filter(|r| r.side == SideName::Plc)
-            .map(|r| (r.id.clone(), NotRunReason::OtherSide(SideName::Plc)));
-        let node_checks = crate::canopen::node_check_ids()
-            .into_iter()
-            .map(|id| (id.to_string(), NotRunReason::CanopenSuite));
+    fn reach(&self, profile: &Profile, _: &[ScenarioRun]) -> Reach {
         Reach {
+            scope: Scope {
+                side: SideName::Device,
+                suite: Suite::Interface,
+            },
             here: checked_ids(&profile.model_capabilities(), self)
                 .into_iter()
                 .collect(),
-            elsewhere: node_checks.chain(plc_side).collect(),
             left_out: self.selection.not_run(),
             ..Reach::default()
         }
@@ -161,13 +157,12 @@ impl Side for Options {
 
 /// Runs every selected case of a profile against a device.
 pub fn run_profile(
-    catalogue: &Catalogue,
     profile: &Profile,
     kind: &IutKind,
     options: &Options,
     progress: impl FnMut(&ScenarioRun),
 ) -> ProfileRun {
-    run::run_profile(catalogue, profile, options, kind, progress)
+    run::run_profile(profile, options, kind, progress)
 }
 
 /// Every requirement the scenarios and checks of a run exercise on a device

@@ -31,7 +31,7 @@ pub fn kill_matrix<S: Side, F: Copy>(
                 .profiles
                 .iter()
                 .map(|profile| {
-                    let run = run_profile(catalogue, profile, &side, &under_test, |_| {});
+                    let run = run_profile(profile, &side, &under_test, |_| {});
                     (
                         profile.name.clone(),
                         run.failed_requirements(catalogue, profile),

@@ -38,7 +38,7 @@ pub trait Side {
     /// instead of starting it again and again.
     fn fail_fast(&self) -> bool;
     /// What a profile's run could judge, given the runs it made.
-    fn reach(&self, catalogue: &Catalogue, profile: &Profile, runs: &[ScenarioRun]) -> Reach;
+    fn reach(&self, profile: &Profile, runs: &[ScenarioRun]) -> Reach;
 }
 
 /// Everything one profile's run produced, and what it could have reached.
@@ -129,7 +129,6 @@ impl ProfileRun {
 
 /// Runs every selected case of a profile, in order, and says each to `progress`.
 pub fn run_profile<S: Side>(
-    catalogue: &Catalogue,
     profile: &Profile,
     side: &S,
     under_test: &S::UnderTest,
@@ -171,7 +170,7 @@ pub fn run_profile<S: Side>(
         progress(&run);
         runs.push(run);
     }
-    let reach = side.reach(catalogue, profile, &runs);
+    let reach = side.reach(profile, &runs);
     ProfileRun::new(&profile.name, runs, reach)
 }
 

@@ -112,7 +112,7 @@ impl<'c, S: Side> Plan<'c, S> {
                 break;
             }
             let mut progress = Progress::new(n, count, &profile.name);
-            let run = run_profile(catalogue, profile, &self.options, under_test, |run| {
+            let run = run_profile(profile, &self.options, under_test, |run| {
                 progress.scenario(run)
             });
             progress.done(&run, catalogue, profile, unit);
