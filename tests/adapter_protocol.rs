@@ -82,6 +82,56 @@ fn the_python_example_written_from_the_document_is_certified() {
     );
 }
 
+/// Issue 26: the same example on a profile that offers 29-bit, which it
+/// refuses. Refusing an interface the profile offers is what the device did
+/// wrong — a failure of PROF-001, once — and what the refused interface was
+/// needed for is "not run" with the device's words, never an error and never
+/// a failure of the scenarios' own requirements. The run says DOES NOT
+/// CONFORM and exits 1.
+/// Covers: PROF-001
+#[test]
+fn refusing_an_offered_interface_fails_prof_001_and_leaves_the_rest_not_run() {
+    let script = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/python/minimal_iut.py"
+    );
+    let dir = std::env::temp_dir().join(format!("canif-refuses-{}", std::process::id()));
+    let output = std::process::Command::new(env!("CARGO_BIN_EXE_canif"))
+        .args(["run", "--profile", "fc510x", "--cases", "1", "--report"])
+        .arg(&dir)
+        .arg("--iut")
+        .arg(format!("exec:python3 {script}"))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(output.status.code(), Some(1), "{stdout}");
+    assert!(stdout.contains("DOES NOT CONFORM"), "{stdout}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let verdicts = report["profiles"][0]["verdicts"].as_object().unwrap();
+    let of = |kind: &str| -> Vec<&String> {
+        verdicts
+            .iter()
+            .filter(|(_, v)| v["verdict"] == kind)
+            .map(|(id, _)| id)
+            .collect()
+    };
+    assert_eq!(of("fail"), ["PROF-001"]);
+    assert!(of("error").is_empty(), "{:?}", of("error"));
+    // A 29-bit requirement the 11-bit scenarios cannot reach: not run, and why.
+    let layout = &verdicts["LAY-29-005"];
+    assert_eq!(layout["verdict"], "not run", "{layout}");
+    assert!(
+        layout["reason"].as_str().is_some_and(
+            |r| r.contains("refuses the interface") && r.contains("11-bit interface only")
+        ),
+        "{layout}"
+    );
+    // What the 11-bit interface showed still passes.
+    assert_eq!(verdicts["HS-TX-001"]["verdict"], "pass");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
 /// One broken IUT: the error it must produce, in words.
 fn broken(command: &str, expected: &[&str]) {
     let caps = Capabilities::everything();

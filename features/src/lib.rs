@@ -72,6 +72,11 @@ pub enum ScenarioOutcome {
     },
     /// The IUT itself broke (could not start, broke the protocol): not a non-conformance.
     Error(String),
+    /// The IUT refused the interface the scenario needs, which the profile offers.
+    Refused {
+        interface: String,
+        reason: String,
+    },
 }
 
 impl ScenarioOutcome {
@@ -109,6 +114,7 @@ where
     };
     let _ = world::take_iut_error();
     let _ = world::take_witness();
+    let _ = world::take_refused();
     let captured = Captured::default();
     let writer =
         writer::Basic::new(captured.clone(), Coloring::Never, Verbosity::ShowWorld).summarized();
@@ -123,7 +129,9 @@ where
     let output = String::from_utf8_lossy(&captured.0.lock().map(|b| b.clone()).unwrap_or_default())
         .into_owned();
     let stats = result.scenarios_stats();
-    if let Some(error) = world::take_iut_error() {
+    if let Some((interface, reason)) = world::take_refused() {
+        ScenarioOutcome::Refused { interface, reason }
+    } else if let Some(error) = world::take_iut_error() {
         ScenarioOutcome::Error(format!("the IUT broke: {error}\n{output}"))
     } else if result.execution_has_failed() || stats.failed > 0 || result.parsing_errors() > 0 {
         ScenarioOutcome::Failed {

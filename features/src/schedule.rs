@@ -3,7 +3,9 @@
 //! target both schedule through here.
 
 use canif_harness::client::suite::ClientKind;
+use canif_harness::device::refusals::OFFERED_REFUSED;
 use canif_harness::device::{blame, IutKind};
+use canif_harness::verdict::{NotRunReason, Rest};
 use canif_harness::{GherkinOutcome, GherkinRun};
 use canif_spec::{Profile, Side};
 
@@ -93,8 +95,17 @@ pub fn run(profile: &Profile, scenario: &ScenarioInfo, under_test: &UnderTest) -
                 UnderTest::Client(_) => witness.iter().map(|id| id.to_string()).collect(),
             },
             report,
+            rest: Rest::Stopped,
         },
         ScenarioOutcome::Error(report) => GherkinOutcome::Error(report),
+        // Refusing an interface the profile offers is the device's failure;
+        // what the scenario needed the interface for is not run.
+        ScenarioOutcome::Refused { interface, reason } => GherkinOutcome::Fail {
+            step: format!("the IUT refuses {interface}, which the profile offers: {reason}"),
+            report: String::new(),
+            blamed: OFFERED_REFUSED.iter().map(|id| id.to_string()).collect(),
+            rest: Rest::NotRun(NotRunReason::Refused { interface, reason }),
+        },
     };
     GherkinRun {
         id: scenario.id(),

@@ -28,6 +28,10 @@ thread_local! {
     static IUT_ERROR: RefCell<Option<String>> = const { RefCell::new(None) };
     /// The requirements the failed check of the last scenario witnesses.
     static WITNESS: RefCell<Vec<ReqId>> = const { RefCell::new(Vec::new()) };
+    /// Set when the IUT refused an interface the profile offers: (the
+    /// interface, the IUT's words). The scenario is then its failure, and
+    /// what it needed the interface for is not run.
+    static REFUSED: RefCell<Option<(String, String)>> = const { RefCell::new(None) };
 }
 
 /// Takes the requirements the last scenario's failed check witnesses on this
@@ -41,6 +45,10 @@ pub(crate) fn record_witness(witness: &[&[ReqId]]) {
 }
 
 /// Takes the IUT error of the last scenario on this thread, if any.
+pub fn take_refused() -> Option<(String, String)> {
+    REFUSED.with(|r| r.borrow_mut().take())
+}
+
 pub fn take_iut_error() -> Option<String> {
     IUT_ERROR.with(|e| e.borrow_mut().take())
 }
@@ -196,8 +204,17 @@ impl CanWorld {
                 Ok(())
             }
             Err(error) => {
-                if let canif_harness::device::BuildError::Failed(broke) = &error {
-                    record_iut_error(&broke.to_string());
+                match &error {
+                    canif_harness::device::BuildError::Failed(broke) => {
+                        record_iut_error(&broke.to_string())
+                    }
+                    canif_harness::device::BuildError::Refused(reason)
+                        if self.config.validate(&self.target.caps).is_ok() =>
+                    {
+                        let interface = canif_harness::device::cases::describe(&self.config);
+                        REFUSED.with(|r| *r.borrow_mut() = Some((interface, reason.clone())));
+                    }
+                    canif_harness::device::BuildError::Refused(_) => {}
                 }
                 let reason = error.to_string();
                 self.refused = Some(reason.clone());

@@ -23,6 +23,8 @@ pub struct Failure {
     pub timeline: Vec<CycleView>,
     /// The frames that differ, when the failure is a frame.
     pub frames: Option<FrameDiff>,
+    /// What the failure says of the rest of what the scenario covers.
+    pub rest: crate::verdict::Rest,
 }
 
 /// The frame the model expected and the one the IUT gave (`None`: no frame).
@@ -119,10 +121,12 @@ pub enum GherkinOutcome {
     Pass,
     /// `step` is the failing step's line; `report` is cucumber's whole account;
     /// `blamed` the scenario's tags the failed check witnesses.
+    /// `rest`: what the failure says of the tags not blamed.
     Fail {
         step: String,
         report: String,
         blamed: Vec<String>,
+        rest: crate::verdict::Rest,
     },
     /// The implementation broke: not a non-conformance.
     Error(String),

@@ -51,6 +51,21 @@ pub struct Finding {
     pub details: String,
     /// The lockstep failure it came from (an index into the profile's failures).
     pub failure: Option<usize>,
+    /// What the check says of the requirements it covers and does not blame.
+    pub rest: Rest,
+}
+
+/// What a failing check says of the requirements it covers and does not blame.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub enum Rest {
+    /// It stopped at the failure: they were exercised up to it only, which
+    /// is evidence neither way.
+    #[default]
+    Stopped,
+    /// It ran to its end, and they held (the refusal grid tries every configuration).
+    Held,
+    /// It could not start (the IUT refused the interface it needs): they were not run.
+    NotRun(NotRunReason),
 }
 
 /// How one check ended.
@@ -203,6 +218,9 @@ pub enum NotRunReason {
     LeftOut(String),
     /// The checks that exercise it ran, but the implementation gave them nothing to judge.
     NothingToJudge(Unobserved),
+    /// The IUT refused the interface its checks need, which the profile
+    /// offers (a failure of its own): the interface, and the IUT's words.
+    Refused { interface: String, reason: String },
 }
 
 /// What an implementation did not show, so that a requirement had nothing to judge.
@@ -218,6 +236,10 @@ impl fmt::Display for NotRunReason {
             NotRunReason::NotSelected => f.write_str("not selected"),
             NotRunReason::Selection(flags) => write!(f, "left out by the selection ({flags})"),
             NotRunReason::LeftOut(what) => f.write_str(what),
+            NotRunReason::Refused { interface, reason } => write!(
+                f,
+                "the IUT refuses the interface its checks need ({interface}), which the profile offers: {reason}"
+            ),
             NotRunReason::NothingToJudge(Unobserved::SentMessages) => f.write_str(
                 "the client told its application of no Tx message sent (it does not use Inputs.TransactionNumber that way): nothing to judge",
             ),
@@ -262,6 +284,7 @@ pub fn judge(
     let mut passed: BTreeMap<&str, Vec<Evidence>> = BTreeMap::new();
     let mut failed: BTreeMap<&str, Vec<(Evidence, Finding)>> = BTreeMap::new();
     let mut broke: BTreeMap<&str, Vec<(Evidence, String)>> = BTreeMap::new();
+    let mut unjudged: BTreeMap<&str, NotRunReason> = BTreeMap::new();
     for check in checks {
         match &check.result {
             CheckResult::Pass => {
@@ -276,8 +299,23 @@ pub fn judge(
                         .or_default()
                         .push((check.evidence.clone(), finding.clone()));
                 }
-                // What the check covers but does not blame was exercised up to
-                // the failure only: that is no evidence of a pass.
+                let rest = check
+                    .covers
+                    .iter()
+                    .filter(|id| !finding.requirements.contains(id));
+                match &finding.rest {
+                    Rest::Stopped => {}
+                    Rest::Held => {
+                        for id in rest {
+                            passed.entry(id).or_default().push(check.evidence.clone());
+                        }
+                    }
+                    Rest::NotRun(why) => {
+                        for id in rest {
+                            unjudged.entry(id).or_insert_with(|| why.clone());
+                        }
+                    }
+                }
             }
             CheckResult::Error(cause) => {
                 for id in &check.covers {
@@ -304,6 +342,8 @@ pub fn judge(
             Verdict::Error(errors)
         } else if let Some(evidence) = passed.remove(id) {
             Verdict::Pass(evidence)
+        } else if let Some(why) = unjudged.remove(id) {
+            Verdict::NotRun(why)
         } else if let Some(why) = reach.unobserved.get(id) {
             Verdict::NotRun(why.clone())
         } else if reach.here.contains(id) {
@@ -342,6 +382,7 @@ mod tests {
 
     fn finding(blames: &[&str]) -> Finding {
         Finding {
+            rest: Rest::Stopped,
             requirements: blames.iter().map(|s| s.to_string()).collect(),
             cause: "differs".into(),
             details: String::new(),

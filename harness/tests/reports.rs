@@ -82,6 +82,7 @@ fn a_failing_gherkin_scenario_fails_its_requirement() {
         GherkinOutcome::Fail {
             step: "Then the padding bytes are 0x00: expected 00, got FF".into(),
             report: "✘ Then the padding bytes are 0x00".into(),
+            rest: canif_harness::verdict::Rest::Stopped,
             blamed: vec!["FD-LEN-003".into()],
         },
     );

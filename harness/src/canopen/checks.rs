@@ -31,6 +31,7 @@ impl NodeCheck {
             result: match &self.outcome {
                 Ok(()) => CheckResult::Pass,
                 Err(why) => CheckResult::Fail(Finding {
+                    rest: crate::verdict::Rest::Stopped,
                     requirements: covers.clone(),
                     cause: why.lines().next().unwrap_or_default().to_string(),
                     details: why.clone(),

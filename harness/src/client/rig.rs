@@ -128,6 +128,7 @@ impl Tracker {
                 })
                 .collect(),
             frames: None,
+            rest: crate::verdict::Rest::Stopped,
         }
     }
 

@@ -28,7 +28,7 @@ pub(crate) mod pair;
 pub mod played_plc;
 pub mod protocol_order;
 pub mod quick_start;
-mod refusals;
+pub mod refusals;
 pub mod scenario;
 pub mod server;
 #[cfg(feature = "socketcan")]

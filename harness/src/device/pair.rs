@@ -100,6 +100,7 @@ impl Pair {
             context: self.history.context(),
             timeline: self.history.timeline(),
             frames: difference.frames.map(|f| *f),
+            rest: crate::verdict::Rest::Stopped,
         }))
     }
 

@@ -12,6 +12,7 @@ use super::cases::describe;
 use super::iut::BuildError;
 use super::iut_kind::IutKind;
 use crate::outcome::{Failure, Outcome, ScenarioRun};
+use crate::verdict::{NotRunReason, Rest};
 
 fn refusal_ids(error: &ConfigError) -> &'static [ReqId] {
     use ConfigError::*;
@@ -30,6 +31,30 @@ fn refusal_ids(error: &ConfigError) -> &'static [ReqId] {
         FdStructuresCarryTransactionNumberAndTimeStamp => req_ids!["LAY-FD-001", "LAY-FD-004"],
         SlotCount { .. } => req_ids!["PROF-011", "LAY-GEN-007"],
         DistributedClocksNotOffered | DistributedClocksNeedsFastQueue => req_ids!["PDX-005"],
+    }
+}
+
+/// What a device breaks when it refuses a configuration its profile offers:
+/// it does not offer what the feature matrix says (PROF-001).
+pub const OFFERED_REFUSED: &[ReqId] = req_ids!["PROF-001"];
+
+/// A scenario that could not start because the IUT refused its interface,
+/// which the profile offers: a failure of [`OFFERED_REFUSED`], and the rest
+/// of what the scenario covers not run, with the IUT's words.
+pub fn refused(scenario: &str, config: &InterfaceConfig, reason: String) -> Failure {
+    let interface = describe(config);
+    Failure {
+        requirements: OFFERED_REFUSED.to_vec(),
+        scenario: scenario.into(),
+        cycle: 0,
+        time: 0,
+        what: format!("configuration {interface}, which the profile offers"),
+        expected: "accepted".into(),
+        actual: format!("refused: {reason}"),
+        context: Vec::new(),
+        timeline: Vec::new(),
+        frames: None,
+        rest: Rest::NotRun(NotRunReason::Refused { interface, reason }),
     }
 }
 
@@ -114,23 +139,56 @@ fn grid() -> impl Iterator<Item = InterfaceConfig> {
     })
 }
 
-/// Every configuration in the grid: the IUT must accept exactly what the model accepts.
-pub(super) fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
+/// Every configuration in the grid: the IUT must accept exactly what the
+/// model accepts. The whole grid is tried: every mismatch is blamed (the
+/// first shown), and what no mismatch touched held.
+pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
     let mut checked = 0;
     let mut configure = kind.configurer();
-    let outcome = grid()
-        .find_map(|config| {
-            checked += 1;
-            let expected = config.validate(caps);
-            let actual = match configure(caps, &config) {
-                Ok(()) => Ok(()),
-                Err(BuildError::Refused(reason)) => Err(reason),
-                Err(BuildError::Failed(reason)) => return Some(Outcome::Error(reason.into())),
-            };
-            (expected.is_ok() != actual.is_ok())
-                .then(|| Outcome::Fail(Box::new(mismatch(&config, expected, actual))))
-        })
-        .unwrap_or(Outcome::Pass);
+    let mut mismatches: Vec<Failure> = Vec::new();
+    let mut outcome = None;
+    for config in grid() {
+        checked += 1;
+        let expected = config.validate(caps);
+        let actual = match configure(caps, &config) {
+            Ok(()) => Ok(()),
+            Err(BuildError::Refused(reason)) => Err(reason),
+            Err(BuildError::Failed(reason)) => {
+                outcome = Some(Outcome::Error(reason.into()));
+                break;
+            }
+        };
+        if expected.is_ok() != actual.is_ok() {
+            mismatches.push(mismatch(&config, expected, actual));
+        }
+    }
+    let outcome = outcome.unwrap_or_else(|| {
+        let Some(mut first) = mismatches.first().cloned() else {
+            return Outcome::Pass;
+        };
+        let mut blamed: Vec<ReqId> = mismatches
+            .iter()
+            .flat_map(|m| m.requirements.iter().copied())
+            .collect();
+        blamed.sort();
+        blamed.dedup();
+        first.requirements = blamed;
+        if mismatches.len() > 1 {
+            first.what = format!(
+                "{} (and {} more of the {checked} configurations)",
+                first.what,
+                mismatches.len() - 1
+            );
+        }
+        first.context = mismatches
+            .iter()
+            .skip(1)
+            .take(20)
+            .map(|m| format!("{}: expected {}, actual {}", m.what, m.expected, m.actual))
+            .collect();
+        first.rest = Rest::Held;
+        Outcome::Fail(Box::new(first))
+    });
     ScenarioRun {
         scenario: REFUSALS.into(),
         covers: REFUSAL_IDS.to_vec(),
@@ -155,7 +213,7 @@ fn mismatch(
     Failure {
         requirements: match &expected {
             Err(e) => refusal_ids(e).to_vec(),
-            Ok(()) => req_ids!["PROF-001", "PROF-002"].to_vec(),
+            Ok(()) => OFFERED_REFUSED.to_vec(),
         },
         scenario: REFUSALS.into(),
         cycle: 0,
@@ -171,5 +229,6 @@ fn mismatch(
         context: Vec::new(),
         timeline: Vec::new(),
         frames: None,
+        rest: Rest::Stopped,
     }
 }

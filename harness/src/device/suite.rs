@@ -9,10 +9,11 @@ use canif_spec::{Catalogue, Profile, ReqId, Scope, Side as SideName, Suite};
 use super::cases::scenarios;
 use super::iut_kind::IutKind;
 use super::lockstep::run_scenario;
-use super::refusals::{check_refusals, REFUSALS, REFUSAL_IDS};
+use super::refusals::{check_refusals, refused, REFUSALS, REFUSAL_IDS};
 use super::scenario::Scenario;
 use crate::device::bus::BusChoice;
-use crate::outcome::ScenarioRun;
+use crate::error::{Refusal, RunError};
+use crate::outcome::{Outcome, ScenarioRun};
 use crate::run::{self, KillRow, ProfileRun, Selection, Side};
 use crate::verdict::Reach;
 
@@ -129,7 +130,14 @@ impl Side for Options {
                 .collect();
             scenario.trace = Some((dir.join(&profile.name), name, self.trace_epoch));
         }
-        run_scenario(kind, &caps, &scenario, scenario.steps())
+        let mut run = run_scenario(kind, &caps, &scenario, scenario.steps());
+        // Refusing an interface the profile offers is the device's failure,
+        // not a broken exchange; what the scenario needed it for is not run.
+        if let Outcome::Error(RunError::Configuration(Refusal::Iut(reason))) = &run.outcome {
+            let failure = refused(&scenario.name, &scenario.interface, reason.clone());
+            run.outcome = Outcome::Fail(Box::new(failure));
+        }
+        run
     }
 
     fn selection(&self) -> &Selection {

@@ -79,11 +79,13 @@ fn gherkin_check(run: &GherkinRun) -> Check {
                 step,
                 report,
                 blamed,
+                rest,
             } => CheckResult::Fail(Finding {
                 requirements: blamed.clone(),
                 cause: step.clone(),
                 details: report.clone(),
                 failure: None,
+                rest: rest.clone(),
             }),
             GherkinOutcome::Error(cause) => CheckResult::Error(cause.clone()),
         },
@@ -142,17 +144,16 @@ impl RunReport {
             .flat_map(|p| p.checks.iter().map(move |c| (p, c)))
     }
 
-    /// 130 when interrupted, 2 on any error or when nothing was checked, 1 on
-    /// any failure, 0 when everything that ran passed.
+    /// 130 when interrupted, 1 on any failure (what the implementation did
+    /// wrong, whatever else broke), 2 on an error or when nothing was
+    /// checked, 0 when everything that ran passed.
     pub fn exit_code(&self) -> u8 {
         let totals = self.totals();
         if self.interrupted {
             130
-        } else if totals[&VerdictKind::Error] > 0 {
-            2
         } else if totals[&VerdictKind::Fail] > 0 {
             1
-        } else if totals[&VerdictKind::Pass] == 0 {
+        } else if totals[&VerdictKind::Error] > 0 || totals[&VerdictKind::Pass] == 0 {
             2
         } else {
             0

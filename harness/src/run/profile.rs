@@ -109,6 +109,7 @@ impl ProfileRun {
                             cause: failure.cause(),
                             details: failure.details(),
                             failure: Some(failures - 1),
+                            rest: failure.rest.clone(),
                         })
                     }
                     Outcome::Error(error) => CheckResult::Error(error.to_string()),
