@@ -214,6 +214,31 @@ fn an_iut_that_dies_with_a_frame_due_is_an_error_not_a_failure() {
     );
 }
 
+/// A well-formed answer describing a frame no controller can send (BRS on a
+/// classic frame, an identifier wider than its format) is what the device
+/// did wrong: a failure naming the frame, not a broken exchange (issue 26).
+#[test]
+fn a_frame_no_controller_can_send_is_a_failure_not_an_error() {
+    for (mode, words) in [
+        ("brs-classic", "BRS on a classic frame"),
+        (
+            "wide-id",
+            "identifier 0x1234 does not fit an 11-bit identifier",
+        ),
+    ] {
+        let iut = format!("python3 {} {mode}", script("misbehave.py"));
+        let run = run(mode, &recorded(&iut), &[]);
+        assert_eq!(run.output.status.code(), Some(1), "{}", run.stderr());
+        assert!(run.report.contains(words), "{mode}: {}", run.stderr());
+        assert!(
+            !run.report.contains("broken frame"),
+            "{mode}: judged a broken exchange: {}",
+            run.stderr()
+        );
+        run.leaves_nothing_running();
+    }
+}
+
 /// After the first error the rest of the profile is skipped, not retried.
 #[test]
 fn after_the_iut_breaks_the_rest_of_the_profile_is_skipped() {

@@ -77,6 +77,10 @@ pub enum InvalidFrame {
     Identifier { id: u32, extended: bool },
     /// The length, the data or the FD bits make no frame.
     Parts(FrameError),
+    /// BRS or ESI on a classic frame: they exist only in CAN FD frames.
+    FdBitsOnClassic { brs: bool, esi: bool },
+    /// A remote frame in CAN FD, which has none.
+    RemoteFd,
     /// The implementation said so itself (the adapter protocol's `invalid`), in its words.
     Declared(String),
 }
@@ -86,10 +90,24 @@ impl fmt::Display for InvalidFrame {
         match self {
             InvalidFrame::Identifier { id, extended } => write!(
                 f,
-                "identifier 0x{id:X} out of range ({} bits)",
-                if *extended { 29 } else { 11 }
+                "identifier 0x{id:X} does not fit {}",
+                if *extended {
+                    "a 29-bit identifier"
+                } else {
+                    "an 11-bit identifier"
+                }
             ),
             InvalidFrame::Parts(error) => error.fmt(f),
+            InvalidFrame::FdBitsOnClassic { brs, esi } => write!(
+                f,
+                "{} on a classic frame (they exist only in CAN FD frames)",
+                match (brs, esi) {
+                    (true, true) => "BRS and ESI",
+                    (true, false) => "BRS",
+                    _ => "ESI",
+                }
+            ),
+            InvalidFrame::RemoteFd => f.write_str("a remote frame in CAN FD, which has none"),
             InvalidFrame::Declared(words) => f.write_str(words),
         }
     }

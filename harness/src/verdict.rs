@@ -293,7 +293,19 @@ pub fn judge(
                 }
             }
             CheckResult::Fail(finding) => {
-                for id in &finding.requirements {
+                // A failure blamed only on what the profile lacks must not
+                // vanish into "not applicable": it falls to what the check covers.
+                let applies = |id: &&String| {
+                    catalogue
+                        .requirement(id)
+                        .is_some_and(|r| profile.lacks(&r.capabilities).is_empty())
+                };
+                let blamed: Vec<&String> = if finding.requirements.iter().any(|id| applies(&id)) {
+                    finding.requirements.iter().collect()
+                } else {
+                    check.covers.iter().filter(applies).collect()
+                };
+                for id in blamed {
                     failed
                         .entry(id)
                         .or_default()
@@ -414,6 +426,22 @@ mod tests {
             Verdict::Pass(vec![Evidence::Gherkin("a".into())])
         );
         assert_eq!(verdicts["HS-TX-003"].kind(), VerdictKind::Error);
+    }
+
+    #[test]
+    fn a_failure_blamed_only_on_what_the_profile_lacks_falls_to_what_the_check_covers() {
+        let catalogue = catalogue();
+        // fc510x has no CAN FD: FD-BIT-002 does not apply there.
+        let profile = catalogue.profile("fc510x").unwrap();
+        let checks = [check(
+            "brs on a classic frame",
+            &["HS-TX-001", "HS-TX-006"],
+            CheckResult::Fail(finding(&["FD-BIT-002"])),
+        )];
+        let verdicts = judge(&catalogue, profile, &checks, &Reach::default());
+        assert_eq!(verdicts["FD-BIT-002"].kind(), VerdictKind::NotApplicable);
+        assert_eq!(verdicts["HS-TX-001"].kind(), VerdictKind::Fail);
+        assert_eq!(verdicts["HS-TX-006"].kind(), VerdictKind::Fail);
     }
 
     #[test]

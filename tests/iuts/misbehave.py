@@ -42,6 +42,10 @@ for line in sys.stdin:
             answer = {"type": "transmit", "frame": None, "next_ns": request["now_ns"] + 1}
         elif mode == "lie-len":
             answer = {"type": "transmit", "frame": dict(frame, len=15)}
+        elif mode == "brs-classic":
+            answer = {"type": "transmit", "frame": dict(frame, brs=True)}
+        elif mode == "wide-id":
+            answer = {"type": "transmit", "frame": dict(frame, id=0x1234)}
         else:
             answer = {"type": "transmit", "frame": None}
     elif kind == "bye":

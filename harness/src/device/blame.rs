@@ -4,6 +4,8 @@
 
 use canif_spec::{req_ids, ReqId};
 
+use crate::error::InvalidFrame;
+
 pub const INPUT_IMAGE_SIZE: &[ReqId] = req_ids!["LAY-GEN-004"];
 pub const TX_COUNTER: &[ReqId] = req_ids![
     "HS-TX-002",
@@ -106,6 +108,23 @@ pub const RX_MESSAGES_OFFSET_TN: &[ReqId] = req_ids!["LAY-GEN-004"];
 pub const INFO_DATA_OFFSET: &[ReqId] = req_ids!["INFO-008"];
 /// Distributed Clocks: the first message of a batch later than SYNC1 plus the jitter.
 pub const SYNC1_LATE: &[ReqId] = req_ids!["PDX-004"];
+
+/// The requirements a frame no controller can send breaks, by what is wrong
+/// with it: an identifier beyond 11 bits comes from COB ID bits that with bit
+/// 31 clear are not the identifier's (LAY-29-006); beyond 29 bits, from the
+/// COB ID's flag bits (LAY-29-003); BRS or ESI on a classic frame, or a
+/// remote FD frame, from the FD flags (FD-BIT-*); a length beyond the
+/// format's from the length field (LAY-GEN-008, FD-LEN-*).
+pub fn invalid_frame(invalid: &InvalidFrame) -> &'static [ReqId] {
+    match invalid {
+        InvalidFrame::Identifier {
+            extended: false, ..
+        } => TX_ID_RESERVED,
+        InvalidFrame::Identifier { extended: true, .. } => TX_ID_29,
+        InvalidFrame::FdBitsOnClassic { .. } | InvalidFrame::RemoteFd => TX_FD_FLAGS,
+        InvalidFrame::Parts(_) | InvalidFrame::Declared(_) => TX_INVALID,
+    }
+}
 
 /// The requirements of `InfoData[index]`.
 pub fn info_data(index: usize) -> &'static [ReqId] {

@@ -56,7 +56,7 @@ impl Bounds {
             None => Ok(None),
             Some(Err(invalid)) => Err(Difference {
                 frames: None,
-                candidates: blame::TX_INVALID,
+                candidates: blame::invalid_frame(&invalid),
                 what: "frame handed to the controller".into(),
                 expected: "a valid CAN frame (at most 8 classic, 64 FD data bytes)".into(),
                 actual: format!("invalid frame: {invalid}"),

@@ -183,7 +183,7 @@ impl Pair {
             }
             (e, Some(Err(invalid))) => Difference {
                 frames: None,
-                candidates: blame::TX_INVALID,
+                candidates: blame::invalid_frame(&invalid),
                 what,
                 expected: e.map_or("no frame".into(), |f| f.to_string()),
                 actual: format!("invalid frame: {invalid}"),
@@ -390,5 +390,20 @@ mod tests {
             .unwrap_err();
         assert_eq!(invalid.candidates, blame::TX_INVALID);
         assert_eq!(invalid.actual, "invalid frame: 36 bytes");
+        // What no controller can send is blamed on where it came from.
+        let brs = InvalidFrame::FdBitsOnClassic {
+            brs: true,
+            esi: false,
+        };
+        let flags = pair.transmit_difference(None, Some(Err(brs))).unwrap_err();
+        assert_eq!(flags.candidates, blame::TX_FD_FLAGS);
+        let too_wide = InvalidFrame::Identifier {
+            id: 0x1234,
+            extended: false,
+        };
+        let identifier = pair
+            .transmit_difference(None, Some(Err(too_wide)))
+            .unwrap_err();
+        assert_eq!(identifier.candidates, blame::TX_ID_RESERVED);
     }
 }

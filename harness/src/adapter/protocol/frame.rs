@@ -106,23 +106,16 @@ impl From<&Frame> for WireFrame {
 }
 
 impl WireFrame {
-    /// Whether the message is consistent in itself: `len` and `data` agree,
-    /// a remote frame has no data, BRS/ESI only with FD, the identifier fits
-    /// its format. A message that is not is a broken protocol, not a frame.
+    /// Whether the message is consistent in itself: `len` and `data` agree
+    /// and a remote frame carries no data. A message that is not is a broken
+    /// protocol, not a frame. A consistent message can still describe what no
+    /// controller can send (an identifier beyond its format, BRS on a classic
+    /// frame): that is the device's doing, [`WireFrame::to_frame`] says what.
     pub fn check(&self) -> Result<(), String> {
-        let limit = if self.extended { 0x1FFF_FFFF } else { 0x7FF };
-        if self.id > limit {
-            return Err(format!(
-                "identifier 0x{:X} does not fit a {} identifier",
-                self.id,
-                if self.extended { "29-bit" } else { "11-bit" }
-            ));
-        }
         let data = self.data.0.len();
-        if self.rtr && (data != 0 || self.fd) {
+        if self.rtr && data != 0 {
             return Err(format!(
-                "a remote frame carries no data (and CAN FD has none): {data} data bytes{}",
-                if self.fd { ", FD" } else { "" }
+                "a remote frame carries no data, but \"data\" has {data} bytes"
             ));
         }
         if !self.rtr && usize::from(self.len) != data {
@@ -130,9 +123,6 @@ impl WireFrame {
                 "\"len\" is {} but \"data\" has {data} bytes",
                 self.len
             ));
-        }
-        if !self.fd && (self.brs || self.esi) {
-            return Err("BRS and ESI exist only in CAN FD frames".into());
         }
         Ok(())
     }
@@ -152,6 +142,15 @@ impl WireFrame {
             id: self.id,
             extended: self.extended,
         })?;
+        if self.fd && self.rtr {
+            return Err(InvalidFrame::RemoteFd);
+        }
+        if !self.fd && (self.brs || self.esi) {
+            return Err(InvalidFrame::FdBitsOnClassic {
+                brs: self.brs,
+                esi: self.esi,
+            });
+        }
         let frame = if self.fd {
             Frame::fd(id, self.brs, self.esi, &self.data.0)
         } else if self.rtr {

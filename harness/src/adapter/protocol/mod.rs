@@ -281,7 +281,7 @@ mod tests {
         let wire: WireFrame = serde_json::from_str(r#"{"id":2048,"len":0,"data":""}"#).unwrap();
         assert_eq!(
             Frame::try_from(&wire).unwrap_err(),
-            "identifier 0x800 does not fit a 11-bit identifier"
+            "identifier 0x800 does not fit an 11-bit identifier"
         );
         assert!(serde_json::from_str::<WireFrame>(r#"{"id":1,"data":"abc"}"#).is_err());
         assert!(serde_json::from_str::<WireFrame>(r#"{"id":4294967297,"data":""}"#).is_err());
