@@ -139,6 +139,18 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                     Err(code) => code,
                 });
             }
+            if let Some(dir) = &trace {
+                // A trace folder that cannot be written is said before the
+                // run, not found missing after it.
+                let writable = std::fs::create_dir_all(dir).and_then(|()| {
+                    let probe = dir.join(".canif-trace-probe");
+                    std::fs::write(&probe, b"").and_then(|()| std::fs::remove_file(probe))
+                });
+                if let Err(error) = writable {
+                    eprintln!("--trace {}: cannot write there: {error}", dir.display());
+                    return Ok(ExitCode::from(2));
+                }
+            }
             let started = std::time::SystemTime::now()
                 .duration_since(std::time::UNIX_EPOCH)
                 .unwrap_or_default();

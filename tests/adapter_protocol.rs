@@ -159,6 +159,21 @@ fn broken(command: &str, expected: &[&str]) {
     }
 }
 
+/// An IUT that answers one request twice (both lines in one write, so the
+/// stray one is waiting when the next request goes out) is an error naming
+/// it, not a desynchronised run judged on the wrong answers (issue 26).
+#[test]
+fn an_iut_that_answers_twice_is_an_error() {
+    broken(
+        r#"read l; c='{"type":"configured","protocol":1,"accepted":true}'; printf '%s\n%s\n' "$c" "$c"; sleep 5"#,
+        &[
+            "answered twice",
+            "before the `poll_transmit` request",
+            "configured",
+        ],
+    );
+}
+
 /// Accepts the configuration, then answers the first request (the bus polls
 /// the controller at t = 0, before the first cycle) with "nothing to send".
 const CONFIGURED: &str = r#"read l; echo '{"type":"configured","protocol":1,"accepted":true}'; read l; echo '{"type":"transmit","frame":null}'"#;

@@ -22,6 +22,31 @@ fn report(dir: &std::path::Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
 }
 
+/// A trace folder that cannot be written is a usage error naming it, before
+/// the run (it wrote nothing and said nothing, exit 0; issue 26).
+#[test]
+fn an_unwritable_trace_folder_is_refused_with_its_path() {
+    let dir = scratch("trace");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("a-file");
+    std::fs::write(&file, b"").unwrap();
+    let target = file.join("traces");
+    let out = canif(&[
+        "run",
+        "--profile",
+        "fc510x",
+        "--trace",
+        target.to_str().unwrap(),
+        "--report",
+        dir.join("report").to_str().unwrap(),
+    ]);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{said}");
+    assert!(said.contains(target.to_str().unwrap()), "{said}");
+    assert!(!dir.join("report").exists(), "the run started");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
 /// Problem 2: a selection that matches nothing is a usage error, not "conforms".
 #[test]
 fn a_selection_that_matches_nothing_is_a_usage_error() {

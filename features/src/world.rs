@@ -133,11 +133,29 @@ pub struct CanWorld {
     pub received_at: Vec<(Nanos, Frame)>,
 }
 
+/// How many frames a failing step shows of the bus and of what the PLC
+/// received: a babbling IUT must not bury the cause under its frames.
+const SHOWN_FRAMES: usize = 8;
+
+/// The count of `frames` and the last [`SHOWN_FRAMES`] of them.
+fn last(frames: &[Frame]) -> String {
+    let shown = &frames[frames.len().saturating_sub(SHOWN_FRAMES)..];
+    let list: Vec<String> = shown.iter().map(Frame::to_string).collect();
+    match frames.len() - shown.len() {
+        0 => format!("[{}]", list.join(", ")),
+        more => format!(
+            "{} frames, the last: [… {more} more, {}]",
+            frames.len(),
+            list.join(", ")
+        ),
+    }
+}
+
 impl std::fmt::Debug for CanWorld {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "CanWorld {{ iut: {}, profile: {}, {:?} {:?} with {} slots, cycle: {}, input header: {:02X?}, on the bus: {:?}, the PLC received: {:?} }}\n      last cycles:\n        {}",
+            "CanWorld {{ iut: {}, profile: {}, {:?} {:?} with {} slots, cycle: {}, input header: {:02X?}, on the bus: {}, the PLC received: {} }}\n      last cycles:\n        {}",
             self.target.iut.name(),
             self.target.profile,
             self.config.format,
@@ -145,8 +163,8 @@ impl std::fmt::Debug for CanWorld {
             self.config.tx_slots,
             self.cycle,
             &self.inputs[..self.inputs.len().min(8)],
-            self.on_bus,
-            self.received.iter().map(|m| m.frame).collect::<Vec<_>>(),
+            last(&self.on_bus),
+            last(&self.received.iter().map(|m| m.frame).collect::<Vec<_>>()),
             self.trace.iter().cloned().collect::<Vec<_>>().join("\n        ")
         )
     }
@@ -437,5 +455,26 @@ impl CanWorld {
                 time_stamp: 0,
             })
             .map_err(|e| e.to_string())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use canif_model::frame::{CanId, Frame};
+
+    use super::{last, SHOWN_FRAMES};
+
+    #[test]
+    fn a_failing_step_shows_the_last_frames_and_how_many_there_were() {
+        let frames: Vec<Frame> = (0..100u16)
+            .map(|id| Frame::classic(CanId::Standard(id), &[]).unwrap())
+            .collect();
+        let shown = last(&frames);
+        assert!(
+            shown.starts_with("100 frames, the last: [… 92 more"),
+            "{shown}"
+        );
+        assert_eq!(shown.matches("#").count(), SHOWN_FRAMES, "{shown}");
+        assert_eq!(last(&frames[..2]).matches('#').count(), 2);
     }
 }

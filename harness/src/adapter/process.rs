@@ -264,6 +264,19 @@ impl AdapterProcess {
         if let Some(failure) = &self.failed {
             return Err(failure.clone());
         }
+        // A line already waiting answers nothing the harness asked: read as
+        // the next answer, it would desynchronise every exchange after it.
+        if let Line::Text(stray) = self.lines.next(Duration::ZERO) {
+            self.kill();
+            return Err(self.fail(
+                IutCause::Protocol,
+                format!(
+                    "answered twice: a line nobody asked for before the `{}` request: {}",
+                    request.name(),
+                    truncate(&stray)
+                ),
+            ));
+        }
         let mut line = serde_json::to_vec(request).expect("requests serialize");
         line.push(b'\n');
         // One write per request: the IUT wakes once.

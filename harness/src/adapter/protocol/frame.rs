@@ -8,11 +8,30 @@ use serde::{Deserialize, Serialize};
 /// A frame the controller starts sending: a valid frame, or what the device
 /// produced that is none (the soft device reports such a frame rather than
 /// hiding it; the harness judges it).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(untagged)]
 pub enum Transmitted {
     Frame(WireFrame),
     Invalid(InvalidWireFrame),
+}
+
+/// Told apart by the `invalid` field, so that an error says which field of
+/// which shape is wrong and with what value (serde's untagged enums say only
+/// that nothing matched).
+impl<'de> Deserialize<'de> for Transmitted {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let value = serde_json::Value::deserialize(deserializer)?;
+        if value.get("invalid").is_some() {
+            InvalidWireFrame::deserialize(value)
+                .map(Transmitted::Invalid)
+                .map_err(|e| D::Error::custom(format!("an invalid frame: {e}")))
+        } else {
+            WireFrame::deserialize(value)
+                .map(Transmitted::Frame)
+                .map_err(|e| D::Error::custom(format!("a frame: {e}")))
+        }
+    }
 }
 
 /// `{"invalid": "why"}`: the device's controller started something that is no

@@ -277,6 +277,21 @@ mod tests {
     }
 
     #[test]
+    fn a_transmit_answer_that_does_not_parse_names_the_field_and_the_value() {
+        let line = r#"{"type":"transmit","frame":{"id":4294967297,"len":0,"data":""}}"#;
+        let error = serde_json::from_str::<Answer>(line)
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("4294967297"), "{error}");
+        assert!(error.contains("a frame"), "{error}");
+        let line = r#"{"type":"transmit","frame":{"invalid":7}}"#;
+        let error = serde_json::from_str::<Answer>(line)
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("an invalid frame"), "{error}");
+    }
+
+    #[test]
     fn a_frame_that_is_no_frame_is_refused_with_the_reason() {
         let wire: WireFrame = serde_json::from_str(r#"{"id":2048,"len":0,"data":""}"#).unwrap();
         assert_eq!(
