@@ -92,6 +92,10 @@ pub const TX_LENGTH: &[ReqId] = req_ids![
 ];
 pub const TX_PADDING: &[ReqId] = req_ids!["FD-LEN-005"];
 pub const TX_DATA: &[ReqId] = req_ids!["HS-TX-006", "LAY-GEN-003"];
+/// A Tx frame the IUT decoded from the output image with another message
+/// structure's stride and offsets (a transaction number skipped or read as
+/// the COB ID).
+pub const TX_STRIDE: &[ReqId] = req_ids!["LAY-GEN-006"];
 pub const TX_INVALID: &[ReqId] = req_ids!["FD-LEN-003", "FD-LEN-004", "ERR-R1", "LAY-GEN-008"];
 pub const CONFIRMATION: &[ReqId] = req_ids!["PDX-001", "PDX-002"];
 /// A batch of nothing was not acknowledged.

@@ -4,7 +4,9 @@
 //! (HS-RX-008, FQ-005) and data bytes past the length.
 
 use canif_model::frame::Frame;
-use canif_model::image::{field, ImageLayout, InputImage, LengthField, MessageRepr, MessageView};
+use canif_model::image::{
+    field, ImageLayout, InputImage, LengthField, MessageLayout, MessageRepr, MessageView,
+};
 use canif_model::Nanos;
 use canif_spec::ReqId;
 
@@ -280,6 +282,34 @@ impl InputCheck<'_> {
             })
         })
     }
+}
+
+/// Whether `frame` is what a Tx slot of one of `batches` (output images)
+/// holds when read with another message structure than the interface's, and
+/// no slot holds with the interface's own: the IUT decoded the image at the
+/// wrong stride or offsets (LAY-GEN-006). A frame some slot holds as it is
+/// (one past NoOfTxMessages, say) is another fault.
+pub fn read_with_another_structure(layout: &ImageLayout, batches: &[&[u8]], frame: &Frame) -> bool {
+    let Some(first) = (layout.tx_slots > 0).then(|| layout.tx_slot(0).start) else {
+        return false;
+    };
+    let holds = |structure: &'static MessageLayout| {
+        batches.iter().any(|outputs| {
+            (0..layout.tx_slots).any(|slot| {
+                let at = first + slot * structure.size;
+                outputs
+                    .get(at..at + structure.size)
+                    .and_then(|bytes| MessageView::new_checked(bytes, structure).ok())
+                    // Read as a device that trusts the fields would.
+                    .is_some_and(|view| MessageRepr::parse_clamped(&view).0.frame == *frame)
+            })
+        })
+    };
+    !holds(layout.tx_message)
+        && MessageLayout::ALL
+            .iter()
+            .filter(|other| other.name != layout.tx_message.name)
+            .any(|other| holds(other))
 }
 
 /// The requirements of the first property in which a frame handed to the

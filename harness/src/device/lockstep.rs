@@ -177,6 +177,7 @@ impl Lockstep<'_> {
             }
         }
         let outputs = self.plc.outputs().to_vec();
+        self.pair.outputs(&outputs);
         let written = OutputImage::new_checked(&outputs[..], layout)
             .map(|o| o.header())
             .unwrap_or_default();

@@ -6,18 +6,22 @@
 use canif_model::device::Device;
 use canif_model::exchange::SYNC1_TX_JITTER;
 use canif_model::frame::Frame;
-use canif_model::image::{ImageLayout, LengthField};
+use canif_model::image::{ImageLayout, LengthField, OutputImage};
 use canif_model::Nanos;
 use canif_spec::ReqId;
 
 use crate::bus::sim::Controller;
 use crate::device::blame;
 use crate::device::bounds::Bounds;
-use crate::device::diff::{frame_difference, Difference};
+use crate::device::diff::{frame_difference, read_with_another_structure, Difference};
 use crate::device::history::History;
 use crate::device::iut::{InvalidFrame, Iut};
 use crate::outcome::{Failure, FrameDiff, Outcome};
+use crate::run::Ring;
 use crate::trace::TraceWriter;
+
+/// How many recent batches a frame is looked for in, read at another stride.
+const BATCHES: usize = 8;
 
 /// The IUT broke: the scenario ends in error, whatever the model expected.
 pub(crate) fn iut_broke(error: crate::error::IutError) -> Outcome {
@@ -46,6 +50,9 @@ pub struct Pair {
     /// documents leave it open (see [`crate::ScenarioRun::tolerated`]).
     pub tolerated: u64,
     pub history: History,
+    /// The output images of the last batches handed over, to tell a frame
+    /// read at the wrong stride from another wrong frame.
+    batches: Ring<Vec<u8>>,
     trace: Option<TraceWriter>,
     scenario: String,
     covers: Vec<ReqId>,
@@ -70,10 +77,29 @@ impl Pair {
             frames: 0,
             tolerated: 0,
             history: History::default(),
+            batches: Ring::new(BATCHES),
             trace,
             scenario: scenario.to_string(),
             covers: covers.to_vec(),
         }
+    }
+
+    /// The PLC's output image of this cycle: kept when it hands over a new batch.
+    pub fn outputs(&mut self, outputs: &[u8]) {
+        let counter = |bytes: &[u8]| {
+            OutputImage::new_checked(bytes, self.layout).map_or(None, |o| Some(o.tx_counter()))
+        };
+        let last = self.batches.iter().last().and_then(|b| counter(b));
+        if counter(outputs).is_some() && counter(outputs) != last {
+            self.batches.push(outputs.to_vec());
+        }
+    }
+
+    /// Whether the IUT's frame is a slot of a recent batch read with another
+    /// message structure's stride and offsets.
+    fn misread(&self, frame: &Frame) -> bool {
+        let batches: Vec<&[u8]> = self.batches.iter().map(Vec::as_slice).collect();
+        read_with_another_structure(&self.layout, &batches, frame)
     }
 
     /// A difference as the failure of this scenario, with its history. The
@@ -169,6 +195,8 @@ impl Pair {
                     frames: None,
                     candidates: if queued_later {
                         blame::TX_OTHER_FRAME
+                    } else if self.misread(&a) {
+                        blame::TX_STRIDE
                     } else {
                         frame_difference(
                             &e,
@@ -197,7 +225,11 @@ impl Pair {
             },
             (None, Some(Ok(a))) => Difference {
                 frames: None,
-                candidates: blame::TX_EXTRA,
+                candidates: if self.misread(&a) {
+                    blame::TX_STRIDE
+                } else {
+                    blame::TX_EXTRA
+                },
                 what,
                 expected: "no frame".into(),
                 actual: a.to_string(),
@@ -323,6 +355,8 @@ mod tests {
     use canif_model::frame::CanId;
     use canif_model::info_data::ControllerStatus;
 
+    use canif_model::image::MessageRepr;
+
     use super::*;
     use crate::device::iut::Transmit;
 
@@ -351,6 +385,56 @@ mod tests {
         ) -> Result<(), crate::error::IutError> {
             Ok(())
         }
+    }
+
+    /// A 29-bit interface with transaction numbers; its batch holds `message`
+    /// in slot 0.
+    fn pair_with_a_batch(message: MessageRepr) -> Pair {
+        let mut config = InterfaceConfig::new(FrameFormat::Extended29, 4);
+        config.transaction_number = true;
+        let model = Device::new(&Capabilities::everything(), config).unwrap();
+        let covers = canif_spec::req_ids!["HS-TX-006"];
+        let mut pair = Pair::new(Box::new(Babbler(frame())), model, ("stride", covers), None);
+        let mut outputs = vec![0; pair.layout.output_size()];
+        let mut image = OutputImage::new_checked(&mut outputs[..], pair.layout).unwrap();
+        image.set_tx_counter(1);
+        image.set_no_of_tx_messages(1);
+        message.emit(&mut image.tx_message_mut(0).unwrap()).unwrap();
+        pair.outputs(&outputs);
+        pair
+    }
+
+    #[test]
+    fn a_frame_read_at_another_structures_stride_is_blamed_on_the_layout() {
+        let sent = MessageRepr {
+            transaction_number: 0x0102,
+            frame: Frame::classic(CanId::Extended(0x0ABC_DEF0 & 0x1FFF_FFFF), &[1, 2, 3]).unwrap(),
+            time_stamp: 0,
+        };
+        let pair = pair_with_a_batch(sent);
+        // What an IUT that skips the transaction number reads from slot 0.
+        let start = pair.layout.tx_slot(0).start;
+        let mut outputs = vec![0; pair.layout.output_size()];
+        let mut image = OutputImage::new_checked(&mut outputs[..], pair.layout).unwrap();
+        sent.emit(&mut image.tx_message_mut(0).unwrap()).unwrap();
+        let other = &canif_model::image::MessageLayout::EXT29;
+        let view = canif_model::image::MessageView::new_checked(
+            &outputs[start..start + other.size],
+            other,
+        )
+        .unwrap();
+        let misread = MessageRepr::parse_clamped(&view).0.frame;
+        assert_ne!(misread, sent.frame);
+        let difference = pair
+            .transmit_difference(Some(sent.frame), Some(Ok(misread)))
+            .unwrap_err();
+        assert_eq!(difference.candidates, blame::TX_STRIDE);
+        // Another wrong frame is not the layout's.
+        let other_frame = Frame::classic(CanId::Extended(0x42), &[9]).unwrap();
+        let difference = pair
+            .transmit_difference(Some(sent.frame), Some(Ok(other_frame)))
+            .unwrap_err();
+        assert_ne!(difference.candidates, blame::TX_STRIDE);
     }
 
     fn pair(iut: Box<dyn Iut>) -> Pair {
