@@ -7,9 +7,10 @@ use std::time::{Duration, Instant};
 
 use canif_harness::device::run_scenario;
 use canif_harness::device::scenario;
-use canif_harness::device::suite::{run_profile, Options};
+use canif_harness::device::suite::Options;
 use canif_harness::device::IutKind;
 use canif_harness::report::{ProfileReport, RunMeta, RunReport};
+use canif_harness::run::run_profile;
 use canif_harness::{Outcome, VerdictKind};
 use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig};
 use canif_spec::Catalogue;

@@ -6,8 +6,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use canif_harness::device::suite::{run_profile, Options};
+use canif_harness::device::suite::Options;
 use canif_harness::device::IutKind;
+use canif_harness::run::run_profile;
 use canif_harness::Outcome;
 use canif_spec::Catalogue;
 

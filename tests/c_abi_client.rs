@@ -5,7 +5,8 @@
 use std::path::PathBuf;
 use std::process::Command;
 
-use canif_harness::client::suite::{run_profile, ClientKind, ClientOptions};
+use canif_harness::client::suite::{ClientKind, ClientOptions};
+use canif_harness::run::run_profile;
 use canif_harness::{Outcome, VerdictKind};
 use canif_spec::Catalogue;
 

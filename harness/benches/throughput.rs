@@ -6,8 +6,9 @@ use std::time::Instant;
 
 use canif_harness::device::run_scenario;
 use canif_harness::device::scenario;
-use canif_harness::device::suite::{run_profile, Options};
+use canif_harness::device::suite::Options;
 use canif_harness::device::IutKind;
+use canif_harness::run::run_profile;
 use canif_model::config::{FrameFormat, InterfaceConfig};
 use canif_model::timing::BitRates;
 use canif_spec::Catalogue;

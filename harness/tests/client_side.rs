@@ -5,7 +5,8 @@
 use std::collections::BTreeSet;
 
 use canif_harness::client::faulty::ClientFault;
-use canif_harness::client::suite::{kill_matrix, run_profile, ClientKind, ClientOptions};
+use canif_harness::client::suite::{ClientKind, ClientOptions};
+use canif_harness::run::{kill_matrix, run_profile};
 use canif_harness::Outcome;
 use canif_spec::{Catalogue, Side};
 

@@ -54,7 +54,7 @@ fn verdicts<S: Side>(
     if let Some(verdicts) = runs.lock().unwrap().get(&key) {
         return verdicts.clone();
     }
-    let run = run_profile(profile, &side, &under_test, |_| {});
+    let run = run_profile(profile, &under_test, &side, |_| {});
     let verdicts = Arc::new(run.verdicts(catalogue, profile));
     runs.lock().unwrap().entry(key).or_insert(verdicts).clone()
 }

@@ -7,9 +7,10 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use canif_harness::compare::{compare, CompareOptions};
-use canif_harness::device::suite::{run_profile, Options};
+use canif_harness::device::suite::Options;
 use canif_harness::device::IutKind;
 use canif_harness::report::{ProfileReport, ReportFile, RunMeta, RunReport};
+use canif_harness::run::run_profile;
 use canif_harness::verdict::Reach;
 use canif_harness::{GherkinOutcome, GherkinRun, VerdictKind};
 use canif_softdevice::Fault;

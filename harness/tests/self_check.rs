@@ -2,8 +2,9 @@
 //! device pass every profile; every fault of the soft device is caught, on the
 //! requirement it breaks.
 
-use canif_harness::device::suite::{profile_for, run_profile, Options};
+use canif_harness::device::suite::{profile_for, Options};
 use canif_harness::device::IutKind;
+use canif_harness::run::run_profile;
 use canif_harness::run::ProfileRun;
 use canif_harness::{Outcome, VerdictKind};
 use canif_softdevice::{Choice, Fault};

@@ -7,7 +7,7 @@ use std::time::Duration;
 use canif_model::config::{Capabilities, InterfaceConfig, QueueMode};
 use canif_model::image::ImageLayout;
 use canif_model::timing::BitRates;
-use canif_spec::{Catalogue, Profile, ReqId, Scope, Side, Suite};
+use canif_spec::{Profile, ReqId, Scope, Side, Suite};
 
 use super::application::{self, ClientScenario};
 use super::exec::ExecClient;
@@ -20,7 +20,7 @@ use crate::device::iut::BuildError;
 use crate::error::RunError;
 use crate::outcome::{Outcome, ScenarioRun};
 
-use crate::run::{self, KillRow, ProfileRun, Selection, Side as RunSide};
+use crate::run::{Selection, SelfCheck, Side as RunSide};
 use crate::verdict::{NotRunReason, Reach, Unobserved};
 
 /// The client under test, as the harness builds it.
@@ -252,16 +252,6 @@ impl RunSide for ClientOptions {
     }
 }
 
-/// Runs every selected case of a profile against a client.
-pub fn run_profile(
-    profile: &Profile,
-    kind: &ClientKind,
-    options: &ClientOptions,
-    progress: impl FnMut(&ScenarioRun),
-) -> ProfileRun {
-    run::run_profile(profile, options, kind, progress)
-}
-
 /// CL-TN-002 judges what a client tells its application was sent: where a
 /// run with transaction numbers passed and the client told nothing (a run
 /// that told something and broke CL-TN-002 fails it), there was nothing to judge.
@@ -287,23 +277,23 @@ pub fn reach(caps: &Capabilities, options: &ClientOptions) -> Reach {
     }
 }
 
-/// The soft client with each of its faults on every profile.
-pub fn kill_matrix(
-    catalogue: &Catalogue,
-    options: &ClientOptions,
-    progress: impl FnMut(&str),
-) -> Vec<KillRow<ClientFault>> {
-    run::kill_matrix(
-        catalogue,
-        ClientFault::ALL,
-        |fault| {
-            let options = ClientOptions {
-                counter_wrap: fault == ClientFault::IgnoresWrap,
-                ..options.clone()
-            };
-            (options, ClientKind::Faulty(Some(fault)))
-        },
-        ClientFault::name,
-        progress,
-    )
+/// The soft client's faults, each alone.
+impl SelfCheck for ClientOptions {
+    type Fault = ClientFault;
+
+    fn faults() -> Vec<ClientFault> {
+        ClientFault::ALL.to_vec()
+    }
+
+    fn fault_name(fault: ClientFault) -> &'static str {
+        fault.name()
+    }
+
+    fn with_fault(&self, fault: ClientFault) -> (Self, ClientKind) {
+        let options = ClientOptions {
+            counter_wrap: fault == ClientFault::IgnoresWrap,
+            ..self.clone()
+        };
+        (options, ClientKind::Faulty(Some(fault)))
+    }
 }

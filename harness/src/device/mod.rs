@@ -38,4 +38,4 @@ pub mod suite;
 pub use iut::{BuildError, Iut};
 pub use iut_kind::IutKind;
 pub use lockstep::run_scenario;
-pub use suite::{run_profile, DeviceCase, Options};
+pub use suite::{DeviceCase, Options};

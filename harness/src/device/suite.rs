@@ -4,7 +4,7 @@
 
 use canif_model::config::Capabilities;
 use canif_model::Nanos;
-use canif_spec::{Catalogue, Profile, ReqId, Scope, Side as SideName, Suite};
+use canif_spec::{Profile, ReqId, Scope, Side as SideName, Suite};
 
 use super::cases::scenarios;
 use super::iut_kind::IutKind;
@@ -14,7 +14,7 @@ use super::scenario::Scenario;
 use crate::device::bus::BusChoice;
 use crate::error::{Refusal, RunError};
 use crate::outcome::{Outcome, ScenarioRun};
-use crate::run::{self, KillRow, ProfileRun, Selection, Side};
+use crate::run::{Selection, SelfCheck, Side};
 use crate::verdict::Reach;
 
 /// What to run.
@@ -163,16 +163,6 @@ impl Side for Options {
     }
 }
 
-/// Runs every selected case of a profile against a device.
-pub fn run_profile(
-    profile: &Profile,
-    kind: &IutKind,
-    options: &Options,
-    progress: impl FnMut(&ScenarioRun),
-) -> ProfileRun {
-    run::run_profile(profile, options, kind, progress)
-}
-
 /// Every requirement the scenarios and checks of a run exercise on a device
 /// with these capabilities: exactly what [`judge`] can call pass or fail,
 /// whatever the selection.
@@ -213,27 +203,27 @@ pub fn profile_for(fault: canif_softdevice::Fault) -> &'static str {
     }
 }
 
-/// The soft device with each of its faults on every profile.
-pub fn kill_matrix(
-    catalogue: &Catalogue,
-    options: &Options,
-    progress: impl FnMut(&str),
-) -> Vec<KillRow<canif_softdevice::Fault>> {
-    run::kill_matrix(
-        catalogue,
-        canif_softdevice::Fault::ALL,
-        |fault| {
-            let options = Options {
-                counter_wrap: fault == canif_softdevice::Fault::CounterDoesNotWrap,
-                ..options.clone()
-            };
-            let kind = IutKind::SoftDevice {
-                faults: vec![fault],
-                choices: vec![],
-            };
-            (options, kind)
-        },
-        canif_softdevice::Fault::name,
-        progress,
-    )
+/// The soft device's faults, each alone.
+impl SelfCheck for Options {
+    type Fault = canif_softdevice::Fault;
+
+    fn faults() -> Vec<Self::Fault> {
+        canif_softdevice::Fault::ALL.to_vec()
+    }
+
+    fn fault_name(fault: Self::Fault) -> &'static str {
+        fault.name()
+    }
+
+    fn with_fault(&self, fault: Self::Fault) -> (Self, IutKind) {
+        let options = Options {
+            counter_wrap: fault == canif_softdevice::Fault::CounterDoesNotWrap,
+            ..self.clone()
+        };
+        let kind = IutKind::SoftDevice {
+            faults: vec![fault],
+            choices: vec![],
+        };
+        (options, kind)
+    }
 }

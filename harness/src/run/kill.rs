@@ -5,6 +5,17 @@ use canif_spec::Catalogue;
 
 use super::{run_profile, Side};
 
+/// A side with deliberate faults of its own implementation (the soft device,
+/// the soft client), to prove the suite catches each.
+pub trait SelfCheck: Side + Sized {
+    type Fault: Copy;
+    /// Every fault, in the order the matrix lists them.
+    fn faults() -> Vec<Self::Fault>;
+    fn fault_name(fault: Self::Fault) -> &'static str;
+    /// The options and the faulty implementation a fault's row runs with.
+    fn with_fault(&self, fault: Self::Fault) -> (Self, Self::UnderTest);
+}
+
 /// One row: a fault and what it broke on each profile.
 #[derive(Debug, Clone)]
 pub struct KillRow<F> {
@@ -13,25 +24,22 @@ pub struct KillRow<F> {
     pub caught: Vec<(String, Vec<String>)>,
 }
 
-/// Runs each fault on every profile; `setup` gives the side's options and
-/// what is under test for one fault, `name` what `progress` is told.
-pub fn kill_matrix<S: Side, F: Copy>(
+/// Runs each fault of the side on every profile.
+pub fn kill_matrix<S: SelfCheck>(
     catalogue: &Catalogue,
-    faults: impl IntoIterator<Item = F>,
-    setup: impl Fn(F) -> (S, S::UnderTest),
-    name: impl Fn(F) -> &'static str,
+    side: &S,
     mut progress: impl FnMut(&str),
-) -> Vec<KillRow<F>> {
-    faults
+) -> Vec<KillRow<S::Fault>> {
+    S::faults()
         .into_iter()
         .map(|fault| {
-            progress(name(fault));
-            let (side, under_test) = setup(fault);
+            progress(S::fault_name(fault));
+            let (side, under_test) = side.with_fault(fault);
             let caught = catalogue
                 .profiles
                 .iter()
                 .map(|profile| {
-                    let run = run_profile(profile, &side, &under_test, |_| {});
+                    let run = run_profile(profile, &under_test, &side, |_| {});
                     (
                         profile.name.clone(),
                         run.failed_requirements(catalogue, profile),

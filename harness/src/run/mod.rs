@@ -11,7 +11,7 @@ mod profile;
 mod ring;
 mod selection;
 
-pub use kill::{kill_matrix, KillRow};
+pub use kill::{kill_matrix, KillRow, SelfCheck};
 pub use profile::{run_profile, ProfileRun, Side};
 pub use ring::{Ring, CONTEXT};
 pub use selection::Selection;

@@ -131,8 +131,8 @@ impl ProfileRun {
 /// Runs every selected case of a profile, in order, and says each to `progress`.
 pub fn run_profile<S: Side>(
     profile: &Profile,
-    side: &S,
     under_test: &S::UnderTest,
+    side: &S,
     mut progress: impl FnMut(&ScenarioRun),
 ) -> ProfileRun {
     let mut runs = Vec::new();

@@ -112,7 +112,7 @@ impl<'c, S: Side> Plan<'c, S> {
                 break;
             }
             let mut progress = Progress::new(n, count, &profile.name);
-            let run = run_profile(profile, &self.options, under_test, |run| {
+            let run = run_profile(profile, under_test, &self.options, |run| {
                 progress.scenario(run)
             });
             progress.done(&run, catalogue, profile, unit);
@@ -297,11 +297,11 @@ pub(crate) fn self_check(catalogue: &Catalogue, seed: u64) -> ExitCode {
         generated_cycles: 150,
         ..canif_harness::device::Options::quick(seed)
     };
-    let devices = canif_harness::device::suite::kill_matrix(catalogue, &options, |fault| {
+    let devices = canif_harness::run::kill_matrix(catalogue, &options, |fault| {
         eprintln!("running {fault} on every profile")
     });
     let uncaught = print_kill_table("device fault", &devices, |f| f.name());
-    let clients = canif_harness::client::suite::kill_matrix(
+    let clients = canif_harness::run::kill_matrix(
         catalogue,
         &canif_harness::client::suite::ClientOptions {
             counter_wrap: false,
