@@ -245,3 +245,47 @@ fn a_large_area_gets_every_line_right() {
         4 + 5 * 39_999
     );
 }
+
+/// A requirement that rests on a ruling cites one a reader can find: a
+/// RULINGS.md source names a ruling of `spec/rulings.yaml` first, and no note
+/// cites a decision ("D8", "D10") that exists only in a session's notes
+/// (issue 26: INFO-009 cited "new gap D10").
+#[test]
+fn every_ruling_a_requirement_cites_can_be_found() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let rulings: Vec<&str> = catalogue.rulings.iter().map(|r| r.id.as_str()).collect();
+    let decision = |text: &str| {
+        text.split(|c: char| !c.is_ascii_alphanumeric())
+            .any(|word| {
+                word.len() >= 2
+                    && word.starts_with('D')
+                    && word[1..].chars().all(|c| c.is_ascii_digit())
+            })
+    };
+    for requirement in catalogue.requirements() {
+        if requirement.source.file == "RULINGS.md" {
+            let first = requirement
+                .source
+                .section
+                .split(|c: char| !c.is_ascii_alphanumeric())
+                .next()
+                .unwrap_or_default();
+            assert!(
+                rulings.contains(&first),
+                "{}: cites RULINGS.md section {:?}, which names no ruling",
+                requirement.id,
+                requirement.source.section
+            );
+        }
+        for text in [Some(&requirement.statement), requirement.notes.as_ref()]
+            .into_iter()
+            .flatten()
+        {
+            assert!(
+                !decision(text),
+                "{} cites a decision no reader can find: {text}",
+                requirement.id
+            );
+        }
+    }
+}
