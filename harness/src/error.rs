@@ -120,8 +120,6 @@ pub enum BusCause {
     Unavailable,
     /// A send or receive on it failed (the interface went down, a buffer stayed full).
     Io,
-    /// A frame did not arrive in time.
-    Timeout,
     /// The device the harness plays on it broke.
     PlayedDevice,
 }

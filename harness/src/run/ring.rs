@@ -37,22 +37,6 @@ impl<T> Ring<T> {
     pub fn iter(&self) -> impl DoubleEndedIterator<Item = &T> + ExactSizeIterator {
         self.items.iter()
     }
-
-    pub fn last_mut(&mut self) -> Option<&mut T> {
-        self.items.back_mut()
-    }
-
-    pub fn len(&self) -> usize {
-        self.items.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.items.is_empty()
-    }
-
-    pub fn clear(&mut self) {
-        self.items.clear();
-    }
 }
 
 #[cfg(test)]
@@ -66,9 +50,6 @@ mod tests {
             ring.push(n);
         }
         assert_eq!(ring.iter().copied().collect::<Vec<_>>(), [2, 3, 4]);
-        *ring.last_mut().unwrap() = 9;
-        assert_eq!(ring.iter().copied().collect::<Vec<_>>(), [2, 3, 9]);
-        ring.clear();
-        assert!(ring.is_empty());
+        assert_eq!(Ring::<u8>::context().capacity, super::CONTEXT);
     }
 }
