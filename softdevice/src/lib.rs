@@ -11,6 +11,7 @@
 #![forbid(unsafe_code)]
 
 mod choice;
+pub mod ethercat;
 mod fault;
 pub mod field;
 mod frame;
@@ -142,6 +143,11 @@ impl SoftDevice {
 
     fn chose(&self, choice: Choice) -> bool {
         self.choices.contains(&choice)
+    }
+
+    /// The lengths of the output and the input image this configuration has.
+    pub fn image_lengths(&self) -> (usize, usize) {
+        (self.output_len(), self.input.len())
     }
 
     fn output_len(&self) -> usize {

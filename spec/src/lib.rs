@@ -22,7 +22,7 @@ pub use catalogue::{
     Area, Capability, Catalogue, Requirement, Ruling, Source, SourceDocument, Status, Verification,
 };
 pub use error::{SpecError, SpecErrors};
-pub use profile::Profile;
+pub use profile::{EthercatIdentity, Profile};
 pub use req_id::ReqId;
 pub use scope::{Scope, Side, Suite};
 

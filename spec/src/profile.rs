@@ -25,8 +25,20 @@ pub struct Profile {
     pub timestamp_tolerance_ns: u64,
     #[serde(default)]
     pub notes: Option<String>,
+    /// Where the device is an EtherCAT terminal: the identity it must show.
+    #[serde(default)]
+    pub ethercat: Option<EthercatIdentity>,
     #[serde(skip)]
     pub file: String,
+}
+
+/// The identity object (0x1018) and SII words of an EtherCAT terminal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EthercatIdentity {
+    pub vendor_id: u32,
+    pub product_code: u32,
+    pub revision: u32,
 }
 
 impl Profile {

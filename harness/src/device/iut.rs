@@ -149,11 +149,11 @@ impl Iut for SoftDeviceIut {
             .map_err(|e| IutError::new(IutCause::Impossible, e.to_string()))
     }
     fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) -> Result<(), IutError> {
-        self.0.rx_interrupt(to_soft(frame), end_of_reception);
+        soft_controller::receive(&mut self.0, frame, end_of_reception);
         Ok(())
     }
     fn poll_transmit(&mut self, now: Nanos) -> Result<Transmit, IutError> {
-        Ok(self.0.controller_idle(now).map(|f| from_soft(&f)))
+        Ok(soft_controller::poll_transmit(&mut self.0, now))
     }
     fn poll_timeout(&self) -> Option<Nanos> {
         self.0.next_release()
@@ -163,11 +163,31 @@ impl Iut for SoftDeviceIut {
         Ok(())
     }
     fn controller_status(&mut self, status: &ControllerStatus) -> Result<(), IutError> {
+        soft_controller::status(&mut self.0, status);
+        Ok(())
+    }
+    fn transmit_plan(&self, now: Nanos) -> Option<Vec<Planned>> {
+        Some(soft_controller::plan(&self.0, now))
+    }
+}
+
+/// The soft device's CAN controller, in model terms: shared by the soft device
+/// in process and the soft device behind an emulated EtherCAT terminal.
+pub(crate) mod soft_controller {
+    use super::*;
+
+    pub(crate) fn receive(device: &mut SoftDevice, frame: &Frame, end_of_reception: Nanos) {
+        device.rx_interrupt(to_soft(frame), end_of_reception);
+    }
+
+    pub(crate) fn poll_transmit(device: &mut SoftDevice, now: Nanos) -> Transmit {
+        device.controller_idle(now).map(|f| from_soft(&f))
+    }
+
+    pub(crate) fn status(device: &mut SoftDevice, status: &ControllerStatus) {
         use canif_softdevice::field::info;
-        self.0
-            .set_controller_word(info::STATUS, status.status_word());
-        self.0
-            .set_controller_word(info::TRANSCEIVER_DELAY, status.transceiver_delay);
+        device.set_controller_word(info::STATUS, status.status_word());
+        device.set_controller_word(info::TRANSCEIVER_DELAY, status.transceiver_delay);
         for (index, value) in [
             (info::ACK_ERRORS, status.ack_errors),
             (info::BIT_ERRORS, status.bit_errors),
@@ -178,18 +198,18 @@ impl Iut for SoftDeviceIut {
             (info::RECEIVE_ERROR_COUNTER, status.receive_error_counter),
             (info::TRANSMIT_ERROR_COUNTER, status.transmit_error_counter),
         ] {
-            self.0.set_controller_word(index, value);
+            device.set_controller_word(index, value);
         }
-        Ok(())
     }
-    fn transmit_plan(&self, now: Nanos) -> Option<Vec<Planned>> {
-        Some(plan_by_rehearsal(
-            &self.0,
+
+    pub(crate) fn plan(device: &SoftDevice, now: Nanos) -> Vec<Planned> {
+        plan_by_rehearsal(
+            device,
             now,
             |d, t| d.controller_idle(t).map(|f| from_soft(&f)),
             SoftDevice::tx_done_interrupt,
             SoftDevice::next_release,
-        ))
+        )
     }
 }
 

@@ -34,6 +34,12 @@ pub enum IutKind {
     Lib {
         path: std::path::PathBuf,
     },
+    /// A terminal over EtherCAT: canif's master (ethercrab) and, in memory,
+    /// the soft device behind an emulated ESC (`ethercat:emulated`).
+    Ethercat {
+        identity: canif_spec::EthercatIdentity,
+        emulated: crate::device::ethercat::Emulated,
+    },
 }
 
 /// Asks an IUT, configuration after configuration, whether it accepts.
@@ -76,6 +82,9 @@ impl IutKind {
                 }
                 Ok(Box::new(SoftDeviceIut(device)))
             }
+            IutKind::Ethercat { identity, emulated } => Ok(Box::new(
+                crate::device::ethercat::build_emulated(caps, config, identity, emulated)?,
+            )),
             IutKind::Exec {
                 command,
                 timeout_ms,
@@ -141,6 +150,11 @@ impl IutKind {
                 .join("+"),
             IutKind::Exec { command, .. } => format!("exec:{command}"),
             IutKind::Lib { path } => format!("lib:{}", path.display()),
+            IutKind::Ethercat { emulated, .. } => std::iter::once("ethercat:emulated")
+                .chain(emulated.faults.iter().map(|f| f.name()))
+                .chain(emulated.choices.iter().map(|c| c.name()))
+                .collect::<Vec<_>>()
+                .join("+"),
         }
     }
 }

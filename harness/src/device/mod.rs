@@ -16,6 +16,7 @@ mod bounds;
 pub mod bus;
 pub mod cases;
 pub mod diff;
+pub mod ethercat;
 pub mod exec_iut;
 pub(crate) mod history;
 pub mod iut;

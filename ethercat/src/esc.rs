@@ -1,0 +1,343 @@
+//! The ESC's memory, datagram by datagram (ETG.1000.4 §5.4, ESC register
+//! description): which datagrams address it, what they read and write
+//! through registers and FMMUs, and the working counter.
+
+use crate::register::{self, Fmmu, SyncManager};
+use crate::wire::{Command, Datagram};
+
+/// Registers and process RAM.
+pub const MEMORY: usize = 0x3000;
+const FMMUS: u16 = 8;
+const SYNC_MANAGERS: u16 = 8;
+/// Port 0 with a link and communication; ports 1–3 closed (the end of the line).
+const DL_STATUS: u16 = 0x5611;
+
+/// What a datagram touched, for the SubDevice to act on after the frame.
+#[derive(Debug, Default, Clone, PartialEq, Eq)]
+pub struct Touched {
+    /// Physical byte ranges written and read.
+    pub written: Vec<std::ops::Range<usize>>,
+    pub read: Vec<std::ops::Range<usize>>,
+}
+
+impl Touched {
+    pub fn wrote(&self, address: u16) -> bool {
+        self.written
+            .iter()
+            .any(|r| r.contains(&usize::from(address)))
+    }
+
+    /// Whether the last byte of `range` was written (a buffer is complete).
+    pub fn completed(&self, range: &std::ops::Range<usize>) -> bool {
+        !range.is_empty() && self.written.iter().any(|r| r.contains(&(range.end - 1)))
+    }
+
+    pub fn read_end_of(&self, range: &std::ops::Range<usize>) -> bool {
+        !range.is_empty() && self.read.iter().any(|r| r.contains(&(range.end - 1)))
+    }
+}
+
+/// The memory of one ESC.
+#[derive(Clone)]
+pub struct Esc {
+    pub memory: Vec<u8>,
+    /// The local clock at the frame being processed (ns), and the time latched by a write to 0x0900.
+    pub local_time: u64,
+}
+
+impl Default for Esc {
+    fn default() -> Self {
+        Esc::new()
+    }
+}
+
+impl Esc {
+    pub fn new() -> Esc {
+        let mut esc = Esc {
+            memory: vec![0; MEMORY],
+            local_time: 0,
+        };
+        esc.memory[0] = 0x11; // ESC type
+        esc.memory[1] = 0x02; // revision
+        esc.memory[usize::from(register::FMMUS_SUPPORTED)] = FMMUS as u8;
+        esc.memory[usize::from(register::SYNC_MANAGERS_SUPPORTED)] = SYNC_MANAGERS as u8;
+        esc.memory[usize::from(register::RAM_SIZE)] = ((MEMORY - 0x1000) / 1024) as u8;
+        esc.memory[usize::from(register::PORT_DESCRIPTOR)] = 0x0F;
+        esc.set16(register::FEATURES, 0b1100); // DC, 64-bit system time
+        esc.set16(register::DL_STATUS, DL_STATUS);
+        esc
+    }
+
+    pub fn get16(&self, at: u16) -> u16 {
+        let at = usize::from(at);
+        u16::from_le_bytes([self.memory[at], self.memory[at + 1]])
+    }
+
+    pub fn set16(&mut self, at: u16, value: u16) {
+        let at = usize::from(at);
+        self.memory[at..at + 2].copy_from_slice(&value.to_le_bytes());
+    }
+
+    pub fn get32(&self, at: u16) -> u32 {
+        let at = usize::from(at);
+        u32::from_le_bytes(self.memory[at..at + 4].try_into().expect("4 bytes"))
+    }
+
+    pub fn set64(&mut self, at: u16, value: u64) {
+        let at = usize::from(at);
+        self.memory[at..at + 8].copy_from_slice(&value.to_le_bytes());
+    }
+
+    pub fn station_address(&self) -> u16 {
+        self.get16(register::STATION_ADDRESS)
+    }
+
+    pub fn sync_manager(&self, n: u16) -> SyncManager {
+        let at = usize::from(register::SYNC_MANAGER_BASE + n * register::SYNC_MANAGER_LEN);
+        SyncManager::parse(&self.memory[at..at + 8])
+    }
+
+    pub fn set_sync_manager_status(&mut self, n: u16, status: u8) {
+        let at = register::SYNC_MANAGER_BASE + n * register::SYNC_MANAGER_LEN + 5;
+        self.memory[usize::from(at)] = status;
+    }
+
+    fn fmmus(&self) -> impl Iterator<Item = Fmmu> + '_ {
+        (0..FMMUS).map(|n| {
+            let at = usize::from(register::FMMU_BASE + n * register::FMMU_LEN);
+            Fmmu::parse(&self.memory[at..at + 16])
+        })
+    }
+
+    /// The system time the ESC shows: its local time plus the offset the master wrote.
+    fn system_time(&self) -> u64 {
+        let at = usize::from(register::DC_SYSTEM_TIME_OFFSET);
+        let offset = u64::from_le_bytes(self.memory[at..at + 8].try_into().expect("8 bytes"));
+        self.local_time.wrapping_add(offset)
+    }
+
+    /// Whether a master may change this byte (read-only registers and the
+    /// SyncManagers' status bytes are the ESC's own).
+    fn writable(address: usize) -> bool {
+        let read_only = [
+            0x0000..0x0010,
+            0x0110..0x0112,
+            0x0130..0x0136,
+            0x0900..0x0920,
+        ];
+        let sm_status = (0x0800..0x0880).contains(&address) && address % 8 == 5;
+        !sm_status && !read_only.iter().any(|r| r.contains(&address))
+    }
+
+    /// Reads and writes `datagram` at physical `start`; the working-counter increment.
+    fn access(&mut self, datagram: &mut Datagram, start: usize, touched: &mut Touched) -> u16 {
+        let end = (start + datagram.data.len()).min(MEMORY);
+        if start >= MEMORY {
+            return 0;
+        }
+        let range = start..end;
+        if range.contains(&usize::from(register::DC_SYSTEM_TIME)) {
+            let time = self.system_time();
+            self.set64(register::DC_SYSTEM_TIME, time);
+        }
+        let mut count = 0;
+        let command = datagram.command;
+        if command.reads() {
+            let bytes = &self.memory[range.clone()];
+            if matches!(command, Command::Brd | Command::Brw) {
+                for (d, m) in datagram.data.iter_mut().zip(bytes) {
+                    *d |= m;
+                }
+            } else {
+                datagram.data[..range.len()].copy_from_slice(bytes);
+            }
+            touched.read.push(range.clone());
+            count += 1;
+        }
+        if command.writes() {
+            for (i, value) in datagram.data[..range.len()].iter().enumerate() {
+                if Esc::writable(start + i) {
+                    self.memory[start + i] = *value;
+                }
+            }
+            if range.contains(&usize::from(register::DC_RECEIVE_TIME_PORT0)) {
+                // A write to the port-0 receive time latches the time the frame passed.
+                let time = self.local_time as u32;
+                let at = usize::from(register::DC_RECEIVE_TIME_PORT0);
+                self.memory[at..at + 4].copy_from_slice(&time.to_le_bytes());
+                let ecat = self.system_time();
+                self.set64(register::DC_RECEIVE_TIME_ECAT, ecat);
+            }
+            touched.written.push(range);
+            count += if command.reads() { 2 } else { 1 };
+        }
+        count
+    }
+
+    /// Logical addressing: each active FMMU overlapping the datagram moves its bytes.
+    fn logical(&mut self, datagram: &mut Datagram, touched: &mut Touched) -> u16 {
+        let (start, len) = (u64::from(datagram.address), datagram.data.len() as u64);
+        let mut count = 0;
+        let fmmus: Vec<Fmmu> = self.fmmus().filter(|f| f.active).collect();
+        for fmmu in fmmus {
+            let (from, to) = (
+                u64::from(fmmu.logical_start),
+                u64::from(fmmu.logical_start) + u64::from(fmmu.length),
+            );
+            let (lo, hi) = (from.max(start), to.min(start + len));
+            if lo >= hi {
+                continue;
+            }
+            let in_datagram = (lo - start) as usize..(hi - start) as usize;
+            let physical = usize::from(fmmu.physical_start) + (lo - from) as usize;
+            let physical = physical..physical + in_datagram.len();
+            if physical.end > MEMORY {
+                continue;
+            }
+            let command = datagram.command;
+            if fmmu.reads() && command.reads() {
+                datagram.data[in_datagram.clone()].copy_from_slice(&self.memory[physical.clone()]);
+                touched.read.push(physical.clone());
+                count |= 1;
+            }
+            if fmmu.writes() && command.writes() {
+                self.memory[physical.clone()].copy_from_slice(&datagram.data[in_datagram]);
+                touched.written.push(physical);
+                count |= 2;
+            }
+        }
+        // An ESC counts a read and a write once each, however many FMMUs served them.
+        (count & 1) + (count >> 1) * 2
+    }
+
+    /// A physically addressed datagram at its ESC. Of a read-multiple-write,
+    /// the addressed ESC reads; there is no other ESC here to write.
+    fn addressed(&mut self, datagram: &mut Datagram, touched: &mut Touched) -> u16 {
+        let register = usize::from(datagram.register());
+        if matches!(datagram.command, Command::Armw | Command::Frmw) {
+            let mut read = datagram.clone();
+            read.command = Command::Fprd;
+            let count = self.access(&mut read, register, touched);
+            datagram.data = read.data;
+            count
+        } else {
+            self.access(datagram, register, touched)
+        }
+    }
+
+    /// Processes one datagram at this ESC; `touched` gathers what it changed.
+    pub fn process(&mut self, datagram: &mut Datagram, touched: &mut Touched) {
+        use Command::*;
+        let count = match datagram.command {
+            Nop => 0,
+            Aprd | Apwr | Aprw | Armw => {
+                let addressed = datagram.station() == 0;
+                datagram.set_station(datagram.station().wrapping_add(1));
+                if addressed {
+                    self.addressed(datagram, touched)
+                } else {
+                    0
+                }
+            }
+            Fprd | Fpwr | Fprw | Frmw => {
+                if datagram.station() == self.station_address() {
+                    self.addressed(datagram, touched)
+                } else {
+                    0
+                }
+            }
+            Brd | Bwr | Brw => self.access(datagram, usize::from(datagram.register()), touched),
+            Lrd | Lwr | Lrw => self.logical(datagram, touched),
+        };
+        datagram.working_counter = datagram.working_counter.wrapping_add(count);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(esc: &mut Esc, mut datagram: Datagram) -> Datagram {
+        esc.process(&mut datagram, &mut Touched::default());
+        datagram
+    }
+
+    #[test]
+    fn a_position_address_reaches_the_first_esc_and_moves_on() {
+        let mut esc = Esc::new();
+        let answer = run(
+            &mut esc,
+            Datagram::physical(
+                Command::Apwr,
+                0,
+                register::STATION_ADDRESS,
+                vec![0x00, 0x10],
+            ),
+        );
+        assert_eq!((answer.working_counter, answer.station()), (1, 1));
+        assert_eq!(esc.station_address(), 0x1000);
+        // The next ESC's turn: position 0xFFFF (-1) passes this one by.
+        let passed = run(
+            &mut esc,
+            Datagram::physical(Command::Aprd, 0xFFFF, register::TYPE, vec![0; 2]),
+        );
+        assert_eq!((passed.working_counter, passed.data[0]), (0, 0));
+    }
+
+    #[test]
+    fn a_configured_address_reads_only_its_own_esc() {
+        let mut esc = Esc::new();
+        esc.set16(register::STATION_ADDRESS, 0x1001);
+        let mine = run(
+            &mut esc,
+            Datagram::physical(Command::Fprd, 0x1001, register::DL_STATUS, vec![0; 2]),
+        );
+        assert_eq!(
+            (mine.working_counter, mine.data.as_slice()),
+            (1, &[0x11, 0x56][..])
+        );
+        let other = run(
+            &mut esc,
+            Datagram::physical(Command::Fprd, 0x1002, register::DL_STATUS, vec![0; 2]),
+        );
+        assert_eq!(other.working_counter, 0);
+    }
+
+    #[test]
+    fn read_only_registers_keep_their_value() {
+        let mut esc = Esc::new();
+        let answer = run(
+            &mut esc,
+            Datagram::physical(Command::Bwr, 0, register::TYPE, vec![0xAA; 2]),
+        );
+        assert_eq!(answer.working_counter, 1);
+        assert_eq!(esc.memory[0], 0x11);
+    }
+
+    #[test]
+    fn lrw_reads_inputs_and_writes_outputs_through_the_fmmus_counting_three() {
+        let mut esc = Esc::new();
+        // FMMU0: logical 0..4 → 0x1100 (write); FMMU1: logical 4..6 → 0x1D00 (read).
+        let fmmu = |logical: u32, len: u16, physical: u16, kind: u8| {
+            let mut b = vec![0u8; 16];
+            b[0..4].copy_from_slice(&logical.to_le_bytes());
+            b[4..6].copy_from_slice(&len.to_le_bytes());
+            b[7] = 7;
+            b[8..10].copy_from_slice(&physical.to_le_bytes());
+            b[11] = kind;
+            b[12] = 1;
+            b
+        };
+        esc.memory[0x600..0x610].copy_from_slice(&fmmu(0, 4, 0x1100, 2));
+        esc.memory[0x610..0x620].copy_from_slice(&fmmu(4, 2, 0x1D00, 1));
+        esc.memory[0x1D00..0x1D02].copy_from_slice(&[7, 8]);
+        let mut lrw = Datagram::physical(Command::Lrw, 0, 0, vec![1, 2, 3, 4, 0, 0]);
+        lrw.address = 0;
+        let mut touched = Touched::default();
+        esc.process(&mut lrw, &mut touched);
+        assert_eq!(lrw.working_counter, 3);
+        assert_eq!(lrw.data, [1, 2, 3, 4, 7, 8]);
+        assert_eq!(&esc.memory[0x1100..0x1104], &[1, 2, 3, 4]);
+        assert!(touched.completed(&(0x1100..0x1104)));
+    }
+}

@@ -1,0 +1,492 @@
+//! The SDO server (ETG.1000.6 §5.6.2): expedited, normal and segmented
+//! download and upload, complete access, abort codes, over an object
+//! dictionary the application keeps.
+
+use crate::mailbox::{abort, capacity, SdoRequest, SdoResponse};
+
+/// One entry of an object as the dictionary holds it now.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Entry {
+    pub sub: u8,
+    pub value: Vec<u8>,
+    pub writable: bool,
+}
+
+impl Entry {
+    pub fn new(sub: u8, value: Vec<u8>, writable: bool) -> Entry {
+        Entry {
+            sub,
+            value,
+            writable,
+        }
+    }
+}
+
+/// The objects behind the server.
+pub trait ObjectDictionary {
+    /// Every entry of `index`, sub-index 0 first, with the size each has when
+    /// written: an array lists all the entries it can hold.
+    fn object(&self, index: u16) -> Option<Vec<Entry>>;
+
+    /// Writes these entries of `index` together (one download), or refuses
+    /// with an abort code; nothing is written when it refuses.
+    fn write(&mut self, index: u16, values: &[(u8, Vec<u8>)]) -> Result<(), u32>;
+}
+
+/// A transfer split over several mailbox messages.
+#[derive(Debug, Clone)]
+enum Segmented {
+    Download {
+        index: u16,
+        sub: u8,
+        complete_access: bool,
+        size: usize,
+        received: Vec<u8>,
+        toggle: bool,
+    },
+    Upload {
+        rest: Vec<u8>,
+        toggle: bool,
+    },
+}
+
+/// The server's state between messages.
+#[derive(Debug, Clone, Default)]
+pub struct SdoServer {
+    segmented: Option<Segmented>,
+}
+
+/// With complete access, sub-index 0 travels in two bytes (ETG.1000.6 §5.6.2.1.1).
+const SUB0_COMPLETE: usize = 2;
+
+fn abort(index: u16, sub: u8, code: u32) -> SdoResponse {
+    SdoResponse::Abort { index, sub, code }
+}
+
+impl SdoServer {
+    /// Answers one request through a mailbox of `mailbox_size` bytes; an
+    /// abort from the client ends its transfer and is not answered.
+    pub fn handle(
+        &mut self,
+        dictionary: &mut dyn ObjectDictionary,
+        request: SdoRequest,
+        mailbox_size: usize,
+    ) -> Option<SdoResponse> {
+        if let SdoRequest::Abort { .. } = request {
+            self.segmented = None;
+            return None;
+        }
+        Some(self.answer(dictionary, request, mailbox_size))
+    }
+
+    fn answer(
+        &mut self,
+        dictionary: &mut dyn ObjectDictionary,
+        request: SdoRequest,
+        mailbox_size: usize,
+    ) -> SdoResponse {
+        let (first, segment) = capacity(mailbox_size);
+        match request {
+            SdoRequest::Download {
+                index,
+                sub,
+                complete_access,
+                size,
+                data,
+            } => {
+                self.segmented = None;
+                let size = size.map_or(data.len(), |s| s as usize);
+                if data.len() >= size {
+                    let data = &data[..size];
+                    return match store(dictionary, index, sub, complete_access, data) {
+                        Ok(()) => SdoResponse::Download { index, sub },
+                        Err(code) => abort(index, sub, code),
+                    };
+                }
+                self.segmented = Some(Segmented::Download {
+                    index,
+                    sub,
+                    complete_access,
+                    size,
+                    received: data,
+                    toggle: false,
+                });
+                SdoResponse::Download { index, sub }
+            }
+            SdoRequest::DownloadSegment { toggle, last, data } => {
+                let Some(Segmented::Download {
+                    index,
+                    sub,
+                    complete_access,
+                    size,
+                    mut received,
+                    toggle: expected,
+                }) = self.segmented.take()
+                else {
+                    return abort(0, 0, abort::COMMAND_SPECIFIER);
+                };
+                if toggle != expected {
+                    return abort(index, sub, abort::TOGGLE_BIT);
+                }
+                received.extend_from_slice(&data);
+                if received.len() > size || (last && received.len() != size) {
+                    return abort(index, sub, abort::LENGTH);
+                }
+                if last {
+                    return match store(dictionary, index, sub, complete_access, &received) {
+                        Ok(()) => SdoResponse::DownloadSegment { toggle },
+                        Err(code) => abort(index, sub, code),
+                    };
+                }
+                self.segmented = Some(Segmented::Download {
+                    index,
+                    sub,
+                    complete_access,
+                    size,
+                    received,
+                    toggle: !toggle,
+                });
+                SdoResponse::DownloadSegment { toggle }
+            }
+            SdoRequest::Upload {
+                index,
+                sub,
+                complete_access,
+            } => {
+                self.segmented = None;
+                let value = match fetch(dictionary, index, sub, complete_access) {
+                    Ok(value) => value,
+                    Err(code) => return abort(index, sub, code),
+                };
+                if value.len() <= 4 && !complete_access {
+                    return SdoResponse::Upload {
+                        index,
+                        sub,
+                        size: None,
+                        data: value,
+                    };
+                }
+                let size = Some(value.len() as u32);
+                if value.len() <= first {
+                    return SdoResponse::Upload {
+                        index,
+                        sub,
+                        size,
+                        data: value,
+                    };
+                }
+                self.segmented = Some(Segmented::Upload {
+                    rest: value[first..].to_vec(),
+                    toggle: false,
+                });
+                SdoResponse::Upload {
+                    index,
+                    sub,
+                    size,
+                    data: value[..first].to_vec(),
+                }
+            }
+            SdoRequest::UploadSegment { toggle } => {
+                let Some(Segmented::Upload {
+                    mut rest,
+                    toggle: expected,
+                }) = self.segmented.take()
+                else {
+                    return abort(0, 0, abort::COMMAND_SPECIFIER);
+                };
+                if toggle != expected {
+                    return abort(0, 0, abort::TOGGLE_BIT);
+                }
+                let tail = rest.split_off(rest.len().min(segment));
+                let last = tail.is_empty();
+                if !last {
+                    self.segmented = Some(Segmented::Upload {
+                        rest: tail,
+                        toggle: !toggle,
+                    });
+                }
+                SdoResponse::UploadSegment {
+                    toggle,
+                    last,
+                    data: rest,
+                }
+            }
+            SdoRequest::Abort { index, sub, .. } => abort(index, sub, abort::COMMAND_SPECIFIER),
+        }
+    }
+}
+
+/// The bytes an upload returns: one entry, or with complete access sub-index 0
+/// (in two bytes) and the entries after it.
+fn fetch(
+    dictionary: &dyn ObjectDictionary,
+    index: u16,
+    sub: u8,
+    complete_access: bool,
+) -> Result<Vec<u8>, u32> {
+    let entries = dictionary.object(index).ok_or(abort::NO_OBJECT)?;
+    if complete_access {
+        if sub > 1 {
+            return Err(abort::UNSUPPORTED_ACCESS);
+        }
+        let count = entries
+            .first()
+            .and_then(|e| e.value.first().copied())
+            .unwrap_or(0);
+        let mut out = Vec::new();
+        if sub == 0 {
+            out.extend_from_slice(&[count, 0]);
+        }
+        for entry in entries
+            .iter()
+            .filter(|e| e.sub >= 1 && e.sub <= count.max(sub))
+        {
+            out.extend_from_slice(&entry.value);
+        }
+        return Ok(out);
+    }
+    entries
+        .into_iter()
+        .find(|e| e.sub == sub)
+        .map(|e| e.value)
+        .ok_or(abort::NO_SUBINDEX)
+}
+
+/// Splits a download into entries by the sizes the dictionary gives, and writes them.
+fn store(
+    dictionary: &mut dyn ObjectDictionary,
+    index: u16,
+    sub: u8,
+    complete_access: bool,
+    data: &[u8],
+) -> Result<(), u32> {
+    let entries = dictionary.object(index).ok_or(abort::NO_OBJECT)?;
+    if !complete_access {
+        let entry = entries
+            .iter()
+            .find(|e| e.sub == sub)
+            .ok_or(abort::NO_SUBINDEX)?;
+        if !entry.writable {
+            return Err(abort::READ_ONLY);
+        }
+        if entry.value.len() != data.len() {
+            return Err(abort::LENGTH);
+        }
+        return dictionary.write(index, &[(sub, data.to_vec())]);
+    }
+    if sub > 1 {
+        return Err(abort::UNSUPPORTED_ACCESS);
+    }
+    let mut values = Vec::new();
+    let mut rest = data;
+    if sub == 0 {
+        if rest.len() < SUB0_COMPLETE {
+            return Err(abort::LENGTH);
+        }
+        values.push((0, vec![rest[0]]));
+        rest = &rest[SUB0_COMPLETE..];
+    }
+    for entry in entries.iter().filter(|e| e.sub >= 1) {
+        if rest.is_empty() {
+            break;
+        }
+        let size = entry.value.len();
+        if rest.len() < size {
+            return Err(abort::LENGTH);
+        }
+        if !entry.writable {
+            return Err(abort::READ_ONLY);
+        }
+        values.push((entry.sub, rest[..size].to_vec()));
+        rest = &rest[size..];
+    }
+    if !rest.is_empty() {
+        return Err(abort::LENGTH);
+    }
+    dictionary.write(index, &values)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A filter-table-like array: sub 0 the count, then up to four 10-byte entries.
+    #[derive(Default)]
+    struct Table {
+        count: u8,
+        rows: [[u8; 10]; 4],
+        writes: usize,
+    }
+
+    impl ObjectDictionary for Table {
+        fn object(&self, index: u16) -> Option<Vec<Entry>> {
+            (index == 0x8001).then(|| {
+                let mut entries = vec![Entry::new(0, vec![self.count], true)];
+                entries
+                    .extend((0..4).map(|i| Entry::new(i as u8 + 1, self.rows[i].to_vec(), true)));
+                entries
+            })
+        }
+        fn write(&mut self, _: u16, values: &[(u8, Vec<u8>)]) -> Result<(), u32> {
+            for (sub, value) in values {
+                match sub {
+                    0 if value[0] > 4 => return Err(abort::VALUE_RANGE),
+                    0 => self.count = value[0],
+                    s => self.rows[usize::from(*s) - 1].copy_from_slice(value),
+                }
+            }
+            self.writes += 1;
+            Ok(())
+        }
+    }
+
+    fn download(data: Vec<u8>) -> SdoRequest {
+        SdoRequest::Download {
+            index: 0x8001,
+            sub: 0,
+            complete_access: true,
+            size: Some(data.len() as u32),
+            data,
+        }
+    }
+
+    #[test]
+    fn a_complete_access_download_in_segments_writes_the_table_once() {
+        let mut table = Table::default();
+        let mut server = SdoServer::default();
+        let mut data = vec![3, 0];
+        for row in 1..=3u8 {
+            data.extend_from_slice(&[row; 10]);
+        }
+        // A 24-byte mailbox carries 8 bytes after the initiate, 15 after a segment's command.
+        let (first, segment) = capacity(24);
+        assert_eq!((first, segment), (8, 15));
+        let whole = data.clone();
+        let mut rest = data.split_off(first);
+        let mut request = SdoRequest::Download {
+            index: 0x8001,
+            sub: 0,
+            complete_access: true,
+            size: Some(whole.len() as u32),
+            data,
+        };
+        let mut toggle = false;
+        loop {
+            let answer = server.handle(&mut table, request, 24).unwrap();
+            assert!(!matches!(answer, SdoResponse::Abort { .. }), "{answer:?}");
+            if rest.is_empty() {
+                break;
+            }
+            let tail = rest.split_off(rest.len().min(segment));
+            request = SdoRequest::DownloadSegment {
+                toggle,
+                last: tail.is_empty(),
+                data: std::mem::replace(&mut rest, tail),
+            };
+            toggle = !toggle;
+        }
+        assert_eq!((table.count, table.writes), (3, 1));
+        assert_eq!(table.rows[2], [3; 10]);
+        // And it reads back the same way, in segments.
+        let mut answer = server
+            .handle(
+                &mut table,
+                SdoRequest::Upload {
+                    index: 0x8001,
+                    sub: 0,
+                    complete_access: true,
+                },
+                24,
+            )
+            .unwrap();
+        let mut read = Vec::new();
+        let mut toggle = false;
+        loop {
+            match answer {
+                SdoResponse::Upload { data, size, .. } => {
+                    assert_eq!(size, Some(whole.len() as u32));
+                    read.extend(data);
+                }
+                SdoResponse::UploadSegment { data, last, .. } => {
+                    read.extend(data);
+                    if last {
+                        break;
+                    }
+                }
+                other => panic!("{other:?}"),
+            }
+            answer = server
+                .handle(&mut table, SdoRequest::UploadSegment { toggle }, 24)
+                .unwrap();
+            toggle = !toggle;
+        }
+        assert_eq!(read, whole);
+    }
+
+    #[test]
+    fn refusals_carry_their_abort_codes() {
+        let mut table = Table::default();
+        let mut server = SdoServer::default();
+        let answer = |server: &mut SdoServer, table: &mut Table, request| match server
+            .handle(table, request, 128)
+        {
+            Some(SdoResponse::Abort { code, .. }) => code,
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(
+            answer(&mut server, &mut table, download(vec![9, 0])),
+            abort::VALUE_RANGE
+        );
+        assert_eq!(
+            answer(&mut server, &mut table, download(vec![1, 0, 1, 2])),
+            abort::LENGTH
+        );
+        let mut missing = download(vec![1, 0]);
+        if let SdoRequest::Download { index, .. } = &mut missing {
+            *index = 0x8002;
+        }
+        assert_eq!(answer(&mut server, &mut table, missing), abort::NO_OBJECT);
+        let stray = SdoRequest::DownloadSegment {
+            toggle: false,
+            last: true,
+            data: vec![1],
+        };
+        assert_eq!(
+            answer(&mut server, &mut table, stray),
+            abort::COMMAND_SPECIFIER
+        );
+        assert_eq!(table.writes, 0);
+    }
+
+    #[test]
+    fn a_wrong_toggle_aborts_the_transfer() {
+        let mut table = Table::default();
+        let mut server = SdoServer::default();
+        let mut data = vec![2, 0];
+        data.extend_from_slice(&[1; 20]);
+        let first = capacity(24).0;
+        let rest = data.split_off(first);
+        let mut request = download(data);
+        if let SdoRequest::Download { size, .. } = &mut request {
+            *size = Some(22);
+        }
+        server.handle(&mut table, request, 24);
+        let answer = server.handle(
+            &mut table,
+            SdoRequest::DownloadSegment {
+                toggle: true,
+                last: true,
+                data: rest,
+            },
+            24,
+        );
+        assert!(matches!(
+            answer,
+            Some(SdoResponse::Abort {
+                code: abort::TOGGLE_BIT,
+                ..
+            })
+        ));
+        assert_eq!(table.writes, 0);
+    }
+}

@@ -1,0 +1,304 @@
+//! An ESC with an application behind it (ETG.1000.6 §6.4): the AL state
+//! machine with the checks of each transition, the SII EEPROM, the CoE
+//! mailbox, and the SyncManager 2 event that runs the application's cycle.
+
+use crate::esc::{Esc, Touched};
+use crate::mailbox::SdoRequest;
+use crate::register::{self, sii};
+use crate::sdo::{ObjectDictionary, SdoServer};
+use crate::sii::{Identity, Layout};
+use crate::wire::Frame;
+
+/// The AL states (AL control / AL status bits 0–3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AlState {
+    Init = 1,
+    PreOp = 2,
+    Bootstrap = 3,
+    SafeOp = 4,
+    Op = 8,
+}
+
+impl AlState {
+    fn from_bits(bits: u16) -> Option<AlState> {
+        Some(match bits & 0x0F {
+            1 => AlState::Init,
+            2 => AlState::PreOp,
+            3 => AlState::Bootstrap,
+            4 => AlState::SafeOp,
+            8 => AlState::Op,
+            _ => return None,
+        })
+    }
+}
+
+/// AL status codes (ETG.1000.6 Table 11) this SubDevice reports.
+pub mod al_status {
+    pub const INVALID_STATE_CHANGE: u16 = 0x0011;
+    pub const UNKNOWN_STATE: u16 = 0x0012;
+    pub const BOOTSTRAP_NOT_SUPPORTED: u16 = 0x0013;
+    pub const INVALID_MAILBOX_CONFIGURATION: u16 = 0x0016;
+    pub const INVALID_OUTPUT_CONFIGURATION: u16 = 0x001D;
+    pub const INVALID_INPUT_CONFIGURATION: u16 = 0x001E;
+    pub const INVALID_SYNC_CONFIGURATION: u16 = 0x0030;
+}
+
+/// How the application's cycle is started (003: SyncManager 2 event, or SYNC0/SYNC1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Synchronization {
+    SyncManager2,
+    /// SYNC0 starts the cycle, SYNC1 follows `sync1_shift` ns later.
+    DistributedClocks {
+        sync0_cycle: u32,
+        sync1_shift: u32,
+    },
+}
+
+/// What the application learns when the master asks for SAFEOP.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Start {
+    pub outputs: usize,
+    pub inputs: usize,
+    pub synchronization: Synchronization,
+}
+
+/// The terminal behind the ESC.
+pub trait Application: ObjectDictionary {
+    /// The process-data lengths its configuration needs (outputs, inputs).
+    fn process_data(&self) -> (usize, usize);
+    /// PREOP → SAFEOP with these SyncManager lengths; an AL status code refuses.
+    fn start(&mut self, start: Start) -> Result<(), u16>;
+    /// Back to PREOP or INIT.
+    fn stop(&mut self);
+    /// The cycle the SyncManager 2 event starts: outputs in, the new inputs.
+    fn cycle(&mut self, outputs: &[u8], now: u64) -> Vec<u8>;
+}
+
+/// One emulated SubDevice.
+pub struct SubDevice<A> {
+    pub esc: Esc,
+    pub application: A,
+    eeprom: Vec<u8>,
+    layout: Layout,
+    state: AlState,
+    sdo: SdoServer,
+    /// How many SyncManager 2 events ran (for a report).
+    pub cycles: u64,
+}
+
+const MAILBOX_OUT: u16 = 0;
+const MAILBOX_IN: u16 = 1;
+const OUTPUTS: u16 = 2;
+const INPUTS: u16 = 3;
+const AL_ERROR: u16 = 0x10;
+
+impl<A: Application> SubDevice<A> {
+    pub fn new(identity: &Identity, application: A) -> SubDevice<A> {
+        let layout = Layout::TERMINAL;
+        let mut device = SubDevice {
+            esc: Esc::new(),
+            application,
+            eeprom: crate::sii::image(identity, &layout),
+            layout,
+            state: AlState::Init,
+            sdo: SdoServer::default(),
+            cycles: 0,
+        };
+        device.set_status(AlState::Init, None);
+        device
+    }
+
+    pub fn state(&self) -> AlState {
+        self.state
+    }
+
+    /// Answers one Ethernet frame at local time `now` (ns); `None` for what is
+    /// no EtherCAT frame (an ESC drops it).
+    pub fn process(&mut self, bytes: &[u8], now: u64) -> Option<Vec<u8>> {
+        let mut frame = Frame::parse(bytes).ok()?;
+        self.esc.local_time = now;
+        let mut touched = Touched::default();
+        for datagram in &mut frame.datagrams {
+            self.esc.process(datagram, &mut touched);
+        }
+        self.after(&touched, now);
+        // The frame returns through port 0 with the locally administered bit set.
+        frame.source[0] |= 0x02;
+        Some(frame.emit())
+    }
+
+    /// What the ESC and its firmware do once a frame has passed.
+    fn after(&mut self, touched: &Touched, now: u64) {
+        if touched.wrote(register::SII_CONTROL) {
+            self.sii_command();
+        }
+        if touched.wrote(register::AL_CONTROL) {
+            let control = self.esc.get16(register::AL_CONTROL);
+            self.al_control(control);
+        }
+        let mailbox_out = self.esc.sync_manager(MAILBOX_OUT);
+        if self.state != AlState::Init
+            && mailbox_out.enabled()
+            && touched.completed(&mailbox_out.range())
+        {
+            self.mailbox(&mailbox_out);
+        }
+        let mailbox_in = self.esc.sync_manager(MAILBOX_IN);
+        if touched.read_end_of(&mailbox_in.range()) {
+            self.esc.set_sync_manager_status(MAILBOX_IN, 0);
+        }
+        let outputs = self.esc.sync_manager(OUTPUTS);
+        if matches!(self.state, AlState::SafeOp | AlState::Op)
+            && outputs.enabled()
+            && touched.completed(&outputs.range())
+        {
+            self.sync_manager_event(&outputs, now);
+        }
+    }
+
+    fn sii_command(&mut self) {
+        let control = self.esc.get16(register::SII_CONTROL);
+        let word = self.esc.get32(register::SII_ADDRESS) as usize;
+        let mut status = control & !(sii::COMMAND_MASK | sii::COMMAND_ERROR) | sii::READ_8_BYTES;
+        match control & sii::COMMAND_MASK {
+            sii::COMMAND_READ => {
+                let at = usize::from(register::SII_DATA);
+                for i in 0..8 {
+                    self.esc.memory[at + i] =
+                        self.eeprom.get(word * 2 + i).copied().unwrap_or(0xFF);
+                }
+            }
+            sii::COMMAND_RELOAD | 0 => {}
+            // The image is the ESC's configuration: it is not written over.
+            _ => status |= sii::COMMAND_ERROR,
+        }
+        self.esc.set16(register::SII_CONTROL, status);
+    }
+
+    fn set_status(&mut self, state: AlState, error: Option<u16>) {
+        self.state = state;
+        let flag = if error.is_some() { AL_ERROR } else { 0 };
+        self.esc.set16(register::AL_STATUS, state as u16 | flag);
+        self.esc.set16(register::AL_STATUS_CODE, error.unwrap_or(0));
+    }
+
+    fn al_control(&mut self, control: u16) {
+        let acknowledged = control & AL_ERROR != 0;
+        let in_error = self.esc.get16(register::AL_STATUS) & AL_ERROR != 0;
+        if in_error && !acknowledged {
+            return; // an error stays until the master acknowledges it
+        }
+        let Some(requested) = AlState::from_bits(control) else {
+            return self.set_status(self.state, Some(al_status::UNKNOWN_STATE));
+        };
+        let result = self.transition(requested);
+        match result {
+            Ok(()) => self.set_status(requested, None),
+            Err(code) => self.set_status(self.state, Some(code)),
+        }
+    }
+
+    fn transition(&mut self, to: AlState) -> Result<(), u16> {
+        use AlState::*;
+        match (self.state, to) {
+            (_, Bootstrap) => Err(al_status::BOOTSTRAP_NOT_SUPPORTED),
+            (from, to) if from == to => Ok(()),
+            (_, Init) => {
+                self.application.stop();
+                Ok(())
+            }
+            (Init, PreOp) => self.check_mailbox(),
+            (SafeOp | Op, PreOp) => {
+                self.application.stop();
+                Ok(())
+            }
+            (PreOp, SafeOp) => self.start(),
+            (Op, SafeOp) | (SafeOp, Op) => Ok(()),
+            _ => Err(al_status::INVALID_STATE_CHANGE),
+        }
+    }
+
+    /// INIT → PREOP: the mailbox SyncManagers as the SII describes them.
+    fn check_mailbox(&self) -> Result<(), u16> {
+        let expected = self.layout.sync_managers();
+        for n in [MAILBOX_OUT, MAILBOX_IN] {
+            let sm = self.esc.sync_manager(n);
+            let (start, length, control, _) = expected[usize::from(n)];
+            if !sm.enabled() || sm.start != start || sm.length != length || sm.control != control {
+                return Err(al_status::INVALID_MAILBOX_CONFIGURATION);
+            }
+        }
+        Ok(())
+    }
+
+    /// PREOP → SAFEOP: process-data SyncManagers of the lengths the configuration needs.
+    fn start(&mut self) -> Result<(), u16> {
+        let (outputs, inputs) = self.application.process_data();
+        let expected = self.layout.sync_managers();
+        let fits = |n: u16, needed: usize| {
+            let sm = self.esc.sync_manager(n);
+            let (start, _, control, _) = expected[usize::from(n)];
+            sm.enabled()
+                && sm.start == start
+                && sm.control & 0x0F == control & 0x0F
+                && usize::from(sm.length) == needed
+        };
+        if !fits(OUTPUTS, outputs) {
+            return Err(al_status::INVALID_OUTPUT_CONFIGURATION);
+        }
+        if !fits(INPUTS, inputs) {
+            return Err(al_status::INVALID_INPUT_CONFIGURATION);
+        }
+        let activation = self.esc.memory[usize::from(register::DC_SYNC_ACTIVATION)];
+        let synchronization = if activation & 0b001 == 0 {
+            Synchronization::SyncManager2
+        } else if activation & 0b110 == 0 {
+            return Err(al_status::INVALID_SYNC_CONFIGURATION);
+        } else {
+            Synchronization::DistributedClocks {
+                sync0_cycle: self.esc.get32(register::DC_SYNC0_CYCLE),
+                sync1_shift: if activation & 0b100 != 0 {
+                    self.esc.get32(register::DC_SYNC1_CYCLE)
+                } else {
+                    0
+                },
+            }
+        };
+        self.application.start(Start {
+            outputs,
+            inputs,
+            synchronization,
+        })
+    }
+
+    fn mailbox(&mut self, mailbox_out: &register::SyncManager) {
+        let size = usize::from(self.layout.mailbox_size);
+        let request = &self.esc.memory[mailbox_out.range()];
+        let counter = request.get(5).map_or(0, |b| b >> 4 & 7);
+        let answer = match SdoRequest::parse(request) {
+            Ok(request) => self.sdo.handle(&mut self.application, request, size),
+            // A message the server cannot read is answered with an abort of no object.
+            Err(_) => Some(crate::mailbox::SdoResponse::Abort {
+                index: 0,
+                sub: 0,
+                code: crate::mailbox::abort::COMMAND_SPECIFIER,
+            }),
+        };
+        if let Some(answer) = answer {
+            let bytes = answer.emit(counter, size);
+            let range = self.esc.sync_manager(MAILBOX_IN).range();
+            self.esc.memory[range].copy_from_slice(&bytes[..size]);
+            self.esc
+                .set_sync_manager_status(MAILBOX_IN, register::SyncManager::STATUS_MAILBOX_FULL);
+        }
+    }
+
+    fn sync_manager_event(&mut self, outputs: &register::SyncManager, now: u64) {
+        let image = self.esc.memory[outputs.range()].to_vec();
+        let inputs = self.application.cycle(&image, now);
+        let range = self.esc.sync_manager(INPUTS).range();
+        let n = inputs.len().min(range.len());
+        self.esc.memory[range.start..range.start + n].copy_from_slice(&inputs[..n]);
+        self.cycles += 1;
+    }
+}

@@ -1,0 +1,165 @@
+//! The wire under canif's EtherCAT master: ethercrab's frame interface on one
+//! end, on the other the emulated terminal in memory (frames answered in the
+//! same thread, time virtual) or a network interface (a raw socket, ethercrab's
+//! own task in a thread of its own).
+
+use std::cell::{Cell, RefCell};
+use std::future::Future;
+use std::rc::Rc;
+use std::task::Poll;
+use std::time::Duration;
+
+use canif_ethercat::SubDevice;
+use canif_softdevice::ethercat::Terminal;
+use ethercrab::{MainDevice, MainDeviceConfig, PduRx, PduStorage, PduTx, Timeouts};
+
+/// Frames in flight at once, and the largest frame's data.
+const MAX_FRAMES: usize = 16;
+const MAX_PDU_DATA: usize = PduStorage::element_size(1100);
+
+/// What the link does to the terminal's answers: the faults a SubDevice or a
+/// wire can have, for canif's own tests of its EtherCAT errors.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LinkFault {
+    /// Every logical datagram comes back with working counter 0.
+    WorkingCounter,
+    /// Frames after the first `n` are not answered.
+    SilentAfter(u64),
+    /// The answer is cut short.
+    Truncated,
+    /// Each datagram comes back two bytes longer than it was sent.
+    Oversized,
+}
+
+thread_local! {
+    /// The in-memory link's time: the harness's virtual time, which the
+    /// terminal's ESC and ethercrab's Distributed Clocks both read.
+    static CLOCK: Cell<u64> = const { Cell::new(0) };
+}
+
+pub(super) fn now() -> u64 {
+    CLOCK.with(Cell::get)
+}
+
+pub(super) fn set_now(time: u64) {
+    CLOCK.with(|c| c.set(time));
+}
+
+/// The emulated terminal at the other end of the in-memory link.
+pub(super) struct Peer {
+    pub(super) terminal: Rc<RefCell<SubDevice<Terminal>>>,
+    pub(super) fault: Option<LinkFault>,
+    pub(super) frames: Cell<u64>,
+}
+
+impl Peer {
+    fn answer(&self, frame: &[u8]) -> Option<Vec<u8>> {
+        let n = self.frames.get() + 1;
+        self.frames.set(n);
+        let mut answer = self.terminal.borrow_mut().process(frame, now())?;
+        match self.fault {
+            None => {}
+            Some(LinkFault::SilentAfter(after)) if n > after => return None,
+            Some(LinkFault::SilentAfter(_)) => {}
+            Some(LinkFault::Truncated) => answer.truncate(20),
+            Some(LinkFault::Oversized) => {
+                let mut parsed = canif_ethercat::wire::Frame::parse(&answer).ok()?;
+                for d in &mut parsed.datagrams {
+                    d.data.extend_from_slice(&[0xEE, 0xEE]);
+                }
+                answer = parsed.emit();
+            }
+            Some(LinkFault::WorkingCounter) => {
+                let mut parsed = canif_ethercat::wire::Frame::parse(&answer).ok()?;
+                for d in &mut parsed.datagrams {
+                    if matches!(
+                        d.command,
+                        canif_ethercat::wire::Command::Lrw
+                            | canif_ethercat::wire::Command::Lrd
+                            | canif_ethercat::wire::Command::Lwr
+                    ) {
+                        d.working_counter = 0;
+                    }
+                }
+                answer = parsed.emit();
+            }
+        }
+        Some(answer)
+    }
+}
+
+/// A master whose frames this thread carries to a [`Peer`].
+pub(super) struct MemoryMaster {
+    pub(super) maindevice: MainDevice<'static>,
+    tx: RefCell<PduTx<'static>>,
+    rx: RefCell<PduRx<'static>>,
+    pub(super) peer: RefCell<Option<Peer>>,
+}
+
+/// Timeouts of a master that waits for an emulated terminal: its answers
+/// and state changes come at once; only a silent one waits them out. (ethercrab
+/// waits out a refused state change instead of reading the AL error flag.)
+pub(super) fn timeouts() -> Timeouts {
+    Timeouts {
+        state_transition: Duration::from_millis(200),
+        pdu: Duration::from_millis(100),
+        eeprom: Duration::from_millis(100),
+        wait_loop_delay: Duration::from_micros(100),
+        mailbox_echo: Duration::from_millis(500),
+        mailbox_response: Duration::from_secs(2),
+    }
+}
+
+pub(super) fn config() -> MainDeviceConfig {
+    MainDeviceConfig {
+        // Static drift compensation: a handful of frames, not ethercrab's 10,000.
+        dc_static_sync_iterations: 10,
+        ..MainDeviceConfig::default()
+    }
+}
+
+thread_local! {
+    /// One master per thread for the thread's life: ethercrab's storage must
+    /// outlive the master, and a run builds a terminal per configuration.
+    static MEMORY_MASTER: &'static MemoryMaster = {
+        let storage: &'static PduStorage<MAX_FRAMES, MAX_PDU_DATA> =
+            Box::leak(Box::new(PduStorage::new()));
+        let (tx, rx, pdu_loop) = storage.try_split().expect("a fresh storage splits");
+        Box::leak(Box::new(MemoryMaster {
+            maindevice: MainDevice::new(pdu_loop, timeouts(), config()),
+            tx: RefCell::new(tx),
+            rx: RefCell::new(rx),
+            peer: RefCell::new(None),
+        }))
+    };
+}
+
+impl MemoryMaster {
+    pub(super) fn of_this_thread() -> &'static MemoryMaster {
+        MEMORY_MASTER.with(|m| *m)
+    }
+
+    /// Runs `operation` to its end, carrying its frames to the peer.
+    pub(super) fn drive<T>(&self, operation: impl Future<Output = T>) -> T {
+        let pump = std::future::poll_fn(|cx| {
+            let mut tx = self.tx.borrow_mut();
+            tx.replace_waker(cx.waker());
+            while let Some(frame) = tx.next_sendable_frame() {
+                let mut answer = None;
+                let sent = frame.send_blocking(|bytes| {
+                    answer = self.peer.borrow().as_ref().and_then(|p| p.answer(bytes));
+                    Ok(bytes.len())
+                });
+                if sent.is_err() {
+                    continue;
+                }
+                if let Some(answer) = answer {
+                    // What the master cannot match is its own timeout to find.
+                    let _ = self.rx.borrow_mut().receive_frame(&answer);
+                }
+            }
+            Poll::<T>::Pending
+        });
+        async_io::block_on(futures_lite::future::or(operation, pump))
+    }
+}

@@ -1,0 +1,423 @@
+//! A terminal under test over EtherCAT (`--iut ethercat:…`): canif is the
+//! MainDevice (ethercrab). It scans, checks the identity against the profile,
+//! configures the CAN interface in PREOP by CoE downloads, brings the terminal
+//! to OP and runs each harness cycle as EtherCAT telegrams: one LRW carrying
+//! the outputs (the SyncManager 2 event), then a read of the input
+//! SyncManager for what that cycle produced. The LRW's own inputs are those
+//! of the cycle before — 003's confirmation two task cycles later — and are
+//! checked to be exactly those.
+
+mod coe;
+mod link;
+pub mod objects;
+
+use std::cell::{Cell, RefCell};
+use std::rc::Rc;
+
+use canif_ethercat::{register, Identity, SubDevice};
+use canif_model::config::{Capabilities, InterfaceConfig, Synchronization};
+use canif_model::frame::Frame;
+use canif_model::info_data::ControllerStatus;
+use canif_model::Nanos;
+use canif_softdevice::ethercat::{Terminal, TerminalIdentity};
+use canif_softdevice::{Choice, Fault, SoftDevice};
+use canif_spec::EthercatIdentity;
+use ethercrab::subdevice_group::Op;
+use ethercrab::{Command, DefaultLock, SubDeviceGroup};
+
+use crate::device::iut::{soft_controller, soft_settings, BuildError, Iut, Planned, Transmit};
+use crate::error::{IutCause, IutError};
+use coe::{CoeError, Mailboxes};
+pub use link::LinkFault;
+use link::{MemoryMaster, Peer};
+
+const MAX_SUBDEVICES: usize = 16;
+const MAX_PDI: usize = 4096;
+/// The working counter of an LRW that read a terminal's inputs and wrote its outputs.
+const LRW_WORKING_COUNTER: u16 = 3;
+/// The AL status's error flag.
+const AL_ERROR: u16 = 0x10;
+/// AL status codes with which a terminal refuses a configuration (not a broken exchange).
+const REFUSALS: [u16; 3] = [0x001D, 0x001E, 0x0030];
+
+/// The meaning of the AL status codes ETG.1000.6 Table 11 gives.
+fn al_status_text(code: u16) -> &'static str {
+    match code {
+        0x0000 => "no error",
+        0x0011 => "invalid requested state change",
+        0x0012 => "unknown requested state",
+        0x0013 => "bootstrap not supported",
+        0x0016 => "invalid mailbox configuration",
+        0x001B => "sync manager watchdog",
+        0x001D => "invalid output configuration",
+        0x001E => "invalid input configuration",
+        0x0030 => "invalid DC SYNC configuration",
+        _ => "no meaning in ETG.1000.6",
+    }
+}
+
+/// Input SyncManager (SM3) registers.
+const SM3: u16 = canif_ethercat::register::SYNC_MANAGER_BASE + 3 * 8;
+
+/// An emulated terminal: the soft device behind an emulated ESC, in memory.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Emulated {
+    pub faults: Vec<Fault>,
+    pub choices: Vec<Choice>,
+    /// A fault of the link or of the ESC, for canif's own tests.
+    pub link_fault: Option<LinkFault>,
+}
+
+/// What a run learns of the terminal it met.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct TerminalFacts {
+    pub name: String,
+    pub vendor_id: u32,
+    pub product_code: u32,
+    pub revision: u32,
+    pub serial: u32,
+    /// `0x1C32:05` as read back after setting `0x1C32:08` (000 §5), if it answers.
+    pub local_cycle_ns: Option<u32>,
+    /// EtherCAT frames exchanged.
+    pub frames: u64,
+}
+
+/// The terminal on the other end of canif's master.
+pub struct EthercatIut {
+    master: &'static MemoryMaster,
+    group: SubDeviceGroup<MAX_SUBDEVICES, MAX_PDI, DefaultLock, Op>,
+    position: usize,
+    station: u16,
+    terminal: Rc<RefCell<SubDevice<Terminal>>>,
+    /// What the previous cycle's SyncManager 2 event left in the inputs.
+    previous_inputs: Option<Vec<u8>>,
+    pub facts: TerminalFacts,
+}
+
+fn master_error(error: ethercrab::error::Error, during: &str) -> IutError {
+    use ethercrab::error::Error;
+    let cause = match error {
+        Error::Timeout(_) => IutCause::Silent,
+        Error::SubDevice(_) => IutCause::Reported,
+        _ => IutCause::Protocol,
+    };
+    IutError::new(cause, format!("EtherCAT, {during}: {error}"))
+}
+
+fn coe_error(error: CoeError, during: &str) -> BuildError {
+    match error {
+        CoeError::Abort { .. } => BuildError::Refused(format!("{during}: {error}")),
+        CoeError::Timeout(_) => BuildError::Failed(IutError::new(
+            IutCause::Silent,
+            format!("{during}: {error}"),
+        )),
+        _ => BuildError::Failed(IutError::new(
+            IutCause::Protocol,
+            format!("{during}: {error}"),
+        )),
+    }
+}
+
+/// The emulated terminal of a profile: its identity, the soft device's offer.
+pub fn emulated_terminal(
+    caps: &Capabilities,
+    identity: &EthercatIdentity,
+    emulated: &Emulated,
+) -> SubDevice<Terminal> {
+    let offer = soft_settings(caps, &InterfaceConfig::new(caps.first_format(), 1)).offer;
+    let mut terminal = Terminal::new(
+        TerminalIdentity {
+            vendor_id: identity.vendor_id,
+            product_code: identity.product_code,
+            revision: identity.revision,
+            serial: 1,
+        },
+        "EL6751 (canif)",
+        offer,
+        caps.rx_queue_depth,
+        caps.tx_queue_depth,
+    );
+    for fault in &emulated.faults {
+        terminal.inject(*fault);
+    }
+    for choice in &emulated.choices {
+        terminal.choose(*choice);
+    }
+    SubDevice::new(
+        &Identity {
+            vendor_id: identity.vendor_id,
+            product_code: identity.product_code,
+            revision: identity.revision,
+            serial: 1,
+            name: "EL6751".into(),
+        },
+        terminal,
+    )
+}
+
+/// Brings up an emulated terminal in memory and configures it as `config`.
+pub fn build_emulated(
+    caps: &Capabilities,
+    config: &InterfaceConfig,
+    identity: &EthercatIdentity,
+    emulated: &Emulated,
+) -> Result<EthercatIut, BuildError> {
+    let master = MemoryMaster::of_this_thread();
+    let terminal = Rc::new(RefCell::new(emulated_terminal(caps, identity, emulated)));
+    *master.peer.borrow_mut() = Some(Peer {
+        terminal: Rc::clone(&terminal),
+        fault: emulated.link_fault,
+        frames: Cell::new(0),
+    });
+    let md = &master.maindevice;
+    let group = master
+        .drive(md.init_single_group::<MAX_SUBDEVICES, MAX_PDI>(link::now))
+        .map_err(|e| BuildError::Failed(master_error(e, "scanning the segment")))?;
+    let position = 0;
+    let (station, facts) = {
+        let sub = group
+            .subdevice(md, position)
+            .map_err(|e| BuildError::Failed(master_error(e, "finding the terminal")))?;
+        let seen = sub.identity();
+        let facts = TerminalFacts {
+            name: sub.name().to_string(),
+            vendor_id: seen.vendor_id,
+            product_code: seen.product_id,
+            revision: seen.revision,
+            serial: seen.serial,
+            local_cycle_ns: None,
+            frames: 0,
+        };
+        if (seen.vendor_id, seen.product_id, seen.revision)
+            != (identity.vendor_id, identity.product_code, identity.revision)
+        {
+            return Err(BuildError::Failed(IutError::new(
+                IutCause::Impossible,
+                format!(
+                    "the terminal at position {position} is vendor {:#010x} product {:#010x} revision {:#010x}; the profile's is {:#010x}/{:#010x}/{:#010x}",
+                    seen.vendor_id, seen.product_id, seen.revision,
+                    identity.vendor_id, identity.product_code, identity.revision
+                ),
+            )));
+        }
+        (sub.configured_address(), facts)
+    };
+    let mut facts = facts;
+    master.drive(configure(md, station, caps, config, &mut facts))?;
+    let group = match master.drive(group.into_op(md)) {
+        Ok(group) => group,
+        Err(error) => {
+            // The terminal's own word on it: AL status and its code (ETG.1000.6 Table 11).
+            let status = master.drive(async {
+                let status = Command::fprd(station, register::AL_STATUS)
+                    .receive::<u16>(md)
+                    .await?;
+                let code = Command::fprd(station, register::AL_STATUS_CODE)
+                    .receive::<u16>(md)
+                    .await?;
+                Ok::<_, ethercrab::error::Error>((status, code))
+            });
+            return Err(match status {
+                Ok((status, code)) if status & AL_ERROR != 0 && REFUSALS.contains(&code) => {
+                    BuildError::Refused(format!(
+                        "PREOP → OP refused: AL status {status:#06x}, code {code:#06x} ({})",
+                        al_status_text(code)
+                    ))
+                }
+                Ok((status, code)) if status & AL_ERROR != 0 => BuildError::Failed(IutError::new(
+                    IutCause::Reported,
+                    format!(
+                        "PREOP → OP: AL status {status:#06x}, code {code:#06x} ({})",
+                        al_status_text(code)
+                    ),
+                )),
+                _ => BuildError::Failed(master_error(error, "PREOP → OP")),
+            });
+        }
+    };
+    Ok(EthercatIut {
+        master,
+        group,
+        position,
+        station,
+        terminal,
+        previous_inputs: None,
+        facts,
+    })
+}
+
+/// The PREOP start-up: the interface's downloads, Distributed Clocks where
+/// the configuration asks for them, and the local cycle-time measurement.
+async fn configure(
+    md: &ethercrab::MainDevice<'_>,
+    station: u16,
+    caps: &Capabilities,
+    config: &InterfaceConfig,
+    facts: &mut TerminalFacts,
+) -> Result<(), BuildError> {
+    let mut mailboxes = Mailboxes::of(md, station)
+        .await
+        .map_err(|e| coe_error(e, "mailbox"))?;
+    for download in objects::downloads(caps, config) {
+        mailboxes
+            .download_complete(md, download.index, &download.data)
+            .await
+            .map_err(|e| coe_error(e, &format!("{} ({:#06x})", download.name, download.index)))?;
+    }
+    if let Synchronization::DistributedClocks { sync1_shift } = config.synchronization {
+        use canif_ethercat::register::{DC_SYNC0_CYCLE, DC_SYNC1_CYCLE, DC_SYNC_ACTIVATION};
+        let shift = u32::try_from(sync1_shift).map_err(|_| {
+            BuildError::Refused(format!("SYNC1 shift {sync1_shift} ns exceeds the register"))
+        })?;
+        let write = |register: u16, bytes: Vec<u8>| async move {
+            Command::fpwr(station, register)
+                .send(md, bytes.as_slice())
+                .await
+                .map_err(|e| BuildError::Failed(master_error(e, "writing the DC registers")))
+        };
+        write(DC_SYNC0_CYCLE, 1_000_000u32.to_le_bytes().to_vec()).await?;
+        write(DC_SYNC1_CYCLE, shift.to_le_bytes().to_vec()).await?;
+        write(DC_SYNC_ACTIVATION, vec![0b111]).await?;
+    }
+    // 000 §5: with 0x1C32:08 set the terminal measures its cycle into 0x1C32:05.
+    if mailboxes
+        .download(
+            md,
+            objects::SYNC_OUTPUTS,
+            objects::MEASURE_SUB,
+            &1u16.to_le_bytes(),
+        )
+        .await
+        .is_ok()
+    {
+        facts.local_cycle_ns = Some(0);
+    }
+    Ok(())
+}
+
+impl EthercatIut {
+    fn controller<T>(&self, act: impl FnOnce(&mut SoftDevice) -> T) -> Result<T, IutError> {
+        let mut terminal = self.terminal.borrow_mut();
+        let device = terminal.application.device_mut().ok_or_else(|| {
+            IutError::new(
+                IutCause::Impossible,
+                "the terminal left SAFEOP/OP during the run",
+            )
+        })?;
+        Ok(act(device))
+    }
+
+    /// Reads `0x1C32:05` for the report.
+    pub fn read_local_cycle(&mut self) {
+        let md = &self.master.maindevice;
+        let station = self.station;
+        let value = self.master.drive(async {
+            let mut mailboxes = Mailboxes::of(md, station).await.ok()?;
+            mailboxes
+                .upload(md, objects::SYNC_OUTPUTS, objects::CYCLE_TIME_SUB)
+                .await
+                .ok()
+        });
+        if let Some(bytes) = value.filter(|b| b.len() == 4) {
+            self.facts.local_cycle_ns =
+                Some(u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]));
+        }
+    }
+}
+
+impl Iut for EthercatIut {
+    fn cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError> {
+        link::set_now(now);
+        let md = &self.master.maindevice;
+        let sub = self
+            .group
+            .subdevice(md, self.position)
+            .map_err(|e| master_error(e, "finding the terminal"))?;
+        {
+            let mut mapped = sub.outputs_raw_mut();
+            if mapped.len() != outputs.len() {
+                return Err(IutError::new(
+                    IutCause::Impossible,
+                    format!(
+                        "the terminal mapped {} output bytes; the configuration's image has {}",
+                        mapped.len(),
+                        outputs.len()
+                    ),
+                ));
+            }
+            mapped.copy_from_slice(outputs);
+        }
+        let response = self
+            .master
+            .drive(self.group.tx_rx(md))
+            .map_err(|e| master_error(e, "LRW"))?;
+        if response.working_counter != LRW_WORKING_COUNTER {
+            return Err(IutError::new(
+                IutCause::Protocol,
+                format!(
+                    "LRW came back with working counter {}, {LRW_WORKING_COUNTER} expected (inputs read, outputs written)",
+                    response.working_counter
+                ),
+            ));
+        }
+        let confirmed = sub.inputs_raw().to_vec();
+        if let Some(previous) = &self.previous_inputs {
+            if &confirmed != previous {
+                return Err(IutError::new(
+                    IutCause::Impossible,
+                    "the LRW returned other inputs than the previous cycle's SyncManager 2 event left",
+                ));
+            }
+        }
+        let station = self.station;
+        let fresh = self.master.drive(async {
+            let sm = Command::fprd(station, SM3).receive_slice(md, 8).await?;
+            let sm = canif_ethercat::register::SyncManager::parse(&sm);
+            Command::fprd(station, sm.start)
+                .receive_slice(md, sm.length)
+                .await
+                .map(|inputs| inputs.to_vec())
+        });
+        let fresh = fresh.map_err(|e| master_error(e, "reading the input SyncManager"))?;
+        self.previous_inputs = Some(fresh.clone());
+        Ok(fresh)
+    }
+
+    fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) -> Result<(), IutError> {
+        self.controller(|d| soft_controller::receive(d, frame, end_of_reception))
+    }
+
+    fn poll_transmit(&mut self, now: Nanos) -> Result<Transmit, IutError> {
+        self.controller(|d| soft_controller::poll_transmit(d, now))
+    }
+
+    fn poll_timeout(&self) -> Option<Nanos> {
+        self.terminal
+            .borrow()
+            .application
+            .device()
+            .and_then(SoftDevice::next_release)
+    }
+
+    fn transmit_complete(&mut self) -> Result<(), IutError> {
+        self.controller(SoftDevice::tx_done_interrupt)
+    }
+
+    fn controller_status(&mut self, status: &ControllerStatus) -> Result<(), IutError> {
+        self.controller(|d| soft_controller::status(d, status))
+    }
+
+    fn transmit_plan(&self, now: Nanos) -> Option<Vec<Planned>> {
+        self.terminal
+            .borrow()
+            .application
+            .device()
+            .map(|d| soft_controller::plan(d, now))
+    }
+}
+
+impl Drop for EthercatIut {
+    fn drop(&mut self) {
+        *self.master.peer.borrow_mut() = None;
+    }
+}

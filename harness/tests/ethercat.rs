@@ -1,0 +1,122 @@
+//! The device suite through real EtherCAT frames: canif's master (ethercrab)
+//! on one end of an in-memory link, the soft device behind an emulated ESC on
+//! the other. Every EtherCAT terminal profile conforms; a fault of the soft
+//! device is caught on the requirement it breaks in process; a SubDevice that
+//! answers wrongly is an error naming what it did, never a FAIL.
+
+use canif_harness::device::ethercat::{Emulated, LinkFault};
+use canif_harness::device::suite::Options;
+use canif_harness::device::IutKind;
+use canif_harness::outcome::Outcome;
+use canif_harness::run::{run_profile, ProfileRun};
+use canif_softdevice::Fault;
+use canif_spec::{Catalogue, Profile};
+
+fn terminals(catalogue: &Catalogue) -> Vec<&Profile> {
+    catalogue
+        .profiles
+        .iter()
+        .filter(|p| p.ethercat.is_some())
+        .collect()
+}
+
+fn run(profile: &Profile, faults: Vec<Fault>, link_fault: Option<LinkFault>) -> ProfileRun {
+    let iut = IutKind::Ethercat {
+        identity: profile.ethercat.expect("an EtherCAT profile"),
+        emulated: Emulated {
+            faults,
+            choices: vec![],
+            link_fault,
+        },
+    };
+    run_profile(profile, &iut, &Options::quick(7), |_| {})
+}
+
+fn errors(run: &ProfileRun) -> Vec<String> {
+    run.runs
+        .iter()
+        .filter_map(|r| match &r.outcome {
+            Outcome::Error(e) => Some(format!("{}: {e}", r.scenario)),
+            _ => None,
+        })
+        .collect()
+}
+
+#[test]
+fn every_ethercat_terminal_profile_conforms_through_ethercat_frames() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let terminals = terminals(&catalogue);
+    assert_eq!(terminals.len(), 2, "el6751-legacy and el6751-mdp");
+    for profile in terminals {
+        let run = run(profile, vec![], None);
+        assert!(
+            run.failures.is_empty(),
+            "{}: {:#?}",
+            profile.name,
+            run.failures.first()
+        );
+        assert_eq!(errors(&run), Vec::<String>::new(), "{}", profile.name);
+        assert!(
+            run.runs.len() > 10,
+            "{} ran {} scenarios",
+            profile.name,
+            run.runs.len()
+        );
+    }
+}
+
+/// The same fault of the soft device, in process and behind the emulated
+/// terminal, fails the same requirements: EtherCAT hides nothing and adds nothing.
+#[test]
+fn a_soft_device_fault_behind_the_terminal_fails_what_it_fails_in_process() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("el6751-mdp").unwrap();
+    for fault in [Fault::SendsBatchReversed, Fault::FilterLastMatchWins] {
+        let through_ethercat = run(profile, vec![fault], None);
+        let in_process = run_profile(
+            profile,
+            &IutKind::SoftDevice {
+                faults: vec![fault],
+                choices: vec![],
+            },
+            &Options::quick(7),
+            |_| {},
+        );
+        let failed = through_ethercat.failed_requirements(&catalogue, profile);
+        assert!(!failed.is_empty(), "{fault:?} passed through EtherCAT");
+        assert_eq!(
+            failed,
+            in_process.failed_requirements(&catalogue, profile),
+            "{fault:?}"
+        );
+        assert_eq!(errors(&through_ethercat), Vec::<String>::new());
+    }
+}
+
+/// What a SubDevice or its wire does wrong is an error naming it, never a
+/// failure of an interface requirement, and never a hang.
+#[test]
+fn a_terminal_that_answers_wrongly_is_an_error_naming_what_it_did() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("el6751-legacy").unwrap();
+    for (fault, named) in [
+        (LinkFault::WorkingCounter, "working counter"),
+        (LinkFault::Truncated, "EtherCAT"),
+        (LinkFault::Oversized, "EtherCAT"),
+        (LinkFault::SilentAfter(400), "timeout"),
+    ] {
+        let run = run(profile, vec![], Some(fault));
+        assert!(
+            run.failures.is_empty(),
+            "{fault:?}: {:?}",
+            run.failures.first()
+        );
+        let errors = errors(&run);
+        assert!(!errors.is_empty(), "{fault:?} went unnoticed");
+        assert!(
+            errors.iter().all(|e| e.contains(named)),
+            "{fault:?}: {}",
+            errors[0]
+        );
+    }
+}
