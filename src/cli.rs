@@ -32,6 +32,9 @@ pub(crate) enum IutArg {
     Exec(String),
     /// `lib:PATH`: a shared library built against include/canif.h.
     Lib(PathBuf),
+    /// `ethercat:emulated`: the soft device behind an emulated EtherCAT
+    /// terminal, reached by canif's EtherCAT master through real frames.
+    Ethercat,
 }
 
 fn iut_arg(text: &str) -> Result<IutArg, String> {
@@ -40,6 +43,11 @@ fn iut_arg(text: &str) -> Result<IutArg, String> {
         "model" => Ok(IutArg::Model),
         "reference" => Ok(IutArg::Reference),
         "softclient" => Ok(IutArg::SoftClient),
+        "ethercat:emulated" => Ok(IutArg::Ethercat),
+        other if other.starts_with("ethercat:") => Err(format!(
+            "`{other}`: this canif reaches terminals through the in-memory link only: \
+             ethercat:emulated (a network interface is issue 25's next step)"
+        )),
         _ => match (text.strip_prefix("exec:"), text.strip_prefix("lib:")) {
             (Some(command), _) if !command.trim().is_empty() => {
                 Ok(IutArg::Exec(command.to_string()))
@@ -48,7 +56,7 @@ fn iut_arg(text: &str) -> Result<IutArg, String> {
             (_, Some(path)) if !path.is_empty() => Ok(IutArg::Lib(PathBuf::from(path))),
             (_, Some(_)) => Err("lib: needs a path, e.g. lib:./libdevice.so".into()),
             _ => Err(
-                "use softdevice, model, exec:'COMMAND' or lib:PATH (device side), \
+                "use softdevice, model, exec:'COMMAND', lib:PATH or ethercat:emulated (device side), \
                  reference or softclient (--side plc)"
                     .into(),
             ),

@@ -66,7 +66,7 @@ pub fn run(profile: &Profile, scenario: &ScenarioInfo, under_test: &UnderTest) -
             &scenario.file,
             scenario.line,
             Target {
-                iut: iut.clone(),
+                iut: iut.for_profile(profile),
                 profile: name,
                 caps,
             },

@@ -22,7 +22,7 @@ fn terminals(catalogue: &Catalogue) -> Vec<&Profile> {
 
 fn run(profile: &Profile, faults: Vec<Fault>, link_fault: Option<LinkFault>) -> ProfileRun {
     let iut = IutKind::Ethercat {
-        identity: profile.ethercat.expect("an EtherCAT profile"),
+        identity: None, // the suite takes it from the profile
         emulated: Emulated {
             faults,
             choices: vec![],

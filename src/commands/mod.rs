@@ -45,7 +45,7 @@ fn soft_device_choices(names: &[String]) -> Result<Vec<Choice>, ExitCode> {
 pub(crate) fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
     let choices = soft_device_choices(&iut.choice)?;
     let arg = iut.iut.clone().unwrap_or(IutArg::SoftDevice);
-    if !choices.is_empty() && !matches!(arg, IutArg::SoftDevice) {
+    if !choices.is_empty() && !matches!(arg, IutArg::SoftDevice | IutArg::Ethercat) {
         eprintln!("--choice applies to the soft device only");
         return Err(ExitCode::from(2));
     }
@@ -74,6 +74,14 @@ pub(crate) fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
         IutArg::SoftDevice => IutKind::SoftDevice {
             faults: chosen,
             choices,
+        },
+        IutArg::Ethercat => IutKind::Ethercat {
+            identity: None,
+            emulated: canif_harness::device::ethercat::Emulated {
+                faults: chosen,
+                choices,
+                link_fault: None,
+            },
         },
         IutArg::Model => {
             only_soft(&chosen)?;

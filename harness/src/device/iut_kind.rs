@@ -11,6 +11,7 @@ use canif_softdevice::{Choice, Fault, SoftDevice};
 use crate::adapter::protocol::OwnedBus;
 use crate::device::exec_iut::{Configured, ExecIut};
 use crate::device::iut::{soft_settings, BuildError, Iut, ModelIut, SoftDeviceIut};
+use crate::error::{IutCause, IutError};
 
 /// Which implementation to run.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -37,7 +38,8 @@ pub enum IutKind {
     /// A terminal over EtherCAT: canif's master (ethercrab) and, in memory,
     /// the soft device behind an emulated ESC (`ethercat:emulated`).
     Ethercat {
-        identity: canif_spec::EthercatIdentity,
+        /// The identity the profile gives (set per profile by the suite).
+        identity: Option<canif_spec::EthercatIdentity>,
         emulated: crate::device::ethercat::Emulated,
     },
 }
@@ -82,9 +84,17 @@ impl IutKind {
                 }
                 Ok(Box::new(SoftDeviceIut(device)))
             }
-            IutKind::Ethercat { identity, emulated } => Ok(Box::new(
-                crate::device::ethercat::build_emulated(caps, config, identity, emulated)?,
-            )),
+            IutKind::Ethercat { identity, emulated } => {
+                let identity = identity.as_ref().ok_or_else(|| {
+                    BuildError::Failed(IutError::new(
+                        IutCause::NotStarted,
+                        "this profile is no EtherCAT terminal: it gives no identity to check",
+                    ))
+                })?;
+                Ok(Box::new(crate::device::ethercat::build_emulated(
+                    caps, config, identity, emulated,
+                )?))
+            }
             IutKind::Exec {
                 command,
                 timeout_ms,
@@ -137,6 +147,17 @@ impl IutKind {
                 let kind = other.clone();
                 Box::new(move |caps, config| kind.build(caps, config).map(|_| ()))
             }
+        }
+    }
+
+    /// This IUT for `profile`: an EtherCAT terminal is checked against the profile's identity.
+    pub fn for_profile(&self, profile: &canif_spec::Profile) -> IutKind {
+        match self {
+            IutKind::Ethercat { emulated, .. } => IutKind::Ethercat {
+                identity: profile.ethercat,
+                emulated: emulated.clone(),
+            },
+            other => other.clone(),
         }
     }
 

@@ -109,6 +109,7 @@ impl Side for Options {
     }
 
     fn run(&self, kind: &IutKind, profile: &Profile, case: DeviceCase) -> ScenarioRun {
+        let kind = &kind.for_profile(profile);
         let caps = profile.model_capabilities();
         let mut scenario = match case {
             DeviceCase::Refusals => return check_refusals(kind, &caps),

@@ -29,6 +29,29 @@ pub(crate) fn run(
     if let Err(code) = plan.check_selection(catalogue) {
         return code;
     }
+    if let IutKind::Ethercat { .. } = kind {
+        let not_terminals: Vec<&str> = plan
+            .profiles
+            .iter()
+            .filter(|p| p.ethercat.is_none())
+            .map(|p| p.name.as_str())
+            .collect();
+        if !not_terminals.is_empty() {
+            let terminals: Vec<&str> = catalogue
+                .profiles
+                .iter()
+                .filter(|p| p.ethercat.is_some())
+                .map(|p| p.name.as_str())
+                .collect();
+            eprintln!(
+                "--iut ethercat: {} {} no EtherCAT terminal; name terminal profiles with --profile ({})",
+                not_terminals.join(", "),
+                if not_terminals.len() == 1 { "is" } else { "are" },
+                terminals.join(", ")
+            );
+            return ExitCode::from(2);
+        }
+    }
     #[cfg(feature = "socketcan")]
     if let BusChoice::SocketCan(kernel) = &plan.options.bus {
         // A bus that cannot be opened at all is one error, not one per scenario.
