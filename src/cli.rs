@@ -32,9 +32,10 @@ pub(crate) enum IutArg {
     Exec(String),
     /// `lib:PATH`: a shared library built against include/canif.h.
     Lib(PathBuf),
-    /// `ethercat:emulated`: the soft device behind an emulated EtherCAT
-    /// terminal, reached by canif's EtherCAT master through real frames.
-    Ethercat,
+    /// `ethercat:emulated` (the soft device behind an emulated terminal, in
+    /// memory) or `ethercat:IFACE[@POSITION]` (a terminal on a network
+    /// interface), reached by canif's EtherCAT master through real frames.
+    Ethercat(canif_harness::device::ethercat::EthercatLink),
 }
 
 fn iut_arg(text: &str) -> Result<IutArg, String> {
@@ -43,11 +44,10 @@ fn iut_arg(text: &str) -> Result<IutArg, String> {
         "model" => Ok(IutArg::Model),
         "reference" => Ok(IutArg::Reference),
         "softclient" => Ok(IutArg::SoftClient),
-        "ethercat:emulated" => Ok(IutArg::Ethercat),
-        other if other.starts_with("ethercat:") => Err(format!(
-            "`{other}`: this canif reaches terminals through the in-memory link only: \
-             ethercat:emulated (a network interface is issue 25's next step)"
-        )),
+        other if other.starts_with("ethercat:") => {
+            canif_harness::device::ethercat::EthercatLink::parse(&other["ethercat:".len()..])
+                .map(IutArg::Ethercat)
+        }
         _ => match (text.strip_prefix("exec:"), text.strip_prefix("lib:")) {
             (Some(command), _) if !command.trim().is_empty() => {
                 Ok(IutArg::Exec(command.to_string()))
@@ -343,6 +343,13 @@ pub(crate) enum Command {
         /// carries only configure, cycle and controller_status.
         #[arg(long)]
         bus: Option<String>,
+        /// Be an EtherCAT terminal on this network interface (needs CAP_NET_RAW)
+        /// for any master; the CAN frames it sends are printed in candump's format.
+        #[arg(long, value_name = "IFACE", conflicts_with_all = ["stdio", "protocol", "bus"])]
+        ethercat: Option<String>,
+        /// The terminal profile whose identity and offer it has (with --ethercat).
+        #[arg(long, default_value = "el6751-mdp", requires = "ethercat")]
+        profile: String,
     },
     /// The suite's power: run every fault on every profile; exit 1 if one goes uncaught.
     SelfCheck {

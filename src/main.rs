@@ -241,10 +241,17 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
             ),
         },
         Command::Device {
+            ethercat: Some(interface),
+            fault,
+            profile,
+            ..
+        } => device::ethercat_terminal(&catalogue, &interface, &profile, &fault),
+        Command::Device {
             stdio,
             fault,
             protocol,
             bus,
+            ..
         } => device::device(stdio, &fault, protocol, bus.as_deref()),
         Command::Faults => {
             for fault in Fault::ALL {

@@ -84,3 +84,167 @@ fn a_profile_that_is_no_terminal_is_a_usage_error_naming_the_terminals() {
     );
     assert!(stderr.contains("el6751-legacy, el6751-mdp"), "{stderr}");
 }
+
+/// Two ends of a veth pair made for this test, removed when it ends.
+struct VethPair {
+    master: String,
+    terminal: String,
+}
+
+impl VethPair {
+    /// The pair, or why it cannot be made here (not root, no veth).
+    fn create(tag: &str) -> Result<VethPair, String> {
+        let (master, terminal) = (format!("cif{tag}m"), format!("cif{tag}t"));
+        let ip = |args: &[&str]| {
+            Command::new("ip")
+                .args(args)
+                .output()
+                .map_err(|e| format!("ip: {e}"))
+                .and_then(|o| {
+                    if o.status.success() {
+                        Ok(())
+                    } else {
+                        Err(String::from_utf8_lossy(&o.stderr).trim().to_string())
+                    }
+                })
+        };
+        let _ = ip(&["link", "del", &master]);
+        ip(&[
+            "link", "add", &master, "type", "veth", "peer", "name", &terminal,
+        ])?;
+        let pair = VethPair { master, terminal };
+        ip(&["link", "set", &pair.master, "up"])?;
+        ip(&["link", "set", &pair.terminal, "up"])?;
+        Ok(pair)
+    }
+}
+
+impl Drop for VethPair {
+    fn drop(&mut self) {
+        let _ = Command::new("ip")
+            .args(["link", "del", &self.master])
+            .output();
+    }
+}
+
+/// The same run across the kernel's packet path: the emulated terminal on one
+/// end of a veth pair, canif's master on the other. Needs root (CI runs as
+/// root and must not skip it: CANIF_VETH=required).
+#[test]
+fn the_terminal_is_certified_across_a_veth_pair() {
+    let pair = match VethPair::create(&format!("{}", std::process::id() % 10_000)) {
+        Ok(pair) => pair,
+        Err(why) => {
+            assert!(
+                std::env::var("CANIF_VETH").as_deref() != Ok("required"),
+                "CANIF_VETH=required, but no veth pair: {why}"
+            );
+            eprintln!(
+                "SKIP the_terminal_is_certified_across_a_veth_pair: no veth pair here ({why})"
+            );
+            return;
+        }
+    };
+    let iut = format!("ethercat:emulated@{},{}", pair.master, pair.terminal);
+    let dir = report_dir("veth");
+    let selection = ["--requirement", "HS-TX-001", "--requirement", "FLT-001"];
+    let mut args = vec![
+        "run",
+        "--iut",
+        &iut,
+        "--profile",
+        "el6751-mdp",
+        "--report",
+        &dir,
+    ];
+    args.extend(selection);
+    let out = canif(&args);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains(" 0 fail, 0 error"), "{stdout}");
+
+    args.extend(["--fault", "filter-last-match-wins"]);
+    let out = canif(&args);
+    let said = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(out.status.code(), Some(1), "{said}");
+    assert!(said.contains("FAIL el6751-mdp::FLT-001"), "{said}");
+}
+
+/// A second, independent master (SOEM, through the Python package pysoem)
+/// scans, configures and runs canif's terminal across a veth pair, and the
+/// CAN message its process image asked for shows on the terminal's side:
+/// the terminal is not tuned to ethercrab.
+#[test]
+fn an_independent_master_drives_the_terminal() {
+    let required = std::env::var("CANIF_VETH").as_deref() == Ok("required");
+    let skip = |why: String| {
+        assert!(!required, "CANIF_VETH=required, but {why}");
+        eprintln!("SKIP an_independent_master_drives_the_terminal: {why}");
+    };
+    let has_pysoem = Command::new("python3")
+        .args(["-c", "import pysoem"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !has_pysoem {
+        return skip("no Python package pysoem (.ci/run installs it)".into());
+    }
+    let pair = match VethPair::create(&format!("{}", std::process::id() % 10_000 + 1)) {
+        Ok(pair) => pair,
+        Err(why) => return skip(format!("no veth pair here ({why})")),
+    };
+    let mut terminal = Command::new(env!("CARGO_BIN_EXE_canif"))
+        .args(["device", "--ethercat", &pair.terminal])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("canif device starts");
+    // It opens its socket before it says so on stderr.
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/python/pysoem_master.py");
+    let master = Command::new("timeout")
+        .args(["60", "python3", script, &pair.master])
+        .output()
+        .expect("python3 runs");
+    // SIGINT: the terminal says what it served and exits.
+    let _ = Command::new("kill")
+        .args(["-INT", &terminal.id().to_string()])
+        .status();
+    let served = wait_at_most(&mut terminal, std::time::Duration::from_secs(10));
+    let said = String::from_utf8_lossy(&master.stdout);
+    assert_eq!(
+        master.status.code(),
+        Some(0),
+        "{said}{}",
+        String::from_utf8_lossy(&master.stderr)
+    );
+    assert!(said.contains("Inputs.TxCounter confirmed 1"), "{said}");
+    assert!(
+        served.contains(" 123#CA1F"),
+        "the terminal's side: {served}"
+    );
+}
+
+/// The child's stdout once it ended; killed if it does not end in time.
+fn wait_at_most(child: &mut std::process::Child, limit: std::time::Duration) -> String {
+    let began = std::time::Instant::now();
+    while child.try_wait().ok().flatten().is_none() && began.elapsed() < limit {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let _ = child.kill();
+    let mut out = String::new();
+    if let Some(mut stdout) = child.stdout.take() {
+        use std::io::Read;
+        let _ = stdout.read_to_string(&mut out);
+    }
+    let _ = child.wait();
+    out
+}

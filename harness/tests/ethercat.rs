@@ -4,7 +4,7 @@
 //! device is caught on the requirement it breaks in process; a SubDevice that
 //! answers wrongly is an error naming what it did, never a FAIL.
 
-use canif_harness::device::ethercat::{Emulated, LinkFault};
+use canif_harness::device::ethercat::{Emulated, EthercatLink, LinkFault};
 use canif_harness::device::suite::Options;
 use canif_harness::device::IutKind;
 use canif_harness::outcome::Outcome;
@@ -23,11 +23,11 @@ fn terminals(catalogue: &Catalogue) -> Vec<&Profile> {
 fn run(profile: &Profile, faults: Vec<Fault>, link_fault: Option<LinkFault>) -> ProfileRun {
     let iut = IutKind::Ethercat {
         identity: None, // the suite takes it from the profile
-        emulated: Emulated {
+        link: EthercatLink::Emulated(Emulated {
             faults,
             choices: vec![],
             link_fault,
-        },
+        }),
     };
     run_profile(profile, &iut, &Options::quick(7), |_| {})
 }

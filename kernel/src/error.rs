@@ -30,7 +30,7 @@ impl fmt::Display for OsError {
 /// What an interface operation was.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Operation {
-    /// Opening and configuring a CAN_RAW socket on it.
+    /// Opening and configuring a socket on it (CAN_RAW, or AF_PACKET for EtherCAT).
     Open,
     /// Finding it over netlink.
     Find,

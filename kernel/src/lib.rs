@@ -9,8 +9,10 @@
 //! echoed when the controller finished sending it).
 
 mod error;
+mod packet;
 
 pub use error::{KernelError, Operation, OsError};
+pub use packet::PacketSocket;
 
 use std::io;
 use std::os::fd::AsRawFd;

@@ -19,6 +19,7 @@ pub mod object {
     pub const IDENTITY: u16 = 0x1018;
     pub const RX_PDO_MAP: u16 = 0x1600;
     pub const TX_PDO_MAP: u16 = 0x1A00;
+    pub const SYNC_MANAGER_TYPES: u16 = 0x1C00;
     pub const RX_PDO_ASSIGN: u16 = 0x1C12;
     pub const TX_PDO_ASSIGN: u16 = 0x1C13;
     pub const SYNC_OUTPUTS: u16 = 0x1C32;
@@ -353,6 +354,14 @@ impl ObjectDictionary for Terminal {
                 ro(2, self.identity.product_code.to_le_bytes().to_vec()),
                 ro(3, self.identity.revision.to_le_bytes().to_vec()),
                 ro(4, self.identity.serial.to_le_bytes().to_vec()),
+            ],
+            // Mailbox out, mailbox in, outputs, inputs (ETG.1000.6 Table 67).
+            object::SYNC_MANAGER_TYPES => vec![
+                ro(0, vec![4]),
+                ro(1, vec![1]),
+                ro(2, vec![2]),
+                ro(3, vec![3]),
+                ro(4, vec![4]),
             ],
             object::RX_PDO_ASSIGN => vec![
                 ro(0, vec![1]),

@@ -39,6 +39,68 @@ pub(crate) fn device(stdio: bool, faults: &[String], protocol: u64, bus: Option<
     }
 }
 
+/// `canif device --ethercat IFACE`: the soft device behind an emulated
+/// EtherCAT terminal on a network interface, until interrupted.
+#[cfg(feature = "socketcan")]
+pub(crate) fn ethercat_terminal(
+    catalogue: &canif_spec::Catalogue,
+    interface: &str,
+    profile: &str,
+    faults: &[String],
+) -> ExitCode {
+    use canif_harness::device::ethercat::{emulated_terminal, served, Emulated};
+    let Some(profile) = catalogue.profile(profile) else {
+        eprintln!("unknown profile `{profile}`; `canif profiles` lists them");
+        return ExitCode::from(2);
+    };
+    let Some(identity) = profile.ethercat else {
+        eprintln!(
+            "--profile {}: no EtherCAT terminal (it gives no identity)",
+            profile.name
+        );
+        return ExitCode::from(2);
+    };
+    let faults = match soft_device_faults(faults) {
+        Ok(faults) => faults,
+        Err(code) => return code,
+    };
+    let emulated = Emulated {
+        faults,
+        choices: vec![],
+        link_fault: None,
+    };
+    let mut terminal = emulated_terminal(&profile.model_capabilities(), &identity, &emulated);
+    eprintln!(
+        "canif device: {} ({}) on {interface}, vendor {:#010x} product {:#010x} revision {:#010x}; Ctrl-C stops",
+        profile.name, profile.device, identity.vendor_id, identity.product_code, identity.revision
+    );
+    let stop = canif_harness::interrupt::requested;
+    match served::serve(interface, &mut terminal, &mut std::io::stdout(), &stop) {
+        Ok(served) => {
+            eprintln!(
+                "canif device: {} EtherCAT frames answered, {} cycles, {} CAN frames sent",
+                served.frames, served.cycles, served.can_frames
+            );
+            ExitCode::SUCCESS
+        }
+        Err(error) => {
+            eprintln!("canif device --ethercat {interface}: {error}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+#[cfg(not(feature = "socketcan"))]
+pub(crate) fn ethercat_terminal(
+    _: &canif_spec::Catalogue,
+    interface: &str,
+    _: &str,
+    _: &[String],
+) -> ExitCode {
+    eprintln!("--ethercat {interface}: this canif was built without Linux sockets (cargo feature `socketcan`)");
+    ExitCode::from(2)
+}
+
 #[cfg(feature = "socketcan")]
 fn serve_on_bus(build: &Build<'_>, bus: &str) -> Result<(), String> {
     let spec = canif_kernel::BusSpec::parse(bus).map_err(|e| format!("--bus {e}"))?;

@@ -45,7 +45,7 @@ fn soft_device_choices(names: &[String]) -> Result<Vec<Choice>, ExitCode> {
 pub(crate) fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
     let choices = soft_device_choices(&iut.choice)?;
     let arg = iut.iut.clone().unwrap_or(IutArg::SoftDevice);
-    if !choices.is_empty() && !matches!(arg, IutArg::SoftDevice | IutArg::Ethercat) {
+    if !choices.is_empty() && !matches!(arg, IutArg::SoftDevice | IutArg::Ethercat(_)) {
         eprintln!("--choice applies to the soft device only");
         return Err(ExitCode::from(2));
     }
@@ -75,14 +75,20 @@ pub(crate) fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
             faults: chosen,
             choices,
         },
-        IutArg::Ethercat => IutKind::Ethercat {
-            identity: None,
-            emulated: canif_harness::device::ethercat::Emulated {
-                faults: chosen,
-                choices,
-                link_fault: None,
-            },
-        },
+        IutArg::Ethercat(link) => {
+            let mut link = link.clone();
+            match link.emulated_mut() {
+                Some(emulated) => {
+                    emulated.faults = chosen;
+                    emulated.choices = choices;
+                }
+                None => only_soft(&chosen)?,
+            }
+            IutKind::Ethercat {
+                identity: None,
+                link,
+            }
+        }
         IutArg::Model => {
             only_soft(&chosen)?;
             IutKind::Model

@@ -40,7 +40,7 @@ pub enum IutKind {
     Ethercat {
         /// The identity the profile gives (set per profile by the suite).
         identity: Option<canif_spec::EthercatIdentity>,
-        emulated: crate::device::ethercat::Emulated,
+        link: crate::device::ethercat::EthercatLink,
     },
 }
 
@@ -84,15 +84,15 @@ impl IutKind {
                 }
                 Ok(Box::new(SoftDeviceIut(device)))
             }
-            IutKind::Ethercat { identity, emulated } => {
+            IutKind::Ethercat { identity, link } => {
                 let identity = identity.as_ref().ok_or_else(|| {
                     BuildError::Failed(IutError::new(
                         IutCause::NotStarted,
                         "this profile is no EtherCAT terminal: it gives no identity to check",
                     ))
                 })?;
-                Ok(Box::new(crate::device::ethercat::build_emulated(
-                    caps, config, identity, emulated,
+                Ok(Box::new(crate::device::ethercat::build(
+                    caps, config, identity, link,
                 )?))
             }
             IutKind::Exec {
@@ -150,12 +150,25 @@ impl IutKind {
         }
     }
 
+    /// Whether the IUT's CAN controller is out of the harness's reach: it opens
+    /// its own socket, or it is a terminal on a real bus.
+    pub fn owns_its_bus(&self) -> bool {
+        matches!(
+            self,
+            IutKind::Exec { .. }
+                | IutKind::Ethercat {
+                    link: crate::device::ethercat::EthercatLink::Interface { .. },
+                    ..
+                }
+        )
+    }
+
     /// This IUT for `profile`: an EtherCAT terminal is checked against the profile's identity.
     pub fn for_profile(&self, profile: &canif_spec::Profile) -> IutKind {
         match self {
-            IutKind::Ethercat { emulated, .. } => IutKind::Ethercat {
+            IutKind::Ethercat { link, .. } => IutKind::Ethercat {
                 identity: profile.ethercat,
-                emulated: emulated.clone(),
+                link: link.clone(),
             },
             other => other.clone(),
         }
@@ -171,11 +184,7 @@ impl IutKind {
                 .join("+"),
             IutKind::Exec { command, .. } => format!("exec:{command}"),
             IutKind::Lib { path } => format!("lib:{}", path.display()),
-            IutKind::Ethercat { emulated, .. } => std::iter::once("ethercat:emulated")
-                .chain(emulated.faults.iter().map(|f| f.name()))
-                .chain(emulated.choices.iter().map(|c| c.name()))
-                .collect::<Vec<_>>()
-                .join("+"),
+            IutKind::Ethercat { link, .. } => link.name(),
         }
     }
 }

@@ -75,9 +75,7 @@ fn start(
 ) -> Result<(Pair, Box<dyn Bus>), RunError> {
     let model = Device::new(caps, scenario.interface.clone())
         .map_err(|e| RunError::Configuration(Refusal::Model(e)))?;
-    let bus = scenario
-        .bus
-        .open(scenario.bit_rates, matches!(kind, IutKind::Exec { .. }))?;
+    let bus = scenario.bus.open(scenario.bit_rates, kind.owns_its_bus())?;
     let iut = match kind.build_on(caps, &scenario.interface, bus.owned_bus().as_ref()) {
         // On a real-time bus the kernel's clock, not the harness, orders the times.
         Ok(iut) if bus.real_time() => iut,

@@ -5,7 +5,7 @@
 
 use std::cell::{Cell, RefCell};
 use std::future::Future;
-use std::rc::Rc;
+use std::sync::{Arc, Mutex, MutexGuard};
 use std::task::Poll;
 use std::time::Duration;
 
@@ -45,9 +45,19 @@ pub(super) fn set_now(time: u64) {
     CLOCK.with(|c| c.set(time));
 }
 
+/// An emulated terminal, shared between the link that carries its frames and
+/// the harness that drives its CAN controller.
+pub(crate) type SharedTerminal = Arc<Mutex<SubDevice<Terminal>>>;
+
+/// The terminal, also after a panic elsewhere left its lock poisoned (the
+/// run reports that panic; the terminal's state is still what it was).
+pub(crate) fn lock(terminal: &SharedTerminal) -> MutexGuard<'_, SubDevice<Terminal>> {
+    terminal.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 /// The emulated terminal at the other end of the in-memory link.
 pub(super) struct Peer {
-    pub(super) terminal: Rc<RefCell<SubDevice<Terminal>>>,
+    pub(super) terminal: SharedTerminal,
     pub(super) fault: Option<LinkFault>,
     pub(super) frames: Cell<u64>,
 }
@@ -56,7 +66,7 @@ impl Peer {
     fn answer(&self, frame: &[u8]) -> Option<Vec<u8>> {
         let n = self.frames.get() + 1;
         self.frames.set(n);
-        let mut answer = self.terminal.borrow_mut().process(frame, now())?;
+        let mut answer = lock(&self.terminal).process(frame, now())?;
         match self.fault {
             None => {}
             Some(LinkFault::SilentAfter(after)) if n > after => return None,
@@ -161,5 +171,66 @@ impl MemoryMaster {
             Poll::<T>::Pending
         });
         async_io::block_on(futures_lite::future::or(operation, pump))
+    }
+}
+
+/// A master on a network interface: ethercrab's own raw-socket task carries
+/// its frames, in a thread of its own; one per interface for the process's life.
+pub(super) struct InterfaceMaster {
+    pub(super) maindevice: MainDevice<'static>,
+}
+
+type Masters = std::sync::Mutex<std::collections::HashMap<String, &'static InterfaceMaster>>;
+
+static INTERFACE_MASTERS: std::sync::OnceLock<Masters> = std::sync::OnceLock::new();
+
+impl InterfaceMaster {
+    /// The master on `interface`, started on first use (needs CAP_NET_RAW);
+    /// `emulated`: the terminal across it answers at once (a veth pair).
+    pub(super) fn on(
+        interface: &str,
+        emulated: bool,
+    ) -> Result<&'static InterfaceMaster, std::io::Error> {
+        let masters = INTERFACE_MASTERS.get_or_init(Default::default);
+        let mut masters = masters.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(master) = masters.get(interface) {
+            return Ok(master);
+        }
+        let storage: &'static PduStorage<MAX_FRAMES, MAX_PDU_DATA> =
+            Box::leak(Box::new(PduStorage::new()));
+        let (tx, rx, pdu_loop) = storage.try_split().expect("a fresh storage splits");
+        let task = ethercrab::std::tx_rx_task(interface, tx, rx)?;
+        std::thread::Builder::new()
+            .name(format!("ethercat-{interface}"))
+            .spawn(move || async_io::block_on(task))?;
+        let master: &'static InterfaceMaster = Box::leak(Box::new(InterfaceMaster {
+            maindevice: MainDevice::new(
+                pdu_loop,
+                if emulated {
+                    timeouts()
+                } else {
+                    real_timeouts()
+                },
+                config(),
+            ),
+        }));
+        masters.insert(interface.to_string(), master);
+        Ok(master)
+    }
+
+    pub(super) fn drive<T>(&self, operation: impl Future<Output = T>) -> T {
+        async_io::block_on(operation)
+    }
+}
+
+/// Timeouts of a master that waits for a terminal across a wire.
+fn real_timeouts() -> Timeouts {
+    Timeouts {
+        state_transition: Duration::from_secs(5),
+        pdu: Duration::from_millis(100),
+        eeprom: Duration::from_millis(100),
+        wait_loop_delay: Duration::from_millis(1),
+        mailbox_echo: Duration::from_millis(500),
+        mailbox_response: Duration::from_secs(2),
     }
 }

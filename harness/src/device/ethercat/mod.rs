@@ -10,9 +10,13 @@
 mod coe;
 mod link;
 pub mod objects;
+#[cfg(feature = "socketcan")]
+pub mod served;
+#[cfg(feature = "socketcan")]
+mod veth;
 
-use std::cell::{Cell, RefCell};
-use std::rc::Rc;
+use std::cell::Cell;
+use std::sync::{Arc, Mutex};
 
 use canif_ethercat::{register, Identity, SubDevice};
 use canif_model::config::{Capabilities, InterfaceConfig, Synchronization};
@@ -29,7 +33,7 @@ use crate::device::iut::{soft_controller, soft_settings, BuildError, Iut, Planne
 use crate::error::{IutCause, IutError};
 use coe::{CoeError, Mailboxes};
 pub use link::LinkFault;
-use link::{MemoryMaster, Peer};
+use link::{lock, InterfaceMaster, MemoryMaster, Peer, SharedTerminal};
 
 const MAX_SUBDEVICES: usize = 16;
 const MAX_PDI: usize = 4096;
@@ -68,6 +72,122 @@ pub struct Emulated {
     pub link_fault: Option<LinkFault>,
 }
 
+/// Where canif's master finds the terminal.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum EthercatLink {
+    /// In memory, with the soft device's CAN controller driven by the harness.
+    Emulated(Emulated),
+    /// On a network interface, at this position of the segment; its CAN side
+    /// is on a real bus the harness shares (`--bus socketcan:`).
+    Interface { name: String, position: usize },
+    /// The emulated terminal served on `terminal`, canif's master on `master`,
+    /// two ends of a veth pair: frames cross the kernel's packet path.
+    Veth {
+        master: String,
+        terminal: String,
+        emulated: Emulated,
+    },
+}
+
+impl EthercatLink {
+    /// `emulated`, `emulated@MASTER_IFACE,TERMINAL_IFACE` or `IFACE[@POSITION]`.
+    pub fn parse(text: &str) -> Result<EthercatLink, String> {
+        let emulated = Emulated {
+            faults: vec![],
+            choices: vec![],
+            link_fault: None,
+        };
+        if text == "emulated" {
+            return Ok(EthercatLink::Emulated(emulated));
+        }
+        if let Some(pair) = text.strip_prefix("emulated@") {
+            return match pair.split_once(',') {
+                Some((master, terminal)) if !master.is_empty() && !terminal.is_empty() => {
+                    Ok(EthercatLink::Veth {
+                        master: master.to_string(),
+                        terminal: terminal.to_string(),
+                        emulated,
+                    })
+                }
+                _ => Err(format!(
+                    "`{pair}`: the two ends of a veth pair, MASTER_IFACE,TERMINAL_IFACE"
+                )),
+            };
+        }
+        let (name, position) = match text.split_once('@') {
+            Some((name, position)) => (
+                name,
+                position.parse().map_err(|_| {
+                    format!("`{position}`: a terminal's position is a number from 0")
+                })?,
+            ),
+            None => (text, 0),
+        };
+        if name.is_empty() {
+            return Err(
+                "ethercat: needs `emulated` or a network interface, e.g. ethercat:eth1@1".into(),
+            );
+        }
+        Ok(EthercatLink::Interface {
+            name: name.to_string(),
+            position,
+        })
+    }
+
+    pub fn name(&self) -> String {
+        match self {
+            EthercatLink::Emulated(emulated) => std::iter::once("ethercat:emulated")
+                .chain(emulated.faults.iter().map(|f| f.name()))
+                .chain(emulated.choices.iter().map(|c| c.name()))
+                .collect::<Vec<_>>()
+                .join("+"),
+            EthercatLink::Interface { name, position } => format!("ethercat:{name}@{position}"),
+            EthercatLink::Veth {
+                master,
+                terminal,
+                emulated,
+            } => std::iter::once(format!("ethercat:emulated@{master},{terminal}"))
+                .chain(emulated.faults.iter().map(|f| f.name().to_string()))
+                .chain(emulated.choices.iter().map(|c| c.name().to_string()))
+                .collect::<Vec<_>>()
+                .join("+"),
+        }
+    }
+
+    /// The soft device's faults and choices behind an emulated terminal.
+    pub fn emulated_mut(&mut self) -> Option<&mut Emulated> {
+        match self {
+            EthercatLink::Emulated(emulated) | EthercatLink::Veth { emulated, .. } => {
+                Some(emulated)
+            }
+            EthercatLink::Interface { .. } => None,
+        }
+    }
+}
+
+/// The master, on either link.
+#[derive(Clone, Copy)]
+enum Master {
+    Memory(&'static MemoryMaster),
+    Interface(&'static InterfaceMaster),
+}
+
+impl Master {
+    fn maindevice(&self) -> &'static ethercrab::MainDevice<'static> {
+        match self {
+            Master::Memory(m) => &m.maindevice,
+            Master::Interface(m) => &m.maindevice,
+        }
+    }
+
+    fn drive<T>(&self, operation: impl std::future::Future<Output = T>) -> T {
+        match self {
+            Master::Memory(m) => m.drive(operation),
+            Master::Interface(m) => m.drive(operation),
+        }
+    }
+}
+
 /// What a run learns of the terminal it met.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct TerminalFacts {
@@ -84,11 +204,15 @@ pub struct TerminalFacts {
 
 /// The terminal on the other end of canif's master.
 pub struct EthercatIut {
-    master: &'static MemoryMaster,
+    master: Master,
     group: SubDeviceGroup<MAX_SUBDEVICES, MAX_PDI, DefaultLock, Op>,
     position: usize,
     station: u16,
-    terminal: Rc<RefCell<SubDevice<Terminal>>>,
+    /// In memory: the terminal, whose CAN controller the harness drives.
+    terminal: Option<SharedTerminal>,
+    /// On a veth pair: the thread serving the terminal, stopped on drop.
+    #[cfg(feature = "socketcan")]
+    serving: Option<veth::Serving>,
     /// What the previous cycle's SyncManager 2 event left in the inputs.
     previous_inputs: Option<Vec<u8>>,
     pub facts: TerminalFacts,
@@ -155,25 +279,67 @@ pub fn emulated_terminal(
     )
 }
 
-/// Brings up an emulated terminal in memory and configures it as `config`.
-pub fn build_emulated(
+/// Brings up the terminal `link` names and configures it as `config`.
+pub fn build(
     caps: &Capabilities,
     config: &InterfaceConfig,
     identity: &EthercatIdentity,
-    emulated: &Emulated,
+    link: &EthercatLink,
 ) -> Result<EthercatIut, BuildError> {
-    let master = MemoryMaster::of_this_thread();
-    let terminal = Rc::new(RefCell::new(emulated_terminal(caps, identity, emulated)));
-    *master.peer.borrow_mut() = Some(Peer {
-        terminal: Rc::clone(&terminal),
-        fault: emulated.link_fault,
-        frames: Cell::new(0),
-    });
-    let md = &master.maindevice;
+    #[cfg(feature = "socketcan")]
+    let mut serving = None;
+    let (master, terminal, position) = match link {
+        EthercatLink::Emulated(emulated) => {
+            let master = MemoryMaster::of_this_thread();
+            let terminal = Arc::new(Mutex::new(emulated_terminal(caps, identity, emulated)));
+            *master.peer.borrow_mut() = Some(Peer {
+                terminal: Arc::clone(&terminal),
+                fault: emulated.link_fault,
+                frames: Cell::new(0),
+            });
+            (Master::Memory(master), Some(terminal), 0)
+        }
+        EthercatLink::Interface { name, position } => {
+            let master = InterfaceMaster::on(name, false).map_err(|e| {
+                BuildError::Failed(IutError::new(
+                    IutCause::NotStarted,
+                    format!("EtherCAT master on {name}: {e} (a raw socket needs CAP_NET_RAW)"),
+                ))
+            })?;
+            (Master::Interface(master), None, *position)
+        }
+        #[cfg(feature = "socketcan")]
+        EthercatLink::Veth {
+            master: master_side,
+            terminal: terminal_side,
+            emulated,
+        } => {
+            let terminal = Arc::new(Mutex::new(emulated_terminal(caps, identity, emulated)));
+            let not_started =
+                |what: String| BuildError::Failed(IutError::new(IutCause::NotStarted, what));
+            serving = Some(
+                veth::Serving::start(terminal_side, &terminal)
+                    .map_err(|e| not_started(format!("the terminal on {terminal_side}: {e}")))?,
+            );
+            let master = InterfaceMaster::on(master_side, true).map_err(|e| {
+                not_started(format!(
+                    "EtherCAT master on {master_side}: {e} (a raw socket needs CAP_NET_RAW)"
+                ))
+            })?;
+            (Master::Interface(master), Some(terminal), 0)
+        }
+        #[cfg(not(feature = "socketcan"))]
+        EthercatLink::Veth { .. } => {
+            return Err(BuildError::Failed(IutError::new(
+                IutCause::NotStarted,
+                "a veth pair needs Linux sockets (cargo feature `socketcan`)",
+            )))
+        }
+    };
+    let md = master.maindevice();
     let group = master
         .drive(md.init_single_group::<MAX_SUBDEVICES, MAX_PDI>(link::now))
         .map_err(|e| BuildError::Failed(master_error(e, "scanning the segment")))?;
-    let position = 0;
     let (station, facts) = {
         let sub = group
             .subdevice(md, position)
@@ -204,47 +370,76 @@ pub fn build_emulated(
     };
     let mut facts = facts;
     master.drive(configure(md, station, caps, config, &mut facts))?;
-    let group = match master.drive(group.into_op(md)) {
-        Ok(group) => group,
-        Err(error) => {
-            // The terminal's own word on it: AL status and its code (ETG.1000.6 Table 11).
-            let status = master.drive(async {
-                let status = Command::fprd(station, register::AL_STATUS)
-                    .receive::<u16>(md)
-                    .await?;
-                let code = Command::fprd(station, register::AL_STATUS_CODE)
-                    .receive::<u16>(md)
-                    .await?;
-                Ok::<_, ethercrab::error::Error>((status, code))
-            });
-            return Err(match status {
-                Ok((status, code)) if status & AL_ERROR != 0 && REFUSALS.contains(&code) => {
-                    BuildError::Refused(format!(
-                        "PREOP → OP refused: AL status {status:#06x}, code {code:#06x} ({})",
-                        al_status_text(code)
-                    ))
-                }
-                Ok((status, code)) if status & AL_ERROR != 0 => BuildError::Failed(IutError::new(
-                    IutCause::Reported,
-                    format!(
-                        "PREOP → OP: AL status {status:#06x}, code {code:#06x} ({})",
-                        al_status_text(code)
-                    ),
-                )),
-                _ => BuildError::Failed(master_error(error, "PREOP → OP")),
-            });
-        }
-    };
+    let group = master
+        .drive(group.into_pre_op_pdi(md))
+        .map_err(|e| BuildError::Failed(master_error(e, "configuring SyncManagers and FMMUs")))?;
+    master.drive(request_safe_op(md, station))?;
+    let group = master
+        .drive(group.into_op(md))
+        .map_err(|e| BuildError::Failed(master_error(e, "SAFEOP → OP")))?;
     Ok(EthercatIut {
         master,
         group,
         position,
         station,
         terminal,
+        #[cfg(feature = "socketcan")]
+        serving,
         previous_inputs: None,
         facts,
     })
 }
+
+/// PREOP → SAFEOP, watched here: the terminal's AL status says at once
+/// whether it refuses (error flag and code), where ethercrab would wait out
+/// its timeout for a state that does not come.
+async fn request_safe_op(md: &ethercrab::MainDevice<'_>, station: u16) -> Result<(), BuildError> {
+    const SAFE_OP: u16 = 4;
+    let failed = |e| BuildError::Failed(master_error(e, "PREOP → SAFEOP"));
+    Command::fpwr(station, register::AL_CONTROL)
+        .send(md, SAFE_OP)
+        .await
+        .map_err(failed)?;
+    let began = std::time::Instant::now();
+    loop {
+        let status = Command::fprd(station, register::AL_STATUS)
+            .receive::<u16>(md)
+            .await
+            .map_err(failed)?;
+        if status & AL_ERROR != 0 {
+            let code = Command::fprd(station, register::AL_STATUS_CODE)
+                .receive::<u16>(md)
+                .await
+                .map_err(failed)?;
+            let what = format!(
+                "PREOP → SAFEOP: AL status {status:#06x}, code {code:#06x} ({})",
+                al_status_text(code)
+            );
+            // Acknowledge, so that the next configuration starts from a clean PREOP.
+            let _ = Command::fpwr(station, register::AL_CONTROL)
+                .send(md, 2u16 | AL_ERROR)
+                .await;
+            return Err(if REFUSALS.contains(&code) {
+                BuildError::Refused(what)
+            } else {
+                BuildError::Failed(IutError::new(IutCause::Reported, what))
+            });
+        }
+        if status & 0x0F == SAFE_OP {
+            return Ok(());
+        }
+        if began.elapsed() > SAFE_OP_TIMEOUT {
+            return Err(BuildError::Failed(IutError::new(
+                IutCause::Silent,
+                format!("PREOP → SAFEOP: AL status still {status:#06x} after {SAFE_OP_TIMEOUT:?}"),
+            )));
+        }
+        async_io::Timer::after(std::time::Duration::from_micros(200)).await;
+    }
+}
+
+/// How long a terminal may take to reach SAFEOP.
+const SAFE_OP_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(5);
 
 /// The PREOP start-up: the interface's downloads, Distributed Clocks where
 /// the configuration asks for them, and the local cycle-time measurement.
@@ -296,8 +491,17 @@ async fn configure(
 }
 
 impl EthercatIut {
+    /// The CAN controller of a terminal in memory. On a network interface the
+    /// terminal's controller is on the real bus, which the harness reads as
+    /// another node (`--bus socketcan:`): it never asks for it.
     fn controller<T>(&self, act: impl FnOnce(&mut SoftDevice) -> T) -> Result<T, IutError> {
-        let mut terminal = self.terminal.borrow_mut();
+        let Some(terminal) = &self.terminal else {
+            return Err(IutError::new(
+                IutCause::HarnessBug,
+                "a terminal on a network interface has its CAN controller on the real bus",
+            ));
+        };
+        let mut terminal = lock(terminal);
         let device = terminal.application.device_mut().ok_or_else(|| {
             IutError::new(
                 IutCause::Impossible,
@@ -309,7 +513,7 @@ impl EthercatIut {
 
     /// Reads `0x1C32:05` for the report.
     pub fn read_local_cycle(&mut self) {
-        let md = &self.master.maindevice;
+        let md = self.master.maindevice();
         let station = self.station;
         let value = self.master.drive(async {
             let mut mailboxes = Mailboxes::of(md, station).await.ok()?;
@@ -328,7 +532,13 @@ impl EthercatIut {
 impl Iut for EthercatIut {
     fn cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError> {
         link::set_now(now);
-        let md = &self.master.maindevice;
+        #[cfg(feature = "socketcan")]
+        if let Some(serving) = &self.serving {
+            serving
+                .clock
+                .store(now, std::sync::atomic::Ordering::SeqCst);
+        }
+        let md = self.master.maindevice();
         let sub = self
             .group
             .subdevice(md, self.position)
@@ -392,8 +602,8 @@ impl Iut for EthercatIut {
     }
 
     fn poll_timeout(&self) -> Option<Nanos> {
-        self.terminal
-            .borrow()
+        let terminal = lock(self.terminal.as_ref()?);
+        terminal
             .application
             .device()
             .and_then(SoftDevice::next_release)
@@ -408,8 +618,8 @@ impl Iut for EthercatIut {
     }
 
     fn transmit_plan(&self, now: Nanos) -> Option<Vec<Planned>> {
-        self.terminal
-            .borrow()
+        let terminal = lock(self.terminal.as_ref()?);
+        terminal
             .application
             .device()
             .map(|d| soft_controller::plan(d, now))
@@ -418,6 +628,8 @@ impl Iut for EthercatIut {
 
 impl Drop for EthercatIut {
     fn drop(&mut self) {
-        *self.master.peer.borrow_mut() = None;
+        if let Master::Memory(master) = self.master {
+            *master.peer.borrow_mut() = None;
+        }
     }
 }

@@ -1,0 +1,144 @@
+//! An AF_PACKET raw socket for one EtherType on one interface (packet(7)):
+//! how EtherCAT frames leave and reach this machine on a NIC or a veth.
+
+use std::io;
+use std::os::fd::{AsRawFd, FromRawFd, OwnedFd};
+use std::time::Duration;
+
+use crate::error::{KernelError, Operation, OsError};
+
+/// Frames of one EtherType on one interface.
+#[derive(Debug)]
+pub struct PacketSocket {
+    fd: OwnedFd,
+}
+
+/// The interface's index, or the error naming it.
+fn index_of(interface: &str) -> Result<libc::c_int, KernelError> {
+    let name = std::ffi::CString::new(interface).map_err(|_| KernelError::NoInterface {
+        name: interface.to_string(),
+    })?;
+    // SAFETY: `name` is a valid NUL-terminated string for the call's duration.
+    let index = unsafe { libc::if_nametoindex(name.as_ptr()) };
+    if index == 0 {
+        return Err(KernelError::NoInterface {
+            name: interface.to_string(),
+        });
+    }
+    Ok(index as libc::c_int)
+}
+
+impl PacketSocket {
+    /// Opens and binds a socket on `interface` for frames of `ethertype`
+    /// (needs CAP_NET_RAW).
+    pub fn open(interface: &str, ethertype: u16) -> Result<PacketSocket, KernelError> {
+        let failed = |error: io::Error| KernelError::Interface {
+            interface: interface.to_string(),
+            operation: Operation::Open,
+            error: OsError::from(error),
+        };
+        let index = index_of(interface)?;
+        let protocol = ethertype.to_be();
+        // SAFETY: a plain socket(2) call; the descriptor is owned right after.
+        let raw = unsafe {
+            libc::socket(
+                libc::AF_PACKET,
+                libc::SOCK_RAW | libc::SOCK_CLOEXEC,
+                libc::c_int::from(protocol),
+            )
+        };
+        if raw < 0 {
+            return Err(failed(io::Error::last_os_error()));
+        }
+        // SAFETY: `raw` is a fresh descriptor nobody else owns.
+        let fd = unsafe { OwnedFd::from_raw_fd(raw) };
+        // SAFETY: sockaddr_ll is plain data; zeroed is a valid start.
+        let mut address: libc::sockaddr_ll = unsafe { std::mem::zeroed() };
+        address.sll_family = libc::AF_PACKET as u16;
+        address.sll_protocol = protocol;
+        address.sll_ifindex = index;
+        // SAFETY: `address` is a valid sockaddr_ll of the size passed.
+        let bound = unsafe {
+            libc::bind(
+                fd.as_raw_fd(),
+                std::ptr::addr_of!(address).cast(),
+                std::mem::size_of::<libc::sockaddr_ll>() as libc::socklen_t,
+            )
+        };
+        if bound < 0 {
+            return Err(failed(io::Error::last_os_error()));
+        }
+        Ok(PacketSocket { fd })
+    }
+
+    /// Sends one whole Ethernet frame.
+    pub fn send(&self, frame: &[u8]) -> io::Result<()> {
+        // SAFETY: `frame` is valid for reads of its length.
+        let sent =
+            unsafe { libc::send(self.fd.as_raw_fd(), frame.as_ptr().cast(), frame.len(), 0) };
+        if sent < 0 {
+            return Err(io::Error::last_os_error());
+        }
+        Ok(())
+    }
+
+    /// The next frame that arrived (not one this machine sent), waiting at
+    /// most `timeout`; `None` when none came.
+    pub fn recv(&self, buffer: &mut [u8], timeout: Duration) -> io::Result<Option<usize>> {
+        let mut poll = libc::pollfd {
+            fd: self.fd.as_raw_fd(),
+            events: libc::POLLIN,
+            revents: 0,
+        };
+        let millis = timeout.as_millis().min(i32::MAX as u128) as libc::c_int;
+        // SAFETY: one valid pollfd.
+        let ready = unsafe { libc::poll(&mut poll, 1, millis) };
+        if ready < 0 {
+            let error = io::Error::last_os_error();
+            return match error.kind() {
+                io::ErrorKind::Interrupted => Ok(None),
+                _ => Err(error),
+            };
+        }
+        if ready == 0 {
+            return Ok(None);
+        }
+        // SAFETY: sockaddr_ll is plain data.
+        let mut from: libc::sockaddr_ll = unsafe { std::mem::zeroed() };
+        let mut from_len = std::mem::size_of::<libc::sockaddr_ll>() as libc::socklen_t;
+        // SAFETY: `buffer` is valid for writes of its length, `from` for its size.
+        let got = unsafe {
+            libc::recvfrom(
+                self.fd.as_raw_fd(),
+                buffer.as_mut_ptr().cast(),
+                buffer.len(),
+                0,
+                std::ptr::addr_of_mut!(from).cast(),
+                &mut from_len,
+            )
+        };
+        if got < 0 {
+            return Err(io::Error::last_os_error());
+        }
+        // A packet socket also sees what this machine sends on the interface.
+        if from.sll_pkttype == libc::PACKET_OUTGOING {
+            return Ok(None);
+        }
+        Ok(Some(got as usize))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_interface_that_does_not_exist_is_named() {
+        assert_eq!(
+            PacketSocket::open("canif-nonesuch", 0x88A4).unwrap_err(),
+            KernelError::NoInterface {
+                name: "canif-nonesuch".into()
+            }
+        );
+    }
+}
