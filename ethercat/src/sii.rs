@@ -121,6 +121,7 @@ pub fn image(identity: &Identity, layout: &Layout) -> Vec<u8> {
     push_category(&mut out, category::STRINGS, strings);
 
     let mut general = vec![0u8; 32];
+    general[2] = 1; // order number: string 1 (what masters show as the name)
     general[3] = 1; // name: string 1
     general[5] = COE_DETAILS;
     push_category(&mut out, category::GENERAL, general);

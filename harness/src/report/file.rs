@@ -54,6 +54,26 @@ pub struct RunMeta {
     /// Seconds since the Unix epoch when the run started.
     pub started_unix: u64,
     pub suite: SuiteKind,
+    /// The EtherCAT terminals the run met, one per profile (device side over EtherCAT).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub terminals: Vec<TerminalEntry>,
+}
+
+/// An EtherCAT terminal as canif's master found it.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct TerminalEntry {
+    pub profile: String,
+    pub name: String,
+    pub vendor_id: u32,
+    pub product_code: u32,
+    pub revision: u32,
+    pub serial: u32,
+    /// `0x1C32:05` read back after setting `0x1C32:08` (000 §5); none where it did not answer.
+    pub local_cycle_ns: Option<u32>,
+    /// Idle cycles timed after bring-up, and one cycle's exchange (LRW and input read), wall clock.
+    pub cycles: u64,
+    pub mean_cycle_ns: u64,
+    pub worst_cycle_ns: u64,
 }
 
 impl RunMeta {
@@ -76,6 +96,7 @@ impl RunMeta {
                 .duration_since(std::time::UNIX_EPOCH)
                 .map_or(0, |d| d.as_secs()),
             suite: SuiteKind::Interface,
+            terminals: Vec::new(),
         }
     }
 }

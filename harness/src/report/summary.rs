@@ -60,6 +60,26 @@ impl RunReport {
         if let Some(left_out) = &self.meta.left_out {
             let _ = writeln!(md, "\nLeft out: {left_out}.");
         }
+        if !self.meta.terminals.is_empty() {
+            md.push_str("\n| EtherCAT terminal | identity (vendor, product, revision, serial) | 0x1C32:05 | idle cycles | mean | worst |\n|---|---|---|---|---|---|\n");
+            for t in &self.meta.terminals {
+                let _ = writeln!(
+                    md,
+                    "| {} ({}) | {:#010x}, {:#010x}, {:#010x}, {} | {} | {} | {} µs | {} µs |",
+                    t.profile,
+                    t.name,
+                    t.vendor_id,
+                    t.product_code,
+                    t.revision,
+                    t.serial,
+                    t.local_cycle_ns
+                        .map_or("not answered".into(), |ns| format!("{ns} ns")),
+                    t.cycles,
+                    t.mean_cycle_ns / 1_000,
+                    t.worst_cycle_ns / 1_000
+                );
+            }
+        }
         md.push_str("\n| profile | pass | fail | error | n/a | not run | not testable | checks | cycles | frames checked |\n|---|---|---|---|---|---|---|---|---|---|\n");
         for p in &self.profiles {
             let _ = writeln!(

@@ -67,6 +67,64 @@ pub(crate) fn run(
     finish(catalogue, &execute(catalogue, &kind, plan), report_dir)
 }
 
+/// Over EtherCAT, each profile's terminal brought up once before the run:
+/// its identity, 0x1C32:05 and the time of an exchange, for the report.
+fn survey_terminals(
+    kind: &IutKind,
+    plan: &Plan<Options>,
+) -> Vec<canif_harness::report::TerminalEntry> {
+    let IutKind::Ethercat { link, .. } = kind else {
+        return Vec::new();
+    };
+    let mut terminals = Vec::new();
+    for profile in &plan.profiles {
+        let Some(identity) = profile.ethercat else {
+            continue;
+        };
+        match canif_harness::device::ethercat::survey(
+            &profile.model_capabilities(),
+            &identity,
+            link,
+            SURVEY_CYCLES,
+        ) {
+            Ok(facts) => {
+                eprintln!(
+                    "{}: {} vendor {:#010x} product {:#010x} revision {:#010x}, 0x1C32:05 {}, an idle cycle {} µs (worst {} µs)",
+                    profile.name,
+                    facts.name,
+                    facts.vendor_id,
+                    facts.product_code,
+                    facts.revision,
+                    facts.local_cycle_ns.map_or("not answered".into(), |ns| format!("{ns} ns")),
+                    facts.mean_cycle_ns / 1_000,
+                    facts.worst_cycle_ns / 1_000
+                );
+                terminals.push(canif_harness::report::TerminalEntry {
+                    profile: profile.name.clone(),
+                    name: facts.name,
+                    vendor_id: facts.vendor_id,
+                    product_code: facts.product_code,
+                    revision: facts.revision,
+                    serial: facts.serial,
+                    local_cycle_ns: facts.local_cycle_ns,
+                    cycles: facts.cycles,
+                    mean_cycle_ns: facts.mean_cycle_ns,
+                    worst_cycle_ns: facts.worst_cycle_ns,
+                });
+            }
+            // The run itself meets the same terminal and reports what broke.
+            Err(error) => eprintln!(
+                "{}: the terminal could not be surveyed: {error}",
+                profile.name
+            ),
+        }
+    }
+    terminals
+}
+
+/// Idle cycles a survey times.
+const SURVEY_CYCLES: u32 = 1_000;
+
 /// Runs a plan: the lockstep on each profile, then the Gherkin scenarios, and
 /// judges every requirement once over all of them.
 pub(crate) fn execute(catalogue: &Catalogue, kind: &IutKind, plan: &Plan<Options>) -> RunReport {
@@ -78,6 +136,8 @@ pub(crate) fn execute(catalogue: &Catalogue, kind: &IutKind, plan: &Plan<Options
         options.seed,
         catalogue,
     );
+    let mut meta = meta;
+    meta.terminals = survey_terminals(kind, plan);
     let lockstep = plan.run_profiles(catalogue, kind, "cycles");
     let iut_broke = lockstep.iter().flat_map(|p| &p.runs).any(|r| {
         matches!(

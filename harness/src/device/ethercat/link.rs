@@ -185,12 +185,8 @@ type Masters = std::sync::Mutex<std::collections::HashMap<String, &'static Inter
 static INTERFACE_MASTERS: std::sync::OnceLock<Masters> = std::sync::OnceLock::new();
 
 impl InterfaceMaster {
-    /// The master on `interface`, started on first use (needs CAP_NET_RAW);
-    /// `emulated`: the terminal across it answers at once (a veth pair).
-    pub(super) fn on(
-        interface: &str,
-        emulated: bool,
-    ) -> Result<&'static InterfaceMaster, std::io::Error> {
+    /// The master on `interface`, started on first use (needs CAP_NET_RAW).
+    pub(super) fn on(interface: &str) -> Result<&'static InterfaceMaster, std::io::Error> {
         let masters = INTERFACE_MASTERS.get_or_init(Default::default);
         let mut masters = masters.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(master) = masters.get(interface) {
@@ -204,15 +200,7 @@ impl InterfaceMaster {
             .name(format!("ethercat-{interface}"))
             .spawn(move || async_io::block_on(task))?;
         let master: &'static InterfaceMaster = Box::leak(Box::new(InterfaceMaster {
-            maindevice: MainDevice::new(
-                pdu_loop,
-                if emulated {
-                    timeouts()
-                } else {
-                    real_timeouts()
-                },
-                config(),
-            ),
+            maindevice: MainDevice::new(pdu_loop, real_timeouts(), config()),
         }));
         masters.insert(interface.to_string(), master);
         Ok(master)
@@ -223,12 +211,14 @@ impl InterfaceMaster {
     }
 }
 
-/// Timeouts of a master that waits for a terminal across a wire.
+/// Timeouts of a master that waits for a terminal across a wire: generous,
+/// since a loaded machine may not run the other end for a while (a refused
+/// SAFEOP does not wait them out: canif watches that transition itself).
 fn real_timeouts() -> Timeouts {
     Timeouts {
         state_transition: Duration::from_secs(5),
-        pdu: Duration::from_millis(100),
-        eeprom: Duration::from_millis(100),
+        pdu: Duration::from_secs(1),
+        eeprom: Duration::from_secs(1),
         wait_loop_delay: Duration::from_millis(1),
         mailbox_echo: Duration::from_millis(500),
         mailbox_response: Duration::from_secs(2),

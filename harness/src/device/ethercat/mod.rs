@@ -12,14 +12,15 @@ mod link;
 pub mod objects;
 #[cfg(feature = "socketcan")]
 pub mod served;
+mod start_up;
 #[cfg(feature = "socketcan")]
 mod veth;
 
 use std::cell::Cell;
 use std::sync::{Arc, Mutex};
 
-use canif_ethercat::{register, Identity, SubDevice};
-use canif_model::config::{Capabilities, InterfaceConfig, Synchronization};
+use canif_ethercat::{Identity, SubDevice};
+use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_model::frame::Frame;
 use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
@@ -31,35 +32,15 @@ use ethercrab::{Command, DefaultLock, SubDeviceGroup};
 
 use crate::device::iut::{soft_controller, soft_settings, BuildError, Iut, Planned, Transmit};
 use crate::error::{IutCause, IutError};
-use coe::{CoeError, Mailboxes};
+use coe::Mailboxes;
 pub use link::LinkFault;
 use link::{lock, InterfaceMaster, MemoryMaster, Peer, SharedTerminal};
+use start_up::{configure, master_error, request_safe_op};
 
 const MAX_SUBDEVICES: usize = 16;
 const MAX_PDI: usize = 4096;
 /// The working counter of an LRW that read a terminal's inputs and wrote its outputs.
 const LRW_WORKING_COUNTER: u16 = 3;
-/// The AL status's error flag.
-const AL_ERROR: u16 = 0x10;
-/// AL status codes with which a terminal refuses a configuration (not a broken exchange).
-const REFUSALS: [u16; 3] = [0x001D, 0x001E, 0x0030];
-
-/// The meaning of the AL status codes ETG.1000.6 Table 11 gives.
-fn al_status_text(code: u16) -> &'static str {
-    match code {
-        0x0000 => "no error",
-        0x0011 => "invalid requested state change",
-        0x0012 => "unknown requested state",
-        0x0013 => "bootstrap not supported",
-        0x0016 => "invalid mailbox configuration",
-        0x001B => "sync manager watchdog",
-        0x001D => "invalid output configuration",
-        0x001E => "invalid input configuration",
-        0x0030 => "invalid DC SYNC configuration",
-        _ => "no meaning in ETG.1000.6",
-    }
-}
-
 /// Input SyncManager (SM3) registers.
 const SM3: u16 = canif_ethercat::register::SYNC_MANAGER_BASE + 3 * 8;
 
@@ -198,8 +179,40 @@ pub struct TerminalFacts {
     pub serial: u32,
     /// `0x1C32:05` as read back after setting `0x1C32:08` (000 §5), if it answers.
     pub local_cycle_ns: Option<u32>,
-    /// EtherCAT frames exchanged.
-    pub frames: u64,
+    /// Harness cycles timed by [`survey`], and how long one took (LRW and
+    /// input read, wall clock), on average and at worst.
+    pub cycles: u64,
+    pub mean_cycle_ns: u64,
+    pub worst_cycle_ns: u64,
+}
+
+/// Brings the terminal up once with the profile's first interface, runs
+/// `cycles` cycles of an idle PLC, and reads `0x1C32:05`: who the terminal is
+/// and how its exchange performs, for the run's report.
+pub fn survey(
+    caps: &Capabilities,
+    identity: &EthercatIdentity,
+    link: &EthercatLink,
+    cycles: u32,
+) -> Result<TerminalFacts, BuildError> {
+    let config = InterfaceConfig::new(caps.first_format(), 1);
+    let mut iut = build(caps, &config, identity, link)?;
+    let outputs = vec![0u8; iut.output_len()];
+    let (mut total, mut worst) = (0u64, 0u64);
+    for n in 0..cycles {
+        let began = std::time::Instant::now();
+        iut.cycle(&outputs, u64::from(n) * 1_000_000)
+            .map_err(BuildError::Failed)?;
+        let took = began.elapsed().as_nanos() as u64;
+        total += took;
+        worst = worst.max(took);
+    }
+    iut.read_local_cycle();
+    let mut facts = iut.facts.clone();
+    facts.cycles = u64::from(cycles);
+    facts.mean_cycle_ns = total / u64::from(cycles.max(1));
+    facts.worst_cycle_ns = worst;
+    Ok(facts)
 }
 
 /// The terminal on the other end of canif's master.
@@ -216,30 +229,6 @@ pub struct EthercatIut {
     /// What the previous cycle's SyncManager 2 event left in the inputs.
     previous_inputs: Option<Vec<u8>>,
     pub facts: TerminalFacts,
-}
-
-fn master_error(error: ethercrab::error::Error, during: &str) -> IutError {
-    use ethercrab::error::Error;
-    let cause = match error {
-        Error::Timeout(_) => IutCause::Silent,
-        Error::SubDevice(_) => IutCause::Reported,
-        _ => IutCause::Protocol,
-    };
-    IutError::new(cause, format!("EtherCAT, {during}: {error}"))
-}
-
-fn coe_error(error: CoeError, during: &str) -> BuildError {
-    match error {
-        CoeError::Abort { .. } => BuildError::Refused(format!("{during}: {error}")),
-        CoeError::Timeout(_) => BuildError::Failed(IutError::new(
-            IutCause::Silent,
-            format!("{during}: {error}"),
-        )),
-        _ => BuildError::Failed(IutError::new(
-            IutCause::Protocol,
-            format!("{during}: {error}"),
-        )),
-    }
 }
 
 /// The emulated terminal of a profile: its identity, the soft device's offer.
@@ -300,7 +289,7 @@ pub fn build(
             (Master::Memory(master), Some(terminal), 0)
         }
         EthercatLink::Interface { name, position } => {
-            let master = InterfaceMaster::on(name, false).map_err(|e| {
+            let master = InterfaceMaster::on(name).map_err(|e| {
                 BuildError::Failed(IutError::new(
                     IutCause::NotStarted,
                     format!("EtherCAT master on {name}: {e} (a raw socket needs CAP_NET_RAW)"),
@@ -321,7 +310,7 @@ pub fn build(
                 veth::Serving::start(terminal_side, &terminal)
                     .map_err(|e| not_started(format!("the terminal on {terminal_side}: {e}")))?,
             );
-            let master = InterfaceMaster::on(master_side, true).map_err(|e| {
+            let master = InterfaceMaster::on(master_side).map_err(|e| {
                 not_started(format!(
                     "EtherCAT master on {master_side}: {e} (a raw socket needs CAP_NET_RAW)"
                 ))
@@ -351,8 +340,7 @@ pub fn build(
             product_code: seen.product_id,
             revision: seen.revision,
             serial: seen.serial,
-            local_cycle_ns: None,
-            frames: 0,
+            ..TerminalFacts::default()
         };
         if (seen.vendor_id, seen.product_id, seen.revision)
             != (identity.vendor_id, identity.product_code, identity.revision)
@@ -390,106 +378,6 @@ pub fn build(
     })
 }
 
-/// PREOP → SAFEOP, watched here: the terminal's AL status says at once
-/// whether it refuses (error flag and code), where ethercrab would wait out
-/// its timeout for a state that does not come.
-async fn request_safe_op(md: &ethercrab::MainDevice<'_>, station: u16) -> Result<(), BuildError> {
-    const SAFE_OP: u16 = 4;
-    let failed = |e| BuildError::Failed(master_error(e, "PREOP → SAFEOP"));
-    Command::fpwr(station, register::AL_CONTROL)
-        .send(md, SAFE_OP)
-        .await
-        .map_err(failed)?;
-    let began = std::time::Instant::now();
-    loop {
-        let status = Command::fprd(station, register::AL_STATUS)
-            .receive::<u16>(md)
-            .await
-            .map_err(failed)?;
-        if status & AL_ERROR != 0 {
-            let code = Command::fprd(station, register::AL_STATUS_CODE)
-                .receive::<u16>(md)
-                .await
-                .map_err(failed)?;
-            let what = format!(
-                "PREOP → SAFEOP: AL status {status:#06x}, code {code:#06x} ({})",
-                al_status_text(code)
-            );
-            // Acknowledge, so that the next configuration starts from a clean PREOP.
-            let _ = Command::fpwr(station, register::AL_CONTROL)
-                .send(md, 2u16 | AL_ERROR)
-                .await;
-            return Err(if REFUSALS.contains(&code) {
-                BuildError::Refused(what)
-            } else {
-                BuildError::Failed(IutError::new(IutCause::Reported, what))
-            });
-        }
-        if status & 0x0F == SAFE_OP {
-            return Ok(());
-        }
-        if began.elapsed() > SAFE_OP_TIMEOUT {
-            return Err(BuildError::Failed(IutError::new(
-                IutCause::Silent,
-                format!("PREOP → SAFEOP: AL status still {status:#06x} after {SAFE_OP_TIMEOUT:?}"),
-            )));
-        }
-        async_io::Timer::after(std::time::Duration::from_micros(200)).await;
-    }
-}
-
-/// How long a terminal may take to reach SAFEOP.
-const SAFE_OP_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(5);
-
-/// The PREOP start-up: the interface's downloads, Distributed Clocks where
-/// the configuration asks for them, and the local cycle-time measurement.
-async fn configure(
-    md: &ethercrab::MainDevice<'_>,
-    station: u16,
-    caps: &Capabilities,
-    config: &InterfaceConfig,
-    facts: &mut TerminalFacts,
-) -> Result<(), BuildError> {
-    let mut mailboxes = Mailboxes::of(md, station)
-        .await
-        .map_err(|e| coe_error(e, "mailbox"))?;
-    for download in objects::downloads(caps, config) {
-        mailboxes
-            .download_complete(md, download.index, &download.data)
-            .await
-            .map_err(|e| coe_error(e, &format!("{} ({:#06x})", download.name, download.index)))?;
-    }
-    if let Synchronization::DistributedClocks { sync1_shift } = config.synchronization {
-        use canif_ethercat::register::{DC_SYNC0_CYCLE, DC_SYNC1_CYCLE, DC_SYNC_ACTIVATION};
-        let shift = u32::try_from(sync1_shift).map_err(|_| {
-            BuildError::Refused(format!("SYNC1 shift {sync1_shift} ns exceeds the register"))
-        })?;
-        let write = |register: u16, bytes: Vec<u8>| async move {
-            Command::fpwr(station, register)
-                .send(md, bytes.as_slice())
-                .await
-                .map_err(|e| BuildError::Failed(master_error(e, "writing the DC registers")))
-        };
-        write(DC_SYNC0_CYCLE, 1_000_000u32.to_le_bytes().to_vec()).await?;
-        write(DC_SYNC1_CYCLE, shift.to_le_bytes().to_vec()).await?;
-        write(DC_SYNC_ACTIVATION, vec![0b111]).await?;
-    }
-    // 000 §5: with 0x1C32:08 set the terminal measures its cycle into 0x1C32:05.
-    if mailboxes
-        .download(
-            md,
-            objects::SYNC_OUTPUTS,
-            objects::MEASURE_SUB,
-            &1u16.to_le_bytes(),
-        )
-        .await
-        .is_ok()
-    {
-        facts.local_cycle_ns = Some(0);
-    }
-    Ok(())
-}
-
 impl EthercatIut {
     /// The CAN controller of a terminal in memory. On a network interface the
     /// terminal's controller is on the real bus, which the harness reads as
@@ -509,6 +397,13 @@ impl EthercatIut {
             )
         })?;
         Ok(act(device))
+    }
+
+    fn output_len(&self) -> usize {
+        let md = self.master.maindevice();
+        self.group
+            .subdevice(md, self.position)
+            .map_or(0, |sub| sub.outputs_raw().len())
     }
 
     /// Reads `0x1C32:05` for the report.

@@ -1,0 +1,160 @@
+//! The terminal's start-up in PREOP, as the EL6751 documentation orders it,
+//! and what its answers mean: SDO aborts and AL status codes are refusals
+//! of a configuration or errors naming what the terminal did.
+
+use canif_ethercat::register;
+use canif_model::config::{Capabilities, InterfaceConfig, Synchronization};
+use ethercrab::Command;
+
+use super::coe::{CoeError, Mailboxes};
+use super::{objects, TerminalFacts};
+use crate::device::iut::BuildError;
+use crate::error::{IutCause, IutError};
+
+/// The AL status's error flag.
+const AL_ERROR: u16 = 0x10;
+/// AL status codes with which a terminal refuses a configuration (not a broken exchange).
+const REFUSALS: [u16; 3] = [0x001D, 0x001E, 0x0030];
+
+/// The meaning of the AL status codes ETG.1000.6 Table 11 gives.
+fn al_status_text(code: u16) -> &'static str {
+    match code {
+        0x0000 => "no error",
+        0x0011 => "invalid requested state change",
+        0x0012 => "unknown requested state",
+        0x0013 => "bootstrap not supported",
+        0x0016 => "invalid mailbox configuration",
+        0x001B => "sync manager watchdog",
+        0x001D => "invalid output configuration",
+        0x001E => "invalid input configuration",
+        0x0030 => "invalid DC SYNC configuration",
+        _ => "no meaning in ETG.1000.6",
+    }
+}
+
+pub(super) fn master_error(error: ethercrab::error::Error, during: &str) -> IutError {
+    use ethercrab::error::Error;
+    let cause = match error {
+        Error::Timeout(_) => IutCause::Silent,
+        Error::SubDevice(_) => IutCause::Reported,
+        _ => IutCause::Protocol,
+    };
+    IutError::new(cause, format!("EtherCAT, {during}: {error}"))
+}
+
+fn coe_error(error: CoeError, during: &str) -> BuildError {
+    match error {
+        CoeError::Abort { .. } => BuildError::Refused(format!("{during}: {error}")),
+        CoeError::Timeout(_) => BuildError::Failed(IutError::new(
+            IutCause::Silent,
+            format!("{during}: {error}"),
+        )),
+        _ => BuildError::Failed(IutError::new(
+            IutCause::Protocol,
+            format!("{during}: {error}"),
+        )),
+    }
+}
+
+/// PREOP → SAFEOP, watched here: the terminal's AL status says at once
+/// whether it refuses (error flag and code), where ethercrab would wait out
+/// its timeout for a state that does not come.
+pub(super) async fn request_safe_op(
+    md: &ethercrab::MainDevice<'_>,
+    station: u16,
+) -> Result<(), BuildError> {
+    const SAFE_OP: u16 = 4;
+    let failed = |e| BuildError::Failed(master_error(e, "PREOP → SAFEOP"));
+    Command::fpwr(station, register::AL_CONTROL)
+        .send(md, SAFE_OP)
+        .await
+        .map_err(failed)?;
+    let began = std::time::Instant::now();
+    loop {
+        let status = Command::fprd(station, register::AL_STATUS)
+            .receive::<u16>(md)
+            .await
+            .map_err(failed)?;
+        if status & AL_ERROR != 0 {
+            let code = Command::fprd(station, register::AL_STATUS_CODE)
+                .receive::<u16>(md)
+                .await
+                .map_err(failed)?;
+            let what = format!(
+                "PREOP → SAFEOP: AL status {status:#06x}, code {code:#06x} ({})",
+                al_status_text(code)
+            );
+            // Acknowledge, so that the next configuration starts from a clean PREOP.
+            let _ = Command::fpwr(station, register::AL_CONTROL)
+                .send(md, 2u16 | AL_ERROR)
+                .await;
+            return Err(if REFUSALS.contains(&code) {
+                BuildError::Refused(what)
+            } else {
+                BuildError::Failed(IutError::new(IutCause::Reported, what))
+            });
+        }
+        if status & 0x0F == SAFE_OP {
+            return Ok(());
+        }
+        if began.elapsed() > SAFE_OP_TIMEOUT {
+            return Err(BuildError::Failed(IutError::new(
+                IutCause::Silent,
+                format!("PREOP → SAFEOP: AL status still {status:#06x} after {SAFE_OP_TIMEOUT:?}"),
+            )));
+        }
+        async_io::Timer::after(std::time::Duration::from_micros(200)).await;
+    }
+}
+
+/// How long a terminal may take to reach SAFEOP.
+const SAFE_OP_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(5);
+
+/// The PREOP start-up: the interface's downloads, Distributed Clocks where
+/// the configuration asks for them, and the local cycle-time measurement.
+pub(super) async fn configure(
+    md: &ethercrab::MainDevice<'_>,
+    station: u16,
+    caps: &Capabilities,
+    config: &InterfaceConfig,
+    facts: &mut TerminalFacts,
+) -> Result<(), BuildError> {
+    let mut mailboxes = Mailboxes::of(md, station)
+        .await
+        .map_err(|e| coe_error(e, "mailbox"))?;
+    for download in objects::downloads(caps, config) {
+        mailboxes
+            .download_complete(md, download.index, &download.data)
+            .await
+            .map_err(|e| coe_error(e, &format!("{} ({:#06x})", download.name, download.index)))?;
+    }
+    if let Synchronization::DistributedClocks { sync1_shift } = config.synchronization {
+        use canif_ethercat::register::{DC_SYNC0_CYCLE, DC_SYNC1_CYCLE, DC_SYNC_ACTIVATION};
+        let shift = u32::try_from(sync1_shift).map_err(|_| {
+            BuildError::Refused(format!("SYNC1 shift {sync1_shift} ns exceeds the register"))
+        })?;
+        let write = |register: u16, bytes: Vec<u8>| async move {
+            Command::fpwr(station, register)
+                .send(md, bytes.as_slice())
+                .await
+                .map_err(|e| BuildError::Failed(master_error(e, "writing the DC registers")))
+        };
+        write(DC_SYNC0_CYCLE, 1_000_000u32.to_le_bytes().to_vec()).await?;
+        write(DC_SYNC1_CYCLE, shift.to_le_bytes().to_vec()).await?;
+        write(DC_SYNC_ACTIVATION, vec![0b111]).await?;
+    }
+    // 000 §5: with 0x1C32:08 set the terminal measures its cycle into 0x1C32:05.
+    if mailboxes
+        .download(
+            md,
+            objects::SYNC_OUTPUTS,
+            objects::MEASURE_SUB,
+            &1u16.to_le_bytes(),
+        )
+        .await
+        .is_ok()
+    {
+        facts.local_cycle_ns = Some(0);
+    }
+    Ok(())
+}
