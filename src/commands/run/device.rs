@@ -29,6 +29,19 @@ pub(crate) fn run(
     if let Err(code) = plan.check_selection(catalogue) {
         return code;
     }
+    if let IutKind::Ethercat {
+        link: canif_harness::device::ethercat::EthercatLink::Interface { name, .. },
+        ..
+    } = &kind
+    {
+        if plan.options.bus.is_sim() {
+            eprintln!(
+                "--iut ethercat:{name}: a terminal on a network interface has its CAN port on a real bus; \
+                 add --bus socketcan:IFACE (the CAN adapter cabled to it), or use ethercat:emulated"
+            );
+            return ExitCode::from(2);
+        }
+    }
     if let IutKind::Ethercat { .. } = kind {
         let not_terminals: Vec<&str> = plan
             .profiles
