@@ -149,6 +149,11 @@ pub(crate) struct RealTimeOptions {
     /// state (real CAN FD controllers), so the scenarios' ESI bits are left out.
     #[arg(long)]
     pub esi_from_controller: bool,
+    /// Over EtherCAT: before the run, exchange idle cycles with each terminal
+    /// every --cycle-us for this many seconds and report the cycles that missed
+    /// their deadline and the worst one (0: 1,000 cycles, unpaced).
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u64).range(0..=86_400))]
+    pub ethercat_soak_s: u64,
 }
 
 /// Which side of the interface is under test.

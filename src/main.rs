@@ -82,6 +82,7 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
             master,
         } => {
             let bus = run::device::bus_choice(&bus, &real_time);
+            let pace = run::device::pace(&real_time);
             let selection = canif_harness::run::Selection {
                 scenarios: scenario,
                 requirements: requirement,
@@ -92,6 +93,7 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                 (duration.is_some(), "--duration"),
                 (trace.is_some(), "--trace"),
                 (no_fail_fast, "--no-fail-fast"),
+                (real_time.ethercat_soak_s > 0, "--ethercat-soak-s"),
             ];
             let plc_only = [(!master.is_empty(), "--master")];
             if let Err(conflict) = cli::side_conflicts(side, &device_only, &plc_only) {
@@ -172,7 +174,7 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                 fail_fast: !no_fail_fast,
             };
             match run::Plan::new(profiles, options, product.product()) {
-                Ok(plan) => run::device::run(&catalogue, &iut, &plan, &report),
+                Ok(plan) => run::device::run(&catalogue, &iut, &plan, pace, &report),
                 Err(code) => code,
             }
         }

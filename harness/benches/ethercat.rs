@@ -44,7 +44,7 @@ fn measure(name: &str, iut: &IutKind) -> (f64, f64) {
             &profile.model_capabilities(),
             &profile.ethercat.expect("a terminal profile"),
             link,
-            IDLE_CYCLES,
+            canif_harness::device::ethercat::Pace::Unpaced(IDLE_CYCLES),
         )
         .expect("the terminal comes up");
         println!(

@@ -120,3 +120,35 @@ fn a_terminal_that_answers_wrongly_is_an_error_naming_what_it_did() {
         );
     }
 }
+
+/// The survey a report shows: the terminal's identity as the profile gives
+/// it, 0x1C32:05 read back, and a paced soak's cycles (how many missed their
+/// deadline is the machine's load, not asserted).
+#[test]
+fn a_survey_names_the_terminal_and_counts_a_soak() {
+    use canif_harness::device::ethercat::{survey, Pace};
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("el6751-legacy").unwrap();
+    let identity = profile.ethercat.unwrap();
+    let link = EthercatLink::Emulated(Emulated {
+        faults: vec![],
+        choices: vec![],
+        link_fault: None,
+    });
+    let pace = Pace::Every {
+        period: std::time::Duration::from_millis(2),
+        soak: std::time::Duration::from_millis(100),
+    };
+    let facts = survey(&profile.model_capabilities(), &identity, &link, pace).unwrap();
+    assert_eq!(
+        (facts.vendor_id, facts.product_code, facts.revision),
+        (identity.vendor_id, identity.product_code, identity.revision)
+    );
+    assert_eq!(facts.name, "EL6751");
+    assert_eq!((facts.cycles, facts.period_ns), (50, Some(2_000_000)));
+    assert!(
+        facts.local_cycle_ns.is_some(),
+        "0x1C32:05 was not read back"
+    );
+    assert!(facts.worst_cycle_ns >= facts.mean_cycle_ns);
+}

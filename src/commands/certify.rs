@@ -75,7 +75,12 @@ pub(crate) fn certify(
             if let Err(code) = plan.check_selection(catalogue) {
                 return code;
             }
-            device::execute(catalogue, &kind, &plan)
+            device::execute(
+                catalogue,
+                &kind,
+                &plan,
+                canif_harness::device::ethercat::Pace::Unpaced(device::SURVEY_CYCLES),
+            )
         }
         SideArg::Plc => {
             let kind = match resolve_client(iut) {

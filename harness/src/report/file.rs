@@ -74,6 +74,12 @@ pub struct TerminalEntry {
     pub cycles: u64,
     pub mean_cycle_ns: u64,
     pub worst_cycle_ns: u64,
+    /// A soak's real-time period (`--ethercat-soak-s`), and the cycles that
+    /// ended after the next one was due; none when the cycles were not paced.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub period_ns: Option<u64>,
+    #[serde(default)]
+    pub missed_cycles: u64,
 }
 
 impl RunMeta {

@@ -61,11 +61,11 @@ impl RunReport {
             let _ = writeln!(md, "\nLeft out: {left_out}.");
         }
         if !self.meta.terminals.is_empty() {
-            md.push_str("\n| EtherCAT terminal | identity (vendor, product, revision, serial) | 0x1C32:05 | idle cycles | mean | worst |\n|---|---|---|---|---|---|\n");
+            md.push_str("\n| EtherCAT terminal | identity (vendor, product, revision, serial) | 0x1C32:05 | idle cycles | period | missed | mean | worst |\n|---|---|---|---|---|---|---|---|\n");
             for t in &self.meta.terminals {
                 let _ = writeln!(
                     md,
-                    "| {} ({}) | {:#010x}, {:#010x}, {:#010x}, {} | {} | {} | {} µs | {} µs |",
+                    "| {} ({}) | {:#010x}, {:#010x}, {:#010x}, {} | {} | {} | {} | {} | {} µs | {} µs |",
                     t.profile,
                     t.name,
                     t.vendor_id,
@@ -75,6 +75,9 @@ impl RunReport {
                     t.local_cycle_ns
                         .map_or("not answered".into(), |ns| format!("{ns} ns")),
                     t.cycles,
+                    t.period_ns
+                        .map_or("unpaced".into(), |ns| format!("{} µs", ns / 1_000)),
+                    t.missed_cycles,
                     t.mean_cycle_ns / 1_000,
                     t.worst_cycle_ns / 1_000
                 );

@@ -5,6 +5,7 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use canif_harness::device::bus::BusChoice;
+use canif_harness::device::ethercat::Pace;
 #[cfg(feature = "socketcan")]
 use canif_harness::device::kernel_bus::KernelBusOptions;
 use canif_harness::device::{IutKind, Options};
@@ -20,6 +21,7 @@ pub(crate) fn run(
     catalogue: &Catalogue,
     iut: &IutOptions,
     plan: &Plan<Options>,
+    pace: Pace,
     report_dir: &Path,
 ) -> ExitCode {
     let kind = match resolve_iut(iut) {
@@ -77,7 +79,11 @@ pub(crate) fn run(
             return ExitCode::from(2);
         }
     }
-    finish(catalogue, &execute(catalogue, &kind, plan), report_dir)
+    finish(
+        catalogue,
+        &execute(catalogue, &kind, plan, pace),
+        report_dir,
+    )
 }
 
 /// Over EtherCAT, each profile's terminal brought up once before the run:
@@ -85,6 +91,7 @@ pub(crate) fn run(
 fn survey_terminals(
     kind: &IutKind,
     plan: &Plan<Options>,
+    pace: Pace,
 ) -> Vec<canif_harness::report::TerminalEntry> {
     let IutKind::Ethercat { link, .. } = kind else {
         return Vec::new();
@@ -98,7 +105,7 @@ fn survey_terminals(
             &profile.model_capabilities(),
             &identity,
             link,
-            SURVEY_CYCLES,
+            pace,
         ) {
             Ok(facts) => {
                 eprintln!(
@@ -112,6 +119,15 @@ fn survey_terminals(
                     facts.mean_cycle_ns / 1_000,
                     facts.worst_cycle_ns / 1_000
                 );
+                if let Some(period) = facts.period_ns {
+                    eprintln!(
+                        "{}: soak of {} cycles every {} µs: {} missed their deadline",
+                        profile.name,
+                        facts.cycles,
+                        period / 1_000,
+                        facts.missed_cycles
+                    );
+                }
                 terminals.push(canif_harness::report::TerminalEntry {
                     profile: profile.name.clone(),
                     name: facts.name,
@@ -123,6 +139,8 @@ fn survey_terminals(
                     cycles: facts.cycles,
                     mean_cycle_ns: facts.mean_cycle_ns,
                     worst_cycle_ns: facts.worst_cycle_ns,
+                    period_ns: facts.period_ns,
+                    missed_cycles: facts.missed_cycles,
                 });
             }
             // The run itself meets the same terminal and reports what broke.
@@ -135,12 +153,17 @@ fn survey_terminals(
     terminals
 }
 
-/// Idle cycles a survey times.
-const SURVEY_CYCLES: u32 = 1_000;
+/// Idle cycles an unpaced survey times.
+pub(crate) const SURVEY_CYCLES: u32 = 1_000;
 
 /// Runs a plan: the lockstep on each profile, then the Gherkin scenarios, and
 /// judges every requirement once over all of them.
-pub(crate) fn execute(catalogue: &Catalogue, kind: &IutKind, plan: &Plan<Options>) -> RunReport {
+pub(crate) fn execute(
+    catalogue: &Catalogue,
+    kind: &IutKind,
+    plan: &Plan<Options>,
+    pace: Pace,
+) -> RunReport {
     let options = &plan.options;
     let started = std::time::Instant::now();
     let meta = RunMeta::new(
@@ -150,7 +173,7 @@ pub(crate) fn execute(catalogue: &Catalogue, kind: &IutKind, plan: &Plan<Options
         catalogue,
     );
     let mut meta = meta;
-    meta.terminals = survey_terminals(kind, plan);
+    meta.terminals = survey_terminals(kind, plan, pace);
     let lockstep = plan.run_profiles(catalogue, kind, "cycles");
     let iut_broke = lockstep.iter().flat_map(|p| &p.runs).any(|r| {
         matches!(
@@ -200,6 +223,18 @@ fn describe_bus(bus: &BusChoice) -> String {
 
 /// The bus the command line chose, with its real-time options.
 #[cfg_attr(not(feature = "socketcan"), allow(unused_variables))]
+/// How the terminals of a run over EtherCAT are surveyed before it: a soak
+/// at the real-time cycle when asked for, else a burst of idle cycles.
+pub(crate) fn pace(real_time: &RealTimeOptions) -> Pace {
+    match real_time.ethercat_soak_s {
+        0 => Pace::Unpaced(SURVEY_CYCLES),
+        seconds => Pace::Every {
+            period: std::time::Duration::from_micros(real_time.cycle_us),
+            soak: std::time::Duration::from_secs(seconds),
+        },
+    }
+}
+
 pub(crate) fn bus_choice(bus: &BusArg, real_time: &RealTimeOptions) -> BusChoice {
     match bus {
         BusArg::Sim => BusChoice::Sim,

@@ -184,34 +184,76 @@ pub struct TerminalFacts {
     pub cycles: u64,
     pub mean_cycle_ns: u64,
     pub worst_cycle_ns: u64,
+    /// A paced survey's period, and the cycles that ended after the next one was due.
+    pub period_ns: Option<u64>,
+    pub missed_cycles: u64,
+}
+
+/// How a survey exchanges its idle cycles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Pace {
+    /// This many cycles, one after the other.
+    Unpaced(u32),
+    /// One cycle every `period` for `soak`, as a real-time task would: a
+    /// cycle that ends after the next one's start missed its deadline.
+    Every {
+        period: std::time::Duration,
+        soak: std::time::Duration,
+    },
 }
 
 /// Brings the terminal up once with the profile's first interface, runs
-/// `cycles` cycles of an idle PLC, and reads `0x1C32:05`: who the terminal is
-/// and how its exchange performs, for the run's report.
+/// idle PLC cycles at `pace`, and reads `0x1C32:05`: who the terminal is and
+/// how its exchange performs, for the run's report.
 pub fn survey(
     caps: &Capabilities,
     identity: &EthercatIdentity,
     link: &EthercatLink,
-    cycles: u32,
+    pace: Pace,
 ) -> Result<TerminalFacts, BuildError> {
+    use std::time::{Duration, Instant};
     let config = InterfaceConfig::new(caps.first_format(), 1);
     let mut iut = build(caps, &config, identity, link)?;
     let outputs = vec![0u8; iut.output_len()];
-    let (mut total, mut worst) = (0u64, 0u64);
+    let (period, cycles) = match pace {
+        Pace::Unpaced(cycles) => (None, u64::from(cycles)),
+        Pace::Every { period, soak } => (
+            Some(period),
+            (soak.as_nanos() / period.as_nanos().max(1)) as u64,
+        ),
+    };
+    let (mut total, mut worst, mut missed) = (0u64, 0u64, 0u64);
+    let started = Instant::now();
     for n in 0..cycles {
-        let began = std::time::Instant::now();
-        iut.cycle(&outputs, u64::from(n) * 1_000_000)
-            .map_err(BuildError::Failed)?;
+        if let Some(period) = period {
+            let due = started + period * n as u32;
+            if let Some(wait) = due.checked_duration_since(Instant::now()) {
+                std::thread::sleep(wait);
+            }
+        }
+        let began = Instant::now();
+        iut.cycle(
+            &outputs,
+            n * period.map_or(1_000_000, |p| p.as_nanos() as u64),
+        )
+        .map_err(BuildError::Failed)?;
         let took = began.elapsed().as_nanos() as u64;
         total += took;
         worst = worst.max(took);
+        if let Some(period) = period {
+            let next = started + period * (n as u32 + 1);
+            if Instant::now() > next + Duration::ZERO {
+                missed += 1;
+            }
+        }
     }
     iut.read_local_cycle();
     let mut facts = iut.facts.clone();
-    facts.cycles = u64::from(cycles);
-    facts.mean_cycle_ns = total / u64::from(cycles.max(1));
+    facts.cycles = cycles;
+    facts.mean_cycle_ns = total / cycles.max(1);
     facts.worst_cycle_ns = worst;
+    facts.period_ns = period.map(|p| p.as_nanos() as u64);
+    facts.missed_cycles = missed;
     Ok(facts)
 }
 
