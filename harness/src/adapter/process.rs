@@ -268,10 +268,18 @@ impl AdapterProcess {
         // the next answer, it would desynchronise every exchange after it.
         if let Line::Text(stray) = self.lines.next(Duration::ZERO) {
             self.kill();
+            // Garbage is garbage whenever it comes: say so, as for an answer.
+            let what = if serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(&stray)
+                .is_ok()
+            {
+                "answered twice"
+            } else {
+                "printed what is not a JSON object"
+            };
             return Err(self.fail(
                 IutCause::Protocol,
                 format!(
-                    "answered twice: a line nobody asked for before the `{}` request: {}",
+                    "{what}: a line nobody asked for before the `{}` request: {}",
                     request.name(),
                     truncate(&stray)
                 ),
