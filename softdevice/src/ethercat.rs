@@ -439,7 +439,7 @@ impl ObjectDictionary for Terminal {
 impl Application for Terminal {
     fn process_data(&self) -> (usize, usize) {
         match SoftDevice::new(self.draft.clone()) {
-            Ok(device) => device.image_lengths(),
+            Ok(device) => (device.output_len(), device.input.len()),
             Err(_) => (0, 0),
         }
     }
