@@ -41,8 +41,7 @@ fn measure(name: &str, iut: &IutKind) -> (f64, f64) {
     );
     if let IutKind::Ethercat { link, .. } = iut {
         let idle = canif_harness::device::ethercat::survey(
-            &profile.model_capabilities(),
-            &profile.ethercat.expect("a terminal profile"),
+            profile,
             link,
             canif_harness::device::ethercat::Pace::Unpaced(IDLE_CYCLES),
         )

@@ -139,7 +139,8 @@ fn a_survey_names_the_terminal_and_counts_a_soak() {
         period: std::time::Duration::from_millis(2),
         soak: std::time::Duration::from_millis(100),
     };
-    let facts = survey(&profile.model_capabilities(), &identity, &link, pace).unwrap();
+    let facts = survey(profile, &link, pace).unwrap();
+    assert_eq!(facts.profile, "el6751-legacy");
     assert_eq!(
         (facts.vendor_id, facts.product_code, facts.revision),
         (identity.vendor_id, identity.product_code, identity.revision)

@@ -60,7 +60,7 @@ pub struct RunMeta {
 }
 
 /// An EtherCAT terminal as canif's master found it.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct TerminalEntry {
     pub profile: String,
     pub name: String,

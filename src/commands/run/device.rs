@@ -98,15 +98,10 @@ fn survey_terminals(
     };
     let mut terminals = Vec::new();
     for profile in &plan.profiles {
-        let Some(identity) = profile.ethercat else {
+        if profile.ethercat.is_none() {
             continue;
-        };
-        match canif_harness::device::ethercat::survey(
-            &profile.model_capabilities(),
-            &identity,
-            link,
-            pace,
-        ) {
+        }
+        match canif_harness::device::ethercat::survey(profile, link, pace) {
             Ok(facts) => {
                 eprintln!(
                     "{}: {} vendor {:#010x} product {:#010x} revision {:#010x}, 0x1C32:05 {}, an idle cycle {} µs (worst {} µs)",
@@ -128,20 +123,7 @@ fn survey_terminals(
                         facts.missed_cycles
                     );
                 }
-                terminals.push(canif_harness::report::TerminalEntry {
-                    profile: profile.name.clone(),
-                    name: facts.name,
-                    vendor_id: facts.vendor_id,
-                    product_code: facts.product_code,
-                    revision: facts.revision,
-                    serial: facts.serial,
-                    local_cycle_ns: facts.local_cycle_ns,
-                    cycles: facts.cycles,
-                    mean_cycle_ns: facts.mean_cycle_ns,
-                    worst_cycle_ns: facts.worst_cycle_ns,
-                    period_ns: facts.period_ns,
-                    missed_cycles: facts.missed_cycles,
-                });
+                terminals.push(facts);
             }
             // The run itself meets the same terminal and reports what broke.
             Err(error) => eprintln!(

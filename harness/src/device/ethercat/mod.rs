@@ -169,25 +169,8 @@ impl Master {
     }
 }
 
-/// What a run learns of the terminal it met.
-#[derive(Debug, Clone, PartialEq, Eq, Default)]
-pub struct TerminalFacts {
-    pub name: String,
-    pub vendor_id: u32,
-    pub product_code: u32,
-    pub revision: u32,
-    pub serial: u32,
-    /// `0x1C32:05` as read back after setting `0x1C32:08` (000 §5), if it answers.
-    pub local_cycle_ns: Option<u32>,
-    /// Harness cycles timed by [`survey`], and how long one took (LRW and
-    /// input read, wall clock), on average and at worst.
-    pub cycles: u64,
-    pub mean_cycle_ns: u64,
-    pub worst_cycle_ns: u64,
-    /// A paced survey's period, and the cycles that ended after the next one was due.
-    pub period_ns: Option<u64>,
-    pub missed_cycles: u64,
-}
+/// What a run learns of the terminal it met: the report's own entry.
+pub use crate::report::TerminalEntry as TerminalFacts;
 
 /// How a survey exchanges its idle cycles.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -206,12 +189,21 @@ pub enum Pace {
 /// idle PLC cycles at `pace`, and reads `0x1C32:05`: who the terminal is and
 /// how its exchange performs, for the run's report.
 pub fn survey(
-    caps: &Capabilities,
-    identity: &EthercatIdentity,
+    profile: &canif_spec::Profile,
     link: &EthercatLink,
     pace: Pace,
 ) -> Result<TerminalFacts, BuildError> {
     use std::time::{Duration, Instant};
+    let caps = &profile.model_capabilities();
+    let identity = &profile.ethercat.ok_or_else(|| {
+        BuildError::Failed(IutError::new(
+            IutCause::NotStarted,
+            format!(
+                "{} is no EtherCAT terminal: it gives no identity",
+                profile.name
+            ),
+        ))
+    })?;
     let config = InterfaceConfig::new(caps.first_format(), 1);
     let mut iut = build(caps, &config, identity, link)?;
     let outputs = vec![0u8; iut.output_len()];
@@ -249,6 +241,7 @@ pub fn survey(
     }
     iut.read_local_cycle();
     let mut facts = iut.facts.clone();
+    facts.profile = profile.name.clone();
     facts.cycles = cycles;
     facts.mean_cycle_ns = total / cycles.max(1);
     facts.worst_cycle_ns = worst;
@@ -398,8 +391,7 @@ pub fn build(
         }
         (sub.configured_address(), facts)
     };
-    let mut facts = facts;
-    master.drive(configure(md, station, caps, config, &mut facts))?;
+    master.drive(configure(md, station, caps, config))?;
     let group = master
         .drive(group.into_pre_op_pdi(md))
         .map_err(|e| BuildError::Failed(master_error(e, "configuring SyncManagers and FMMUs")))?;
@@ -461,7 +453,7 @@ impl EthercatIut {
         });
         if let Some(bytes) = value.filter(|b| b.len() == 4) {
             self.facts.local_cycle_ns =
-                Some(u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]));
+                <u32 as ethercrab::EtherCrabWireRead>::unpack_from_slice(&bytes).ok();
         }
     }
 }

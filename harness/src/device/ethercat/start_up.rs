@@ -7,7 +7,7 @@ use canif_model::config::{Capabilities, InterfaceConfig, Synchronization};
 use ethercrab::Command;
 
 use super::coe::{CoeError, Mailboxes};
-use super::{objects, TerminalFacts};
+use super::objects;
 use crate::device::iut::BuildError;
 use crate::error::{IutCause, IutError};
 
@@ -117,7 +117,6 @@ pub(super) async fn configure(
     station: u16,
     caps: &Capabilities,
     config: &InterfaceConfig,
-    facts: &mut TerminalFacts,
 ) -> Result<(), BuildError> {
     let mut mailboxes = Mailboxes::of(md, station)
         .await
@@ -133,28 +132,25 @@ pub(super) async fn configure(
         let shift = u32::try_from(sync1_shift).map_err(|_| {
             BuildError::Refused(format!("SYNC1 shift {sync1_shift} ns exceeds the register"))
         })?;
-        let write = |register: u16, bytes: Vec<u8>| async move {
-            Command::fpwr(station, register)
-                .send(md, bytes.as_slice())
-                .await
-                .map_err(|e| BuildError::Failed(master_error(e, "writing the DC registers")))
-        };
-        write(DC_SYNC0_CYCLE, 1_000_000u32.to_le_bytes().to_vec()).await?;
-        write(DC_SYNC1_CYCLE, shift.to_le_bytes().to_vec()).await?;
-        write(DC_SYNC_ACTIVATION, vec![0b111]).await?;
+        let failed = |e| BuildError::Failed(master_error(e, "writing the DC registers"));
+        Command::fpwr(station, DC_SYNC0_CYCLE)
+            .send(md, 1_000_000u32)
+            .await
+            .map_err(failed)?;
+        Command::fpwr(station, DC_SYNC1_CYCLE)
+            .send(md, shift)
+            .await
+            .map_err(failed)?;
+        // Cyclic operation, SYNC0 and SYNC1 on.
+        Command::fpwr(station, DC_SYNC_ACTIVATION)
+            .send(md, 0b111u8)
+            .await
+            .map_err(failed)?;
     }
-    // 000 §5: with 0x1C32:08 set the terminal measures its cycle into 0x1C32:05.
-    if mailboxes
-        .download(
-            md,
-            objects::SYNC_OUTPUTS,
-            objects::MEASURE_SUB,
-            &1u16.to_le_bytes(),
-        )
-        .await
-        .is_ok()
-    {
-        facts.local_cycle_ns = Some(0);
-    }
+    // 000 §5: with 0x1C32:08 set the terminal measures its cycle into 0x1C32:05,
+    // read back for the report; a terminal that refuses it reports none.
+    let _ = mailboxes
+        .download(md, objects::SYNC_OUTPUTS, objects::MEASURE_SUB, &[1, 0])
+        .await;
     Ok(())
 }
