@@ -266,24 +266,36 @@ impl AdapterProcess {
         }
         // A line already waiting answers nothing the harness asked: read as
         // the next answer, it would desynchronise every exchange after it.
-        if let Line::Text(stray) = self.lines.next(Duration::ZERO) {
-            self.kill();
-            // Garbage is garbage whenever it comes: say so, as for an answer.
-            let what = if serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(&stray)
-                .is_ok()
-            {
-                "answered twice"
-            } else {
-                "printed what is not a JSON object"
-            };
-            return Err(self.fail(
-                IutCause::Protocol,
-                format!(
-                    "{what}: a line nobody asked for before the `{}` request: {}",
-                    request.name(),
-                    truncate(&stray)
-                ),
-            ));
+        match self.lines.next(Duration::ZERO) {
+            Line::Text(stray) => {
+                self.kill();
+                // Garbage is garbage whenever it comes: say so, as for an answer.
+                let what = match serde_json::from_str::<serde_json::Map<String, serde_json::Value>>(
+                    &stray,
+                ) {
+                    Ok(_) => "answered twice",
+                    Err(_) => "printed what is not a JSON object",
+                };
+                return Err(self.fail(
+                    IutCause::Protocol,
+                    format!(
+                        "{what}: a line nobody asked for before the `{}` request: {}",
+                        request.name(),
+                        truncate(&stray)
+                    ),
+                ));
+            }
+            // A broken line is broken before a request too (it was dropped
+            // here once, and the run then waited for an answer in vain).
+            Line::Broken(what) => {
+                self.kill();
+                return Err(self.fail(
+                    IutCause::Protocol,
+                    format!("{what} before the `{}` request (killed)", request.name()),
+                ));
+            }
+            // Nothing waiting; a closed stdout shows at the answer.
+            Line::Silent | Line::Closed => {}
         }
         let mut line = serde_json::to_vec(request).expect("requests serialize");
         line.push(b'\n');
@@ -397,5 +409,34 @@ fn truncate(line: &str) -> String {
         format!("{}…", line.chars().take(200).collect::<String>())
     } else {
         line.to_string()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A line the IUT prints before the harness asks anything is read at
+    /// the next request, whatever it holds: a line that is not UTF-8 too (it
+    /// was dropped once, and the harness then waited for an answer in vain).
+    #[test]
+    fn a_broken_line_before_a_request_is_an_error_at_that_request() {
+        let mut iut = AdapterProcess::spawn(
+            r"printf '\377\n'; cat >/dev/null",
+            Duration::from_secs(5),
+            false,
+        )
+        .unwrap();
+        // Let the line arrive before the request, as a slow harness would.
+        std::thread::sleep(Duration::from_millis(300));
+        let started = std::time::Instant::now();
+        let error = iut.exchange_line(&Request::TransmitComplete).unwrap_err();
+        assert_eq!(error.cause, IutCause::Protocol, "{error}");
+        assert!(
+            error.to_string().contains("not UTF-8")
+                && error.to_string().contains("before the `transmit_complete` request"),
+            "{error}"
+        );
+        assert!(started.elapsed() < Duration::from_secs(2), "it waited for an answer");
     }
 }
