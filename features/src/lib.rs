@@ -6,6 +6,7 @@
 
 #![forbid(unsafe_code)]
 
+mod bus_coupler;
 pub mod catalogue;
 pub mod client_world;
 pub mod schedule;

@@ -1,17 +1,30 @@
-//! The world a scenario runs in: a PLC (the reference client of 001 §6), an
-//! implementation under test built through the harness, and the bus around it.
+//! The world a scenario runs in: the lockstep of the harness
+//! (`canif_harness::device::lockstep`) one cycle at a time. The played PLC
+//! (the reference client of 001 §6) writes the outputs, the model and the
+//! implementation under test run the same cycle on them and on the same
+//! simulated bus, and every cycle is judged against the model as in a
+//! scripted scenario; the steps then check what the manual's sentence says.
 
-use canif_harness::device::played_plc::{PlcSide, TaskStimulus};
-use canif_harness::device::protocol_order::Ordered;
-use canif_harness::device::{Iut, IutKind};
+use std::collections::VecDeque;
+
+use canif_harness::bus::sim::SimBus;
+use canif_harness::device::bus::BusChoice;
+use canif_harness::device::lockstep::Lockstep;
+use canif_harness::device::scenario::{Judgement, Scenario, Step, Steps};
+use canif_harness::device::{BuildError, IutKind};
+use canif_harness::error::{Refusal, RunError};
+use canif_harness::Outcome;
 use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig};
 use canif_model::exchange::ExchangeMode;
 use canif_model::frame::Frame;
 use canif_model::image::{ImageLayout, InputImage, MessageRepr, OutputImage};
 use canif_model::info_data::ControllerStatus;
+use canif_model::timing::BitRates;
 use canif_model::Nanos;
 use canif_spec::ReqId;
 use std::cell::RefCell;
+
+use crate::bus_coupler::BusCoupler;
 
 /// Who the scenario runs against; set by the runner before each run.
 #[derive(Debug, Clone)]
@@ -57,20 +70,27 @@ pub(crate) fn record_iut_error(message: &str) {
     IUT_ERROR.with(|e| *e.borrow_mut() = Some(message.to_string()));
 }
 
-/// What the IUT answered; when it broke, that is recorded as the scenario's
-/// error (not a failure) and the step ends.
-fn iut_said<T>(result: Result<T, canif_harness::IutError>) -> Result<T, String> {
-    result.map_err(|e| {
-        let said = e.to_string();
-        record_iut_error(&said);
-        said
-    })
+/// How a cycle that ended the lockstep reads in a step: a difference from
+/// the model fails the step on the requirements of the differing field; a
+/// broken IUT is the scenario's error.
+fn ended(outcome: Outcome) -> String {
+    match outcome {
+        Outcome::Fail(failure) => {
+            record_witness(&[&failure.requirements]);
+            format!(
+                "cycle {}: {} differs from the model: expected {}, actual {}",
+                failure.cycle, failure.what, failure.expected, failure.actual
+            )
+        }
+        Outcome::Error(RunError::Iut(error)) => {
+            let said = error.to_string();
+            record_iut_error(&said);
+            said
+        }
+        Outcome::Error(error) => error.to_string(),
+        Outcome::Pass => "the lockstep ended".into(),
+    }
 }
-
-/// How many frames (or due times) one cycle may ask of the IUT's controller:
-/// far more than a 1 ms cycle carries at 1 Mbit/s (about 20), so only a
-/// babbling controller or a time that never advances reaches it.
-const MOST_POLLS_PER_CYCLE: usize = 10_000;
 
 /// Sets the target for scenarios run on this thread.
 pub fn set_target(target: Target) {
@@ -90,30 +110,43 @@ fn target() -> Target {
 /// One cycle: 1 ms.
 pub const CYCLE: Nanos = 1_000_000;
 
+/// The world's bus: an idle, fast bus (100 Mbit/s, about 1 µs a classic
+/// frame), so what a step sends between two cycles has ended before the next
+/// one, in the order the step sent it, as the manual's sentences mean it.
+const FAST_BUS: BitRates = BitRates {
+    nominal: 100_000_000,
+    data: 100_000_000,
+};
+
 #[derive(cucumber::World)]
 #[world(init = Self::new)]
 pub struct CanWorld {
     pub target: Target,
     pub config: InterfaceConfig,
     pub exchange_mode: ExchangeMode,
-    pub iut: Option<Box<dyn Iut>>,
+    /// The scenario once started: the played PLC, model and IUT, and the bus.
+    run: Option<Lockstep<SimBus>>,
+    /// The IUT accepted a configuration the model refuses (one the profile
+    /// does not allow): there is nothing to run it against.
+    accepted_alone: bool,
     pub refused: Option<String>,
-    pub plc: Option<PlcSide>,
     /// The input image the IUT returned last.
     pub inputs: Vec<u8>,
+    /// When the coming cycle starts.
     pub now: Nanos,
-    /// The latest time any request to the IUT carried: the next one may not be
-    /// earlier (docs/adapter-protocol.md: times are non-decreasing).
-    pub clock: Nanos,
     pub cycle: u64,
     pub bus_blocked: bool,
-    /// The frame the controller took but could not finish while the bus was blocked.
-    pub in_controller: Option<Frame>,
     /// Frames the IUT put on the bus, in order, and when each started.
     pub on_bus: Vec<Frame>,
     pub bus_times: Vec<Nanos>,
     /// Frames other nodes sent, with the end of their reception.
     pub sent_by_nodes: Vec<(Frame, Nanos)>,
+    /// Frames other nodes sent that have not ended yet, in order.
+    awaited: VecDeque<Frame>,
+    /// When the next frame of another node is ready: once the one before has
+    /// ended (one node's queue), so the frames keep the order the steps sent
+    /// them in.
+    next_ready: Nanos,
     /// Messages the PLC read, in order.
     pub received: Vec<MessageRepr>,
     pub tx_counter_override: Option<u16>,
@@ -124,9 +157,8 @@ pub struct CanWorld {
     pub confirmation_delay: Option<u64>,
     /// The last cycles, shown when a step fails (bounded).
     pub trace: canif_harness::run::Ring<String>,
-    /// A CANopen bus coupler on the bus (the quick start), and whether it still runs.
-    pub coupler: Option<canif_model::canopen::coupler::Coupler>,
-    pub coupler_alive: bool,
+    /// A CANopen bus coupler on the bus (the quick start).
+    pub coupler: Option<BusCoupler>,
     /// When the coupler stopped, for loss detection times.
     pub coupler_failed_at: Option<Nanos>,
     /// Every message the PLC read, with the cycle's time, for CANopen timing.
@@ -177,19 +209,19 @@ impl CanWorld {
             target,
             config: InterfaceConfig::new(FrameFormat::Base11, 4),
             exchange_mode: ExchangeMode::SeparateInputUpdate,
-            iut: None,
+            run: None,
+            accepted_alone: false,
             refused: None,
-            plc: None,
             inputs: Vec::new(),
             // The first cycle starts one cycle in, so frames can end before it.
             now: CYCLE,
-            clock: 0,
             cycle: 0,
             bus_blocked: false,
-            in_controller: None,
             on_bus: Vec::new(),
             bus_times: Vec::new(),
             sent_by_nodes: Vec::new(),
+            awaited: VecDeque::new(),
+            next_ready: 0,
             received: Vec::new(),
             tx_counter_override: None,
             declared_lengths: Vec::new(),
@@ -198,51 +230,99 @@ impl CanWorld {
             confirmation_delay: None,
             trace: canif_harness::run::Ring::context(),
             coupler: None,
-            coupler_alive: true,
             coupler_failed_at: None,
             received_at: Vec::new(),
         }
     }
 
-    /// Builds the IUT the first time a scenario needs it.
+    /// The scenario the lockstep runs: the world's interface and exchange;
+    /// its steps come one at a time. It covers nothing by itself: a
+    /// difference names the requirements of its field, and the Gherkin
+    /// scenario's tags among them are blamed.
+    fn scenario(&self) -> Scenario {
+        Scenario {
+            name: "gherkin".into(),
+            covers: Vec::new(),
+            interface: self.config.clone(),
+            exchange: self.exchange_mode,
+            bit_rates: FAST_BUS,
+            cycle_time: CYCLE,
+            check_confirmation_delay: false,
+            declared_lengths: self.declared_lengths.clone(),
+            time_stamp_tolerance: 0,
+            trace: None,
+            bus: BusChoice::Sim,
+            judgement: Judgement::Exact,
+            steps: Steps::Scripted(Vec::new()),
+        }
+    }
+
+    /// Builds the IUT (and the model beside it) the first time a scenario needs it.
     pub fn start(&mut self) -> Result<(), String> {
-        if self.iut.is_some() {
+        if self.run.is_some() || self.accepted_alone {
             return Ok(());
         }
         if let Some(reason) = &self.refused {
             return Err(reason.clone());
         }
-        match self.target.iut.build(&self.target.caps, &self.config) {
-            Ok(iut) => {
-                let iut: Box<dyn Iut> = Box::new(Ordered::new(iut));
-                let layout = ImageLayout::new(&self.config, self.target.caps.info_data);
-                self.inputs = vec![0; layout.input_size()];
-                self.plc = Some(PlcSide::new(layout, self.exchange_mode));
-                self.iut = Some(iut);
-                Ok(())
-            }
-            Err(error) => {
-                match &error {
-                    canif_harness::device::BuildError::Failed(broke) => {
-                        record_iut_error(&broke.to_string())
-                    }
-                    canif_harness::device::BuildError::Refused(reason)
-                        if self.config.validate(&self.target.caps).is_ok() =>
-                    {
-                        let interface = canif_harness::device::cases::describe(&self.config);
-                        REFUSED.with(|r| *r.borrow_mut() = Some((interface, reason.clone())));
-                    }
-                    canif_harness::device::BuildError::Refused(_) => {}
-                }
-                let reason = error.to_string();
-                self.refused = Some(reason.clone());
-                Err(reason)
-            }
+        let mut bus = SimBus::new(FAST_BUS);
+        if let Some(coupler) = &self.coupler {
+            bus.answer_with(Box::new(coupler.clone()));
         }
+        let (kind, caps) = (&self.target.iut, &self.target.caps);
+        let refusal = match Lockstep::start(kind, caps, &self.scenario(), Box::new(bus)) {
+            Ok(mut run) => {
+                run.pair.ended = Some(Vec::new());
+                self.inputs = vec![0; run.pair.layout.input_size()];
+                self.run = Some(run);
+                return Ok(());
+            }
+            // A configuration the profile does not allow: what counts is
+            // whether the IUT refuses it too.
+            Err(RunError::Configuration(Refusal::Model(_))) => match kind.build(caps, &self.config)
+            {
+                Ok(_) => {
+                    self.accepted_alone = true;
+                    return Ok(());
+                }
+                Err(BuildError::Refused(reason)) => reason,
+                Err(BuildError::Failed(broke)) => {
+                    let said = broke.to_string();
+                    record_iut_error(&said);
+                    return Err(said);
+                }
+            },
+            // The model accepts it, so the profile offers it: refusing it
+            // is the scenario's failure, and what it needed is not run.
+            Err(RunError::Configuration(Refusal::Iut(reason))) => {
+                let interface = canif_harness::device::cases::describe(&self.config);
+                REFUSED.with(|r| *r.borrow_mut() = Some((interface, reason.clone())));
+                reason
+            }
+            Err(RunError::Iut(broke)) => {
+                let said = broke.to_string();
+                record_iut_error(&said);
+                return Err(said);
+            }
+            Err(error) => return Err(error.to_string()),
+        };
+        let reason = format!("the IUT refuses the configuration: {refusal}");
+        self.refused = Some(reason.clone());
+        Err(reason)
+    }
+
+    /// The running lockstep, or why there is none.
+    fn lockstep(&mut self) -> Result<&mut Lockstep<SimBus>, String> {
+        self.start()?;
+        self.run.as_mut().ok_or_else(|| {
+            "the IUT accepted a configuration the profile does not allow: \
+             the model refuses it, so there is nothing to run it against"
+                .to_string()
+        })
     }
 
     pub fn layout(&self) -> ImageLayout {
-        self.plc.as_ref().expect("started").layout()
+        self.run.as_ref().expect("started").pair.layout
     }
 
     pub fn input_image(&self) -> InputImage<&[u8]> {
@@ -250,37 +330,76 @@ impl CanWorld {
             .expect("the IUT's input image has the layout's size")
     }
 
-    /// One task cycle: the PLC's task (unless busy), the IUT's cycle, then the bus.
+    /// One task cycle of the lockstep: the PLC's task (unless busy), the
+    /// model's and the IUT's cycle, compared; then the bus up to the half
+    /// cycle, where the IUT's frames of the cycle have gone out.
     pub fn cycle(&mut self, plc_busy: bool) -> Result<(), String> {
-        self.start()?;
-        let layout = self.layout();
-        let plc = self.plc.as_mut().expect("started");
-        if !plc_busy {
-            let stimulus = TaskStimulus {
-                declared_lengths: &self.declared_lengths,
-                set_tx_counter: self.tx_counter_override.take(),
-                ..TaskStimulus::default()
-            };
-            let report = plc.task(self.cycle, stimulus).map_err(|e| e.to_string())?;
-            if let Some(delay) = report.confirmed_after {
-                self.confirmation_delay = Some(delay);
-            }
-            let read = plc.take_received();
-            self.received_at
-                .extend(read.iter().map(|m| (self.now, m.frame)));
-            self.received.extend(read);
+        let (k, blocked) = (self.cycle + 1, self.bus_blocked);
+        let step = Step {
+            plc_busy,
+            set_tx_counter: match plc_busy {
+                true => None,
+                false => self.tx_counter_override.take(),
+            },
+            status: self.status.take(),
+            ..Step::default()
+        };
+        let declared_lengths = self.declared_lengths.clone();
+        let run = self.lockstep()?;
+        run.rules.declared_lengths = declared_lengths;
+        run.bus.hold_own(blocked);
+        let task = run.cycle(k, step).map_err(ended)?;
+        let read = run.plc.take_received();
+        let outputs = run.plc.outputs().to_vec();
+        self.inputs = task.inputs;
+        if let Some(delay) = task.report.confirmed_after {
+            self.confirmation_delay = Some(delay);
         }
-        let outputs = plc.outputs().to_vec();
-        let iut = self.iut.as_mut().expect("started");
-        if let Some(status) = self.status.take() {
-            iut_said(iut.controller_status(&status))?;
-        }
-        self.clock = self.clock.max(self.now);
-        self.inputs = iut_said(iut.cycle(&outputs, self.now))?;
-        plc.device_cycle_done(&self.inputs);
+        self.received_at
+            .extend(read.iter().map(|m| (self.now, m.frame)));
+        self.received.extend(read);
         let sent_before = self.on_bus.len();
-        let result = self.run_bus(self.now);
-        let out = OutputImage::new_checked(&outputs[..], layout)
+        let result = self.bus_until(self.now + CYCLE / 2);
+        self.trace_cycle(plc_busy, &outputs, sent_before);
+        result?;
+        if let Some(coupler) = &self.coupler {
+            let frames = coupler.poll(self.now + CYCLE / 2);
+            self.run
+                .as_mut()
+                .expect("started")
+                .bus
+                .schedule_all(self.now + CYCLE / 2, frames);
+        }
+        self.now += CYCLE;
+        self.cycle += 1;
+        Ok(())
+    }
+
+    /// Runs the bus to `until` and reads what ended on it.
+    fn bus_until(&mut self, until: Nanos) -> Result<(), String> {
+        let run = self.run.as_mut().expect("started");
+        let result = run.run_bus(until).map_err(ended);
+        let ended = run
+            .pair
+            .ended
+            .as_mut()
+            .map(std::mem::take)
+            .unwrap_or_default();
+        for (frame, own, end) in ended {
+            if own {
+                self.on_bus.push(frame);
+                self.bus_times.push(end - run.bus.duration(&frame));
+            } else if self.awaited.front() == Some(&frame) {
+                self.awaited.pop_front();
+                self.sent_by_nodes.push((frame, end));
+            }
+        }
+        result
+    }
+
+    fn trace_cycle(&mut self, plc_busy: bool, outputs: &[u8], sent_before: usize) {
+        let layout = self.layout();
+        let out = OutputImage::new_checked(outputs, layout)
             .map(|o| o.header())
             .unwrap_or_default();
         let inp = InputImage::new_checked(&self.inputs[..], layout)
@@ -306,123 +425,58 @@ impl CanWorld {
                 sent.join(" ")
             }
         ));
-        result?;
-        if let (Some(coupler), true) = (self.coupler.as_mut(), self.coupler_alive) {
-            for frame in coupler.poll(self.now + CYCLE / 2) {
-                self.receive(frame, self.now + CYCLE / 2)?;
-            }
-        }
-        self.now += CYCLE;
-        self.cycle += 1;
-        Ok(())
     }
 
     /// The bus, blocked until now, takes frames again before the coming cycle.
     pub fn release_bus(&mut self) -> Result<(), String> {
         self.bus_blocked = false;
-        self.run_bus(self.before_cycle())
+        self.lockstep()?.bus.hold_own(false);
+        self.bus_until(self.now - CYCLE / 4)
     }
 
-    /// Lets every frame the IUT offers from `from` on go on the bus (an idle,
-    /// fast bus), up to the next cycle; a blocked bus takes none.
-    fn run_bus(&mut self, from: Nanos) -> Result<(), String> {
-        let iut = self.iut.as_mut().expect("started");
-        if self.bus_blocked {
-            // The controller takes the first frame but loses every arbitration.
-            if self.in_controller.is_none() {
-                self.clock = self.clock.max(from);
-                match iut_said(iut.poll_transmit(self.clock))? {
-                    Some(Ok(frame)) => self.in_controller = Some(frame),
-                    Some(Err(invalid)) => {
-                        return Err(format!(
-                            "the IUT put an invalid frame on the bus: {invalid}"
-                        ))
-                    }
-                    None => {}
-                }
-            }
-            return Ok(());
+    /// Puts a CANopen coupler on the bus, answering what the IUT sends.
+    pub fn put_coupler(&mut self, coupler: BusCoupler) {
+        if let Some(run) = self.run.as_mut() {
+            run.bus.answer_with(Box::new(coupler.clone()));
         }
-        if let Some(frame) = self.in_controller.take() {
-            self.on_bus.push(frame);
-            self.bus_times.push(from.max(self.clock));
-            iut_said(iut.transmit_complete())?;
-        }
-        let mut at = from.max(self.clock);
-        for _ in 0..MOST_POLLS_PER_CYCLE {
-            if let Some(due) = iut.poll_timeout() {
-                at = at.max(due);
-            }
-            self.clock = at;
-            match iut_said(iut.poll_transmit(at))? {
-                Some(Ok(frame)) => {
-                    self.on_bus.push(frame);
-                    self.bus_times.push(at);
-                    iut_said(iut.transmit_complete())?;
-                    at += 1_000;
-                    if let (Some(coupler), true) = (self.coupler.as_mut(), self.coupler_alive) {
-                        for answer in coupler.handle(&frame, at) {
-                            at += 200;
-                            iut_said(iut.receive(&answer, at))?;
-                        }
-                    }
-                    self.clock = at;
-                }
-                Some(Err(invalid)) => {
-                    return Err(format!(
-                        "the IUT put an invalid frame on the bus: {invalid}"
-                    ))
-                }
-                None if iut
-                    .poll_timeout()
-                    .is_some_and(|due| due > at && due < self.now + CYCLE) =>
-                {
-                    continue
-                }
-                None => return Ok(()),
-            }
-        }
-        let error = format!(
-            "the IUT's controller was polled {MOST_POLLS_PER_CYCLE} times in one cycle \
-             (a babbling controller, or a due time that never advances: now {at} ns)"
-        );
-        record_iut_error(&error);
-        Err(error)
+        self.coupler = Some(coupler);
     }
 
-    /// The coupler's own frames (an input changed) go on the bus now.
+    /// The coupler stops: no more answers, heartbeats or events.
+    pub fn coupler_fails(&mut self) {
+        if let Some(coupler) = &self.coupler {
+            coupler.fail();
+        }
+        self.coupler_failed_at = Some(self.now);
+    }
+
+    /// The coupler's own frames (an input changed) go on the bus before the coming cycle.
     pub fn coupler_sends(&mut self, frames: Vec<Frame>) -> Result<(), String> {
-        self.start()?;
-        if !self.coupler_alive {
-            return Ok(());
-        }
-        for frame in frames {
-            self.receive(frame, self.before_cycle())?;
-        }
+        let at = self.before_cycle();
+        self.lockstep()?.bus.schedule_all(at, frames);
         Ok(())
     }
 
-    /// When a frame sent before the coming cycle ends: in the half cycle
-    /// before it, after everything the IUT was told so far.
+    /// When a frame sent before the coming cycle starts: in the half cycle
+    /// before it, where the bus has run to.
     fn before_cycle(&self) -> Nanos {
         self.now - CYCLE / 2
     }
 
-    /// The IUT's controller receives `frame`, ending at `earliest` or, when
-    /// the IUT has been told of a later time already, just after that.
-    fn receive(&mut self, frame: Frame, earliest: Nanos) -> Result<Nanos, String> {
-        let end = earliest.max(self.clock);
-        self.clock = end + 200;
-        iut_said(self.iut.as_mut().expect("started").receive(&frame, end))?;
-        Ok(end)
+    /// Another node sends `frame` before the coming cycle.
+    pub fn node_sends(&mut self, frame: Frame) -> Result<(), String> {
+        let at = self.before_cycle().max(self.next_ready);
+        let bus = &mut self.lockstep()?.bus;
+        let ends = at + bus.duration(&frame);
+        bus.schedule(at, frame);
+        self.next_ready = ends;
+        self.awaited.push_back(frame);
+        Ok(())
     }
 
-    /// A frame from another node ends its reception now (plus a few µs per frame).
-    pub fn node_sends(&mut self, frame: Frame) -> Result<(), String> {
-        self.start()?;
-        let end = self.receive(frame, self.before_cycle())?;
-        self.sent_by_nodes.push((frame, end));
-        Ok(())
+    /// How many frames other nodes have sent, ended or still on their way.
+    pub fn frames_from_nodes(&self) -> usize {
+        self.sent_by_nodes.len() + self.awaited.len()
     }
 
     /// One frame from another node in each of the next `cycles` cycles, the PLC reading all.
@@ -435,20 +489,18 @@ impl CanWorld {
                 )
                 .expect("1 byte"),
             )?;
-            self.sent_by_nodes.clear();
             self.cycle(false)?;
+            self.sent_by_nodes.clear();
             self.received.clear();
         }
         Ok(())
     }
 
     pub fn plc_sends(&mut self, frame: Frame) -> Result<(), String> {
-        self.start()?;
         let transaction_number = self.next_tn;
         self.next_tn = self.next_tn.wrapping_add(1);
-        self.plc
-            .as_mut()
-            .expect("started")
+        self.lockstep()?
+            .plc
             .send(MessageRepr {
                 transaction_number,
                 frame,

@@ -164,8 +164,10 @@ fn a_broken_iut_makes_a_scenario_an_error() {
 }
 
 /// A babbling controller (a frame at every poll) or a due time that never
-/// advances cannot spin a scenario for ever: the world stops polling after a
-/// bounded number of times in one cycle and names why.
+/// advances cannot spin a scenario for ever. The babble is what the device
+/// did wrong: the first frame the model does not send fails the scenario on
+/// the Tx path. A due time that never advances is a broken exchange: the bus
+/// stops polling after a bounded number of times in one cycle and names why.
 #[test]
 fn a_babbling_iut_ends_a_scenario_in_bounded_time() {
     let scenario = scenarios()
@@ -193,14 +195,24 @@ fn a_babbling_iut_ends_a_scenario_in_bounded_time() {
             "{mode}: took {:?}",
             started.elapsed()
         );
-        match outcome {
-            ScenarioOutcome::Error(report) => {
+        match (mode, outcome) {
+            ("babble", ScenarioOutcome::Failed { report, witness }) => {
                 assert!(
-                    report.contains("polled 10000 times in one cycle"),
+                    report.contains("expected no frame, actual 123#"),
+                    "{mode}: {report}"
+                );
+                assert!(
+                    witness.iter().all(|id| id.as_str().starts_with("HS-TX-")),
+                    "{mode}: {witness:?}"
+                );
+            }
+            ("stuck-time", ScenarioOutcome::Error(report)) => {
+                assert!(
+                    report.contains("asked to be polled 10000 times within one cycle"),
                     "{mode}: {report}"
                 )
             }
-            other => panic!("{mode}: expected an error, got {other:?}"),
+            (mode, other) => panic!("{mode}: ended otherwise: {other:?}"),
         }
     }
 }

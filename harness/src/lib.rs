@@ -17,7 +17,7 @@
 #![forbid(unsafe_code)]
 
 pub mod adapter;
-mod bus;
+pub mod bus;
 pub mod canopen;
 pub mod certificate;
 pub mod client;

@@ -373,7 +373,7 @@ fn profile_interface(world: &mut CanWorld, slots: u8) {
 #[given(regex = r"^a Beckhoff bus coupler with node id (\d+) on the bus$")]
 fn coupler_on_bus(world: &mut CanWorld, node: u8) -> StepResult {
     let node = NodeId::new(node).ok_or("node ids are 1..63")?;
-    world.coupler = Some(canif_model::canopen::coupler::Coupler::new(node, 2, 4));
+    world.put_coupler(crate::bus_coupler::BusCoupler::new(node));
     Ok(())
 }
 
@@ -381,7 +381,7 @@ fn coupler_node(world: &CanWorld) -> Result<NodeId, String> {
     world
         .coupler
         .as_ref()
-        .map(|c| c.node())
+        .map(crate::bus_coupler::BusCoupler::node)
         .ok_or_else(|| "no coupler on the bus".into())
 }
 
@@ -449,7 +449,7 @@ fn coupler_digital(world: &mut CanWorld, byte: usize, value: String) -> StepResu
     world.start()?;
     let frames = world
         .coupler
-        .as_mut()
+        .as_ref()
         .ok_or("no coupler")?
         .set_digital_input(byte, num(&value) as u8);
     world.coupler_sends(frames)
@@ -460,7 +460,7 @@ fn coupler_analog(world: &mut CanWorld, channel: usize, value: i16) -> StepResul
     world.start()?;
     let frames = world
         .coupler
-        .as_mut()
+        .as_ref()
         .ok_or("no coupler")?
         .set_analog_input(channel, value);
     world.coupler_sends(frames)
@@ -468,8 +468,7 @@ fn coupler_analog(world: &mut CanWorld, channel: usize, value: i16) -> StepResul
 
 #[when("the coupler fails")]
 fn coupler_fails(world: &mut CanWorld) {
-    world.coupler_alive = false;
-    world.coupler_failed_at = Some(world.now);
+    world.coupler_fails();
 }
 
 #[then(regex = r"^the PLC has received the SDO answer ([0-9A-Fa-f ]+)$")]

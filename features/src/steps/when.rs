@@ -109,7 +109,7 @@ fn node_transmits_fd(
 fn nodes_transmit(world: &mut CanWorld, n: u32) -> StepResult {
     for i in 0..n {
         let frame = Frame::classic(
-            CanId::Standard(((world.sent_by_nodes.len() as u32) % 0x7FF) as u16 + 1),
+            CanId::Standard(((world.frames_from_nodes() as u32) % 0x7FF) as u16 + 1),
             &[i as u8],
         )
         .unwrap();

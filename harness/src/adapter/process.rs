@@ -434,9 +434,14 @@ mod tests {
         assert_eq!(error.cause, IutCause::Protocol, "{error}");
         assert!(
             error.to_string().contains("not UTF-8")
-                && error.to_string().contains("before the `transmit_complete` request"),
+                && error
+                    .to_string()
+                    .contains("before the `transmit_complete` request"),
             "{error}"
         );
-        assert!(started.elapsed() < Duration::from_secs(2), "it waited for an answer");
+        assert!(
+            started.elapsed() < Duration::from_secs(2),
+            "it waited for an answer"
+        );
     }
 }

@@ -3,4 +3,4 @@
 //! whose controller it serves (the device side's pair of model and IUT, or the
 //! device the harness plays for a client).
 
-pub(crate) mod sim;
+pub mod sim;

@@ -103,27 +103,71 @@ pub(crate) trait Controller {
 /// about 20 frames, so only a device whose due times do not advance reaches it.
 pub(crate) const MOST_EVENTS_PER_CYCLE: usize = 10_000;
 
+/// A node on the bus that answers the frames the controller sends (a
+/// CANopen slave answering the PLC's requests): its answers wait for the bus
+/// from the end of the frame they answer.
+pub trait Answering {
+    fn answer(&mut self, frame: &Frame, end: Nanos) -> Vec<Frame>;
+}
+
 /// The simulated bus of one scenario: the other nodes, and the frame on the wire.
-#[derive(Debug)]
-pub(crate) struct SimBus {
+pub struct SimBus {
     nodes: Nodes,
     bit_rates: BitRates,
     /// The frame on the bus: its end, whether the controller sent it.
     on_bus: Option<(Nanos, Frame, bool)>,
+    /// The controller loses every arbitration (a dominant node holds the
+    /// bus): its frame waits; the other nodes' frames still pass.
+    own_held: bool,
+    answering: Option<Box<dyn Answering>>,
+}
+
+impl std::fmt::Debug for SimBus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SimBus")
+            .field("bit_rates", &self.bit_rates)
+            .field("on_bus", &self.on_bus)
+            .field("own_held", &self.own_held)
+            .finish_non_exhaustive()
+    }
 }
 
 impl SimBus {
-    pub(crate) fn new(bit_rates: BitRates) -> Self {
+    pub fn new(bit_rates: BitRates) -> Self {
         SimBus {
             nodes: Nodes::default(),
             bit_rates,
             on_bus: None,
+            own_held: false,
+            answering: None,
         }
     }
 
     /// Another node's frame, ready to send from `at`.
-    pub(crate) fn schedule(&mut self, at: Nanos, frame: Frame) {
+    pub fn schedule(&mut self, at: Nanos, frame: Frame) {
         self.nodes.schedule(at, frame);
+    }
+
+    /// Other nodes' frames, ready from `at` in this order.
+    pub fn schedule_all(&mut self, at: Nanos, frames: Vec<Frame>) {
+        for (k, frame) in frames.into_iter().enumerate() {
+            self.nodes.schedule(at + k as Nanos, frame);
+        }
+    }
+
+    /// Holds (or releases) the controller's frames: see [`SimBus::own_held`].
+    pub fn hold_own(&mut self, held: bool) {
+        self.own_held = held;
+    }
+
+    /// Puts a node on the bus that answers the controller's frames.
+    pub fn answer_with(&mut self, node: Box<dyn Answering>) {
+        self.answering = Some(node);
+    }
+
+    /// How long `frame` occupies this bus.
+    pub fn duration(&self, frame: &Frame) -> Nanos {
+        duration(frame, self.bit_rates)
     }
 
     /// The controller resets (a device restart): its frame on the wire, if
@@ -145,7 +189,10 @@ impl SimBus {
             let now = *node.now();
             if self.on_bus.is_none() {
                 let other = self.nodes.best_key(now);
-                let own = node.pending().as_ref().map(arbitration_key);
+                let own = match self.own_held {
+                    true => None,
+                    false => node.pending().as_ref().map(arbitration_key),
+                };
                 let start = match (other, own) {
                     (Some(o), Some(k)) if o < k => self.nodes.take_best(now).map(|f| (f, false)),
                     (Some(_), None) => self.nodes.take_best(now).map(|f| (f, false)),
@@ -171,6 +218,11 @@ impl SimBus {
                     if let Some((end, frame, own)) = self.on_bus.take() {
                         if end == t {
                             node.ended(frame, own, end)?;
+                            if let (true, Some(answering)) = (own, self.answering.as_mut()) {
+                                for answer in answering.answer(&frame, end) {
+                                    self.nodes.schedule(end, answer);
+                                }
+                            }
                         } else {
                             self.on_bus = Some((end, frame, own));
                         }
@@ -328,5 +380,71 @@ mod tests {
             .drive(&mut Stuck(Node::default()), 1_000_000_000)
             .unwrap_err();
         assert_eq!(error, format!("stalled after {MOST_EVENTS_PER_CYCLE}"));
+    }
+
+    #[test]
+    fn a_held_controller_loses_every_arbitration_until_released() {
+        let rates = BitRates::classic(500_000);
+        let mut bus = SimBus::new(rates);
+        bus.hold_own(true);
+        bus.schedule(0, standard(0x700));
+        let mut node = Node {
+            to_send: vec![standard(0x001)],
+            ..Node::default()
+        };
+        bus.drive(&mut node, 1_000_000).unwrap();
+        assert_eq!(
+            node.ended,
+            [(standard(0x700), false, duration(&standard(0x700), rates))]
+        );
+        assert_eq!(node.pending, Some(standard(0x001)), "still waiting");
+        bus.hold_own(false);
+        bus.drive(&mut node, 2_000_000).unwrap();
+        assert_eq!(node.ended.len(), 2);
+        assert_eq!(node.ended[1].0, standard(0x001));
+        assert!(node.ended[1].1, "the controller's own frame");
+    }
+
+    /// Answers every frame with the frame's identifier plus one.
+    struct Echo;
+
+    impl Answering for Echo {
+        fn answer(&mut self, frame: &Frame, _: Nanos) -> Vec<Frame> {
+            vec![standard(frame.id.raw() as u16 + 1)]
+        }
+    }
+
+    #[test]
+    fn an_answering_node_answers_the_controllers_frames_once_they_end() {
+        let rates = BitRates::classic(500_000);
+        let mut bus = SimBus::new(rates);
+        bus.answer_with(Box::new(Echo));
+        bus.schedule(0, standard(0x300));
+        let mut node = Node {
+            to_send: vec![standard(0x100)],
+            ..Node::default()
+        };
+        bus.drive(&mut node, 1_000_000).unwrap();
+        let ended: Vec<(u32, bool)> = node
+            .ended
+            .iter()
+            .map(|(f, own, _)| (f.id.raw(), *own))
+            .collect();
+        // The other node's frame is not answered, the controller's is, after it.
+        assert_eq!(ended, [(0x100, true), (0x101, false), (0x300, false)]);
+        let (first_end, answer_end) = (node.ended[0].2, node.ended[1].2);
+        assert_eq!(answer_end, first_end + duration(&standard(0x101), rates));
+    }
+
+    #[test]
+    fn frames_scheduled_together_keep_their_order_only_if_ready_one_after_another() {
+        let rates = BitRates::classic(500_000);
+        let mut bus = SimBus::new(rates);
+        bus.schedule_all(0, vec![standard(0x200), standard(0x100)]);
+        let mut node = Node::default();
+        bus.drive(&mut node, 1_000_000).unwrap();
+        let ids: Vec<u32> = node.ended.iter().map(|(f, _, _)| f.id.raw()).collect();
+        // 0x200 is ready a nanosecond earlier and takes the idle bus.
+        assert_eq!(ids, [0x200, 0x100]);
     }
 }

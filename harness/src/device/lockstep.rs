@@ -6,6 +6,7 @@
 
 use canif_model::config::{Capabilities, QueueMode};
 use canif_model::device::Device;
+use canif_model::exchange::ExchangeMode;
 use canif_model::image::{InputImage, OutputImage};
 use canif_model::Nanos;
 
@@ -16,7 +17,7 @@ use crate::device::diff::{Difference, InputCheck, RxState};
 use crate::device::iut::BuildError;
 use crate::device::iut_kind::IutKind;
 use crate::device::pair::Pair;
-use crate::device::played_plc::{PlcSide, TaskStimulus};
+use crate::device::played_plc::{PlcSide, TaskReport, TaskStimulus};
 use crate::device::protocol_order::Ordered;
 use crate::device::scenario::{Judgement, Scenario, Step};
 use crate::error::{HarnessError, IutCause, IutError, Refusal, RunError};
@@ -39,22 +40,16 @@ pub fn run_scenario(
         tolerated,
         elapsed: std::time::Duration::ZERO,
     };
-    let (mut pair, mut bus) = match start(kind, caps, scenario) {
-        Ok(started) => started,
+    let bus = match scenario.bus.open(scenario.bit_rates, kind.owns_its_bus()) {
+        Ok(bus) => bus,
         Err(error) => return run(Outcome::Error(error), 0, (0, 0)),
     };
-    let result = Lockstep {
-        scenario,
-        plc: PlcSide::new(pair.layout, scenario.exchange),
-        // On a real-time bus the cycle is real time, and the scenario's offsets scale with it.
-        cycle_time: bus.cycle_time().unwrap_or(scenario.cycle_time),
-        time_stamp_tolerance: scenario
-            .time_stamp_tolerance
-            .max(bus.time_stamp_tolerance()),
-        pair: &mut pair,
-        bus: bus.as_mut(),
-    }
-    .run(steps);
+    let mut lockstep = match Lockstep::start(kind, caps, scenario, bus) {
+        Ok(lockstep) => lockstep,
+        Err(error) => return run(Outcome::Error(error), 0, (0, 0)),
+    };
+    let result = lockstep.run(steps);
+    let pair = &mut lockstep.pair;
     let result = match (result, pair.bounds.as_ref().and_then(Bounds::still_cycling)) {
         (Ok(cycles), Some(stopped)) => Err((pair.fail(stopped), cycles)),
         (result, _) => result,
@@ -66,64 +61,110 @@ pub fn run_scenario(
     }
 }
 
-/// The model, the bus and the IUT of a scenario, in the order a real bus
-/// needs them: the IUT is told which socket to open.
-fn start(
-    kind: &IutKind,
-    caps: &Capabilities,
-    scenario: &Scenario,
-) -> Result<(Pair, Box<dyn Bus>), RunError> {
-    let model = Device::new(caps, scenario.interface.clone())
-        .map_err(|e| RunError::Configuration(Refusal::Model(e)))?;
-    let bus = scenario.bus.open(scenario.bit_rates, kind.owns_its_bus())?;
-    let iut = match kind.build_on(caps, &scenario.interface, bus.owned_bus().as_ref()) {
-        // On a real-time bus the kernel's clock, not the harness, orders the times.
-        Ok(iut) if bus.real_time() => iut,
-        Ok(iut) => Box::new(Ordered::new(iut)),
-        Err(BuildError::Refused(reason)) => {
-            return Err(RunError::Configuration(Refusal::Iut(reason)))
-        }
-        Err(BuildError::Failed(error)) => return Err(error.into()),
-    };
-    let trace = scenario.trace.as_ref().and_then(|(dir, name, epoch)| {
-        TraceWriter::create(dir, name, &bus.interface_name(), *epoch).ok()
-    });
-    let mut pair = Pair::new(iut, model, (&scenario.name, &scenario.covers), trace);
-    if scenario.judgement == Judgement::Bounds {
-        pair.bounds = Some(Bounds::default());
-    }
-    Ok((pair, bus))
+/// What a cycle needs of its scenario, kept by the lockstep (a Gherkin
+/// world's steps may add declared lengths as they go).
+#[derive(Debug, Clone)]
+pub struct Rules {
+    pub exchange: ExchangeMode,
+    pub fast_queue: bool,
+    pub declared_lengths: Vec<(u16, u8)>,
+    pub check_confirmation_delay: bool,
+    /// The cycle the scenario's offsets are written for.
+    pub scenario_cycle_time: Nanos,
 }
 
-/// One scenario in progress.
-struct Lockstep<'a> {
-    scenario: &'a Scenario,
-    plc: PlcSide,
+/// One scenario in progress: the played PLC, the pair of model and IUT, and
+/// the bus under them. Scripted and generated scenarios run it step after
+/// step ([`run_scenario`]); a Gherkin world drives the same cycle one step
+/// at a time.
+pub struct Lockstep<B: Bus + ?Sized = dyn Bus> {
+    pub pair: Pair,
+    pub plc: PlcSide,
+    pub rules: Rules,
+    pub bus: Box<B>,
     cycle_time: Nanos,
     time_stamp_tolerance: Nanos,
-    pair: &'a mut Pair,
-    bus: &'a mut dyn Bus,
 }
 
-impl Lockstep<'_> {
+impl<B: Bus + ?Sized> Lockstep<B> {
+    /// The model, then the IUT on `bus`, in the order a real bus needs them:
+    /// the IUT is told which socket to open.
+    pub fn start(
+        kind: &IutKind,
+        caps: &Capabilities,
+        scenario: &Scenario,
+        bus: Box<B>,
+    ) -> Result<Self, RunError> {
+        let model = Device::new(caps, scenario.interface.clone())
+            .map_err(|e| RunError::Configuration(Refusal::Model(e)))?;
+        let iut = match kind.build_on(caps, &scenario.interface, bus.owned_bus().as_ref()) {
+            // On a real-time bus the kernel's clock, not the harness, orders the times.
+            Ok(iut) if bus.real_time() => iut,
+            Ok(iut) => Box::new(Ordered::new(iut)),
+            Err(BuildError::Refused(reason)) => {
+                return Err(RunError::Configuration(Refusal::Iut(reason)))
+            }
+            Err(BuildError::Failed(error)) => return Err(error.into()),
+        };
+        let trace = scenario.trace.as_ref().and_then(|(dir, name, epoch)| {
+            TraceWriter::create(dir, name, &bus.interface_name(), *epoch).ok()
+        });
+        let mut pair = Pair::new(iut, model, (&scenario.name, &scenario.covers), trace);
+        if scenario.judgement == Judgement::Bounds {
+            pair.bounds = Some(Bounds::default());
+        }
+        Ok(Lockstep {
+            plc: PlcSide::new(pair.layout, scenario.exchange),
+            rules: Rules {
+                exchange: scenario.exchange,
+                fast_queue: scenario.interface.queue == QueueMode::Fast,
+                declared_lengths: scenario.declared_lengths.clone(),
+                check_confirmation_delay: scenario.check_confirmation_delay,
+                scenario_cycle_time: scenario.cycle_time,
+            },
+            // On a real-time bus the cycle is real time, and the scenario's offsets scale with it.
+            cycle_time: bus.cycle_time().unwrap_or(scenario.cycle_time),
+            time_stamp_tolerance: scenario
+                .time_stamp_tolerance
+                .max(bus.time_stamp_tolerance()),
+            pair,
+            bus,
+        })
+    }
+
     /// Every step, one cycle each: the number of cycles run, or how it ended
     /// early and in which cycle.
-    fn run(mut self, steps: impl Iterator<Item = Step>) -> Result<u64, (Outcome, u64)> {
+    fn run(&mut self, steps: impl Iterator<Item = Step>) -> Result<u64, (Outcome, u64)> {
         for (k, step) in steps.enumerate() {
             let k = k as u64;
             if crate::interrupt::requested() {
                 return Err((Outcome::Error(RunError::Interrupted), k));
             }
             self.cycle(k, step).map_err(|outcome| (outcome, k))?;
+            // The checker judges the images; what the PLC read is not kept (bounded memory).
+            drop(self.plc.take_received());
         }
         Ok(self.pair.cycle + 1)
     }
 
-    fn cycle(&mut self, k: u64, mut step: Step) -> Result<(), Outcome> {
-        let scenario = self.scenario;
-        let start = k * self.cycle_time;
+    /// When cycle `k` starts, in scenario time.
+    pub fn start_of(&self, k: u64) -> Nanos {
+        k * self.cycle_time
+    }
+
+    /// Runs the bus on to scenario time `until` (frames end, the pair learns of them).
+    pub fn run_bus(&mut self, until: Nanos) -> Result<(), Outcome> {
+        self.bus.run_until(&mut self.pair, until)
+    }
+
+    /// Cycle `k`: the bus up to its start, the PLC's task, the model's and
+    /// the IUT's cycle on the same outputs, their inputs compared; then the
+    /// other nodes' frames of the step go on the bus.
+    pub fn cycle(&mut self, k: u64, mut step: Step) -> Result<Seen, Outcome> {
+        let rules = &self.rules;
+        let start = self.start_of(k);
         let layout = self.pair.layout;
-        self.bus.run_until(self.pair, start)?;
+        self.bus.run_until(&mut self.pair, start)?;
         let t = if self.bus.real_time() {
             self.pair.now
         } else {
@@ -147,22 +188,23 @@ impl Lockstep<'_> {
                 .map_err(crate::device::pair::iut_broke)?;
             self.pair.model.handle_controller_status(status);
         }
+        let mut report = TaskReport::default();
         if !step.plc_busy {
             let stimulus = TaskStimulus {
-                declared_lengths: &scenario.declared_lengths,
+                declared_lengths: &rules.declared_lengths,
                 set_tx_counter: step.set_tx_counter,
                 edits: &step.edits,
                 raw_outputs: step.raw_outputs.as_deref(),
             };
-            let report = self.plc.task(k, stimulus).map_err(|e| {
+            report = self.plc.task(k, stimulus).map_err(|e| {
                 Outcome::Error(RunError::Iut(IutError::new(
                     IutCause::Impossible,
                     format!("the PLC cannot read the IUT's input image: {e}"),
                 )))
             })?;
-            let wanted = u64::from(scenario.exchange.confirmation_cycles());
+            let wanted = u64::from(rules.exchange.confirmation_cycles());
             match report.confirmed_after {
-                Some(delay) if scenario.check_confirmation_delay && delay != wanted => {
+                Some(delay) if rules.check_confirmation_delay && delay != wanted => {
                     return Err(self.pair.fail(Difference {
                         frames: None,
                         candidates: blame::CONFIRMATION,
@@ -183,7 +225,7 @@ impl Lockstep<'_> {
             before: InputImage::new_checked(self.pair.model.inputs(), layout)
                 .map_or(0, |i| i.rx_counter()),
             plc_released: written.rx_counter,
-            fast: scenario.interface.queue == QueueMode::Fast,
+            fast: rules.fast_queue,
             no_of_tx_messages: written.no_of_tx_messages,
         };
         let expected = match self.pair.model.cycle(&outputs, t) {
@@ -224,12 +266,22 @@ impl Lockstep<'_> {
         }
         self.pair.tolerated += u64::from(!identical);
         self.plc.device_cycle_done(&actual);
-        // The checker judges the images; what the PLC read is not kept (bounded memory).
-        drop(self.plc.take_received());
         for (offset, frame) in step.bus {
-            let offset = offset * self.cycle_time / scenario.cycle_time.max(1);
+            let offset = offset * self.cycle_time / self.rules.scenario_cycle_time.max(1);
             self.bus.schedule(start + offset, self.bus.adapt(frame));
         }
-        Ok(())
+        Ok(Seen {
+            report,
+            inputs: actual,
+        })
     }
+}
+
+/// What a cycle showed beyond the judgement, for steps that check more.
+#[derive(Debug, Clone)]
+pub struct Seen {
+    /// What the PLC's task saw (its confirmation of an increment).
+    pub report: TaskReport,
+    /// The IUT's input image.
+    pub inputs: Vec<u8>,
 }

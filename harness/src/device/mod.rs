@@ -24,7 +24,7 @@ pub mod iut_kind;
 #[cfg(feature = "socketcan")]
 pub mod kernel_bus;
 pub(crate) mod lib_iut;
-mod lockstep;
+pub mod lockstep;
 pub(crate) mod pair;
 pub mod played_plc;
 pub mod protocol_order;

@@ -50,6 +50,9 @@ pub struct Pair {
     /// documents leave it open (see [`crate::ScenarioRun::tolerated`]).
     pub tolerated: u64,
     pub history: History,
+    /// Every frame that ended on the bus (whether the IUT sent it, its end),
+    /// kept only for a caller that reads them (a Gherkin world's steps).
+    pub ended: Option<Vec<(Frame, bool, Nanos)>>,
     /// The output images of the last batches handed over, to tell a frame
     /// read at the wrong stride from another wrong frame.
     batches: Ring<Vec<u8>>,
@@ -77,6 +80,7 @@ impl Pair {
             frames: 0,
             tolerated: 0,
             history: History::default(),
+            ended: None,
             batches: Ring::new(BATCHES),
             trace,
             scenario: scenario.to_string(),
@@ -306,6 +310,9 @@ impl Pair {
             self.model.handle_received(frame, end);
         }
         self.history.frame(self.cycle, from_iut, frame, end);
+        if let Some(ended) = self.ended.as_mut() {
+            ended.push((frame, from_iut, end));
+        }
     }
 
     /// Closes the trace files.
