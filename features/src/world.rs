@@ -17,7 +17,7 @@ use canif_harness::Outcome;
 use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig};
 use canif_model::exchange::ExchangeMode;
 use canif_model::frame::Frame;
-use canif_model::image::{ImageLayout, InputImage, MessageRepr, OutputImage};
+use canif_model::image::{ImageLayout, InputImage, MessageRepr};
 use canif_model::info_data::ControllerStatus;
 use canif_model::timing::BitRates;
 use canif_model::Nanos;
@@ -155,8 +155,6 @@ pub struct CanWorld {
     pub status: Option<ControllerStatus>,
     /// Cycles from the PLC's TxCounter increment to its confirmation, as the PLC saw it.
     pub confirmation_delay: Option<u64>,
-    /// The last cycles, shown when a step fails (bounded).
-    pub trace: canif_harness::run::Ring<String>,
     /// A CANopen bus coupler on the bus (the quick start).
     pub coupler: Option<BusCoupler>,
     /// When the coupler stopped, for loss detection times.
@@ -197,7 +195,10 @@ impl std::fmt::Debug for CanWorld {
             &self.inputs[..self.inputs.len().min(8)],
             last(&self.on_bus),
             last(&self.received.iter().map(|m| m.frame).collect::<Vec<_>>()),
-            self.trace.iter().cloned().collect::<Vec<_>>().join("\n        ")
+            self.run
+                .as_ref()
+                .map(|run| run.pair.history.context().join("\n        "))
+                .unwrap_or_default()
         )
     }
 }
@@ -228,7 +229,6 @@ impl CanWorld {
             next_tn: 1,
             status: None,
             confirmation_delay: None,
-            trace: canif_harness::run::Ring::context(),
             coupler: None,
             coupler_failed_at: None,
             received_at: Vec::new(),
@@ -350,7 +350,6 @@ impl CanWorld {
         run.bus.hold_own(blocked);
         let task = run.cycle(k, step).map_err(ended)?;
         let read = run.plc.take_received();
-        let outputs = run.plc.outputs().to_vec();
         self.inputs = task.inputs;
         if let Some(delay) = task.report.confirmed_after {
             self.confirmation_delay = Some(delay);
@@ -358,10 +357,7 @@ impl CanWorld {
         self.received_at
             .extend(read.iter().map(|m| (self.now, m.frame)));
         self.received.extend(read);
-        let sent_before = self.on_bus.len();
-        let result = self.bus_until(self.now + CYCLE / 2);
-        self.trace_cycle(plc_busy, &outputs, sent_before);
-        result?;
+        self.bus_until(self.now + CYCLE / 2)?;
         if let Some(coupler) = &self.coupler {
             let frames = coupler.poll(self.now + CYCLE / 2);
             self.run
@@ -395,36 +391,6 @@ impl CanWorld {
             }
         }
         result
-    }
-
-    fn trace_cycle(&mut self, plc_busy: bool, outputs: &[u8], sent_before: usize) {
-        let layout = self.layout();
-        let out = OutputImage::new_checked(outputs, layout)
-            .map(|o| o.header())
-            .unwrap_or_default();
-        let inp = InputImage::new_checked(&self.inputs[..], layout)
-            .map(|i| i.header())
-            .unwrap_or_default();
-        let sent: Vec<String> = self.on_bus[sent_before..]
-            .iter()
-            .map(ToString::to_string)
-            .collect();
-        self.trace.push(format!(
-            "cycle {:>3}{}: out[tx={} rx={} n={}] in[tx={} rx={} n={}] bus: {}",
-            self.cycle,
-            if plc_busy { " (PLC busy)" } else { "" },
-            out.tx_counter,
-            out.rx_counter,
-            out.no_of_tx_messages,
-            inp.tx_counter,
-            inp.rx_counter,
-            inp.no_of_rx_messages,
-            if sent.is_empty() {
-                "-".to_string()
-            } else {
-                sent.join(" ")
-            }
-        ));
     }
 
     /// The bus, blocked until now, takes frames again before the coming cycle.
