@@ -11,6 +11,9 @@ use crate::run::Ring;
 /// How many frames of bus history a failure can show.
 const BUS_LOG: usize = 256;
 
+/// How many frames of one cycle a failure's context lists.
+const SHOWN_FRAMES: usize = 8;
+
 /// How many received frames the oracle remembers.
 const RECENT_RX: usize = 4_096;
 
@@ -129,14 +132,21 @@ impl History {
                 let o = r.outputs;
                 let i = r.actual;
                 let tn = i.transaction_number.map_or(String::new(), |tn| format!(" tn={tn}"));
-                let frames: Vec<String> = self
-                    .frames_before(r.cycle)
+                let frames: Vec<&Logged> = self.frames_before(r.cycle).collect();
+                let shown = &frames[frames.len().saturating_sub(SHOWN_FRAMES)..];
+                let listed: Vec<String> = shown
+                    .iter()
                     .map(|l| format!("{} {}", if l.from_iut { "tx" } else { "rx" }, l.frame))
                     .collect();
-                let bus = if frames.is_empty() {
-                    String::new()
-                } else {
-                    format!(" | bus: {}", frames.join(", "))
+                // A flood must not bury the cause: its count and its last frames.
+                let bus = match frames.len() - shown.len() {
+                    _ if frames.is_empty() => String::new(),
+                    0 => format!(" | bus: {}", listed.join(", ")),
+                    more => format!(
+                        " | bus: {} frames, the last: … {more} more, {}",
+                        frames.len(),
+                        listed.join(", ")
+                    ),
                 };
                 format!(
                     "cycle {:>5} t={:>9.3} ms  out[tx={} rx={} n={}]  in[tx={} rx={} n={}{tn}]{bus}",
@@ -197,5 +207,25 @@ mod tests {
         let mut history = History::default();
         history.cycle(layout, (0, 0), &[1, 2], &[3], &[4]);
         assert_eq!(history.timeline()[0].actual, InputHeader::default());
+    }
+
+    #[test]
+    fn a_flood_shows_its_count_and_its_last_frames() {
+        let layout = ImageLayout::new(&InterfaceConfig::new(FrameFormat::Base11, 2), false);
+        let (outputs, inputs) = (vec![0; layout.output_size()], vec![0; layout.input_size()]);
+        let mut history = History::default();
+        history.cycle(layout, (0, 0), &outputs, &inputs, &inputs);
+        for id in 0..200u16 {
+            let frame = Frame::classic(CanId::Standard(id), &[]).unwrap();
+            history.frame(0, false, frame, 10 + u64::from(id));
+        }
+        history.cycle(layout, (1, 1_000), &outputs, &inputs, &inputs);
+        let context = history.context();
+        let last = context.last().unwrap();
+        assert!(
+            last.contains("bus: 200 frames, the last: … 192 more, rx 0C0#"),
+            "{last}"
+        );
+        assert_eq!(last.matches("rx ").count(), SHOWN_FRAMES, "{last}");
     }
 }
