@@ -216,9 +216,11 @@ impl<B: Bus + ?Sized> Lockstep<B> {
                 _ => {}
             }
         }
-        let outputs = self.plc.outputs().to_vec();
-        self.pair.outputs(&outputs);
-        let written = OutputImage::new_checked(&outputs[..], layout)
+        // Borrowed, not copied: the pair's devices and its history are
+        // fields of their own, so nothing here needs a second image.
+        let outputs = self.plc.outputs();
+        self.pair.outputs(outputs);
+        let written = OutputImage::new_checked(outputs, layout)
             .map(|o| o.header())
             .unwrap_or_default();
         let rx = RxState {
@@ -228,8 +230,8 @@ impl<B: Bus + ?Sized> Lockstep<B> {
             fast: rules.fast_queue,
             no_of_tx_messages: written.no_of_tx_messages,
         };
-        let expected = match self.pair.model.cycle(&outputs, t) {
-            Ok(inputs) => inputs.to_vec(),
+        let expected = match self.pair.model.cycle(outputs, t) {
+            Ok(inputs) => inputs,
             Err(e) => {
                 return Err(Outcome::Error(RunError::Harness(HarnessError::Model(
                     e.to_string(),
@@ -239,16 +241,16 @@ impl<B: Bus + ?Sized> Lockstep<B> {
         let actual = self
             .pair
             .iut
-            .cycle(&outputs, t)
+            .cycle(outputs, t)
             .map_err(|e| Outcome::Error(e.into()))?;
         self.pair
             .history
-            .cycle(layout, (k, self.pair.now), &outputs, &expected, &actual);
+            .cycle(layout, (k, self.pair.now), outputs, expected, &actual);
         // Most cycles agree byte for byte: then there is nothing to judge
         // field by field, and nothing was tolerated.
-        let identical = expected == actual;
+        let identical = expected == &actual[..];
         let difference = match self.pair.bounds.as_mut() {
-            Some(bounds) => bounds.cycle(&layout, &outputs, &actual),
+            Some(bounds) => bounds.cycle(&layout, outputs, &actual),
             None if identical => None,
             None => {
                 let history = &self.pair.history;
@@ -258,7 +260,7 @@ impl<B: Bus + ?Sized> Lockstep<B> {
                     time_stamp_tolerance: self.time_stamp_tolerance,
                     rx,
                 }
-                .compare(&expected, &actual)
+                .compare(expected, &actual)
             }
         };
         if let Some(difference) = difference {
