@@ -345,12 +345,14 @@ pub(crate) enum Command {
         protocol: u64,
         /// Put the device's CAN side on a SocketCAN interface (`socketcan:IFACE`):
         /// it sends and receives real frames there, and the adapter protocol
-        /// carries only configure, cycle and controller_status.
+        /// carries only configure, cycle and controller_status. With
+        /// --ethercat: the terminal's CAN side.
         #[arg(long)]
         bus: Option<String>,
         /// Be an EtherCAT terminal on this network interface (needs CAP_NET_RAW)
-        /// for any master; the CAN frames it sends are printed in candump's format.
-        #[arg(long, value_name = "IFACE", conflicts_with_all = ["stdio", "protocol", "bus"])]
+        /// for any master. Its CAN side is --bus socketcan:IFACE; without it
+        /// the CAN frames it sends are printed in candump's format.
+        #[arg(long, value_name = "IFACE", conflicts_with_all = ["stdio", "protocol"])]
         ethercat: Option<String>,
         /// The terminal profile whose identity and offer it has (with --ethercat).
         #[arg(long, default_value = "el6751-mdp", requires = "ethercat")]

@@ -246,8 +246,9 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
             ethercat: Some(interface),
             fault,
             profile,
+            bus,
             ..
-        } => device::ethercat_terminal(&catalogue, &interface, &profile, &fault),
+        } => device::ethercat_terminal(&catalogue, (&interface, bus.as_deref()), &profile, &fault),
         Command::Device {
             stdio,
             fault,

@@ -85,54 +85,12 @@ fn a_profile_that_is_no_terminal_is_a_usage_error_naming_the_terminals() {
     assert!(stderr.contains("el6751-legacy, el6751-mdp"), "{stderr}");
 }
 
-/// Two ends of a veth pair made for this test, removed when it ends.
-struct VethPair {
-    master: String,
-    terminal: String,
-}
-
-impl VethPair {
-    /// The pair, or why it cannot be made here (not root, no veth).
-    fn create(tag: &str) -> Result<VethPair, String> {
-        let (master, terminal) = (format!("cif{tag}m"), format!("cif{tag}t"));
-        let ip = |args: &[&str]| {
-            Command::new("ip")
-                .args(args)
-                .output()
-                .map_err(|e| format!("ip: {e}"))
-                .and_then(|o| {
-                    if o.status.success() {
-                        Ok(())
-                    } else {
-                        Err(String::from_utf8_lossy(&o.stderr).trim().to_string())
-                    }
-                })
-        };
-        let _ = ip(&["link", "del", &master]);
-        ip(&[
-            "link", "add", &master, "type", "veth", "peer", "name", &terminal,
-        ])?;
-        let pair = VethPair { master, terminal };
-        ip(&["link", "set", &pair.master, "up"])?;
-        ip(&["link", "set", &pair.terminal, "up"])?;
-        Ok(pair)
-    }
-}
-
-impl Drop for VethPair {
-    fn drop(&mut self) {
-        let _ = Command::new("ip")
-            .args(["link", "del", &self.master])
-            .output();
-    }
-}
-
 /// The same run across the kernel's packet path: the emulated terminal on one
 /// end of a veth pair, canif's master on the other. Needs root (CI runs as
 /// root and must not skip it: CANIF_VETH=required).
 #[test]
 fn the_terminal_is_certified_across_a_veth_pair() {
-    let pair = match VethPair::create(&format!("{}", std::process::id() % 10_000)) {
+    let pair = match canif_kernel::VethPair::create(&format!("{}", std::process::id() % 10_000)) {
         Ok(pair) => pair,
         Err(why) => {
             assert!(
@@ -197,7 +155,8 @@ fn an_independent_master_drives_the_terminal() {
     if !has_pysoem {
         return skip("no Python package pysoem (.ci/run installs it)".into());
     }
-    let pair = match VethPair::create(&format!("{}", std::process::id() % 10_000 + 1)) {
+    let pair = match canif_kernel::VethPair::create(&format!("{}", std::process::id() % 10_000 + 1))
+    {
         Ok(pair) => pair,
         Err(why) => return skip(format!("no veth pair here ({why})")),
     };

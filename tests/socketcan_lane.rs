@@ -361,6 +361,137 @@ fn wait_with_timeout(mut child: Child, timeout: Duration) -> Result<Output, Fail
     }
 }
 
+/// `canif device --ethercat TERMINAL --bus socketcan:CAN`, until dropped.
+struct TerminalProcess(Child);
+
+impl TerminalProcess {
+    fn start(
+        terminal: &str,
+        can: &str,
+        profile: &str,
+        fault: Option<&str>,
+    ) -> Result<Self, Failed> {
+        let mut command = Command::new(canif_bin());
+        command.args([
+            "device",
+            "--ethercat",
+            terminal,
+            "--bus",
+            &format!("socketcan:{can}"),
+            "--profile",
+            profile,
+        ]);
+        if let Some(fault) = fault {
+            command.args(["--fault", fault]);
+        }
+        let mut child = command
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()?;
+        // It says so once both interfaces are open: a master may scan then.
+        let mut line = String::new();
+        BufReader::new(child.stderr.take().ok_or("no stderr")?).read_line(&mut line)?;
+        if !line.starts_with("canif device:") {
+            let _ = child.kill();
+            return Err(format!("the terminal did not start: {line:?}").into());
+        }
+        Ok(TerminalProcess(child))
+    }
+}
+
+impl Drop for TerminalProcess {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// Issue 25's two ends, as a lab runs them against a real terminal: `canif
+/// device --ethercat` on one end of a veth pair with its CAN side on the
+/// interface, `canif run --iut ethercat:… --bus socketcan:…` on the other.
+/// Every EtherCAT terminal profile conforms; a fault behind the terminal
+/// fails on its requirement.
+fn ethercat_terminal_over(can: &str) -> Result<(), Failed> {
+    let pair = canif_kernel::VethPair::create(&format!("{}", std::process::id() % 10_000))
+        .map_err(|why| format!("no veth pair in the lane: {why}"))?;
+    let run =
+        |profile: &str, name: &str, scenarios: &[&str]| -> Result<(Output, PathBuf), Failed> {
+            let dir = report_dir(name);
+            let (iut, bus, dir_text) = (
+                format!("ethercat:{}", pair.master),
+                format!("socketcan:{can}"),
+                dir.display().to_string(),
+            );
+            let mut args = vec![
+                "run",
+                "--iut",
+                &iut,
+                "--bus",
+                &bus,
+                "--profile",
+                profile,
+                "--cycle-us",
+                "5000",
+                "--report",
+                &dir_text,
+            ];
+            for scenario in scenarios {
+                args.extend(["--scenario", scenario]);
+            }
+            let started = Instant::now();
+            let output = canif(&args);
+            eprintln!(
+                "ethercat {name}: exit {:?} in {:?}",
+                output.status.code(),
+                started.elapsed()
+            );
+            Ok((output, dir))
+        };
+    for profile in ["el6751-legacy", "el6751-mdp"] {
+        let _terminal = TerminalProcess::start(&pair.terminal, can, profile, None)?;
+        let (output, dir) = run(
+            profile,
+            &format!("ethercat-{profile}"),
+            &["tx-batches", "rx-handshake", "filters-first-match"],
+        )?;
+        let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap_or_default();
+        let report = report(&dir).map_err(|e| format!("{e}\n{}", text(&output)))?;
+        if output.status.code() != Some(0) {
+            return Err(format!(
+                "{profile}: expected conformance\n{}\nsummary:\n{summary}",
+                text(&output)
+            )
+            .into());
+        }
+        let terminal = &report["meta"]["terminals"][0];
+        if terminal["product_code"].as_u64().is_none()
+            || report["totals"]["pass"].as_u64().unwrap_or(0) < 10
+        {
+            return Err(format!(
+                "{profile}: the report names no terminal or checked too little: {}",
+                report["meta"]
+            )
+            .into());
+        }
+    }
+    let _terminal = TerminalProcess::start(
+        &pair.terminal,
+        can,
+        "el6751-mdp",
+        Some("sends-batch-reversed"),
+    )?;
+    let (output, dir) = run("el6751-mdp", "ethercat-fault", &["tx-batches"])?;
+    let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap_or_default();
+    if output.status.code() != Some(1) || !summary.contains("HS-TX-006") {
+        return Err(format!(
+            "expected a failure of HS-TX-006\n{}\nsummary:\n{summary}",
+            text(&output)
+        )
+        .into());
+    }
+    Ok(())
+}
+
 /// `canif coupler --bus` on an interface, until dropped.
 struct CouplerProcess(Child);
 
@@ -747,6 +878,10 @@ fn main() {
         }),
     ));
     trials.push(("client_side_over_vcan_fd", on(&fd, client_side_over)));
+    trials.push((
+        "ethercat_terminal_over_veth_with_its_can_side_on_vcan",
+        on(&classic, ethercat_terminal_over),
+    ));
     trials.push((
         "interface_down_is_an_error",
         on(&classic, interface_down_is_an_error),

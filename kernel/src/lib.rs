@@ -10,9 +10,11 @@
 
 mod error;
 mod packet;
+mod veth;
 
 pub use error::{KernelError, Operation, OsError};
 pub use packet::PacketSocket;
+pub use veth::VethPair;
 
 use std::io;
 use std::os::fd::AsRawFd;

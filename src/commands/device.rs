@@ -39,12 +39,13 @@ pub(crate) fn device(stdio: bool, faults: &[String], protocol: u64, bus: Option<
     }
 }
 
-/// `canif device --ethercat IFACE`: the soft device behind an emulated
-/// EtherCAT terminal on a network interface, until interrupted.
+/// `canif device --ethercat IFACE [--bus socketcan:CANIFACE]`: the soft
+/// device behind an emulated EtherCAT terminal on a network interface, its
+/// CAN side on a SocketCAN interface, until interrupted.
 #[cfg(feature = "socketcan")]
 pub(crate) fn ethercat_terminal(
     catalogue: &canif_spec::Catalogue,
-    interface: &str,
+    (interface, bus): (&str, Option<&str>),
     profile: &str,
     faults: &[String],
 ) -> ExitCode {
@@ -69,13 +70,39 @@ pub(crate) fn ethercat_terminal(
         choices: vec![],
         link_fault: None,
     };
+    let can = match bus.map(canif_kernel::BusSpec::parse).transpose() {
+        Ok(spec) => spec.map(|spec| spec.iut),
+        Err(error) => {
+            eprintln!("--bus {error}");
+            return ExitCode::from(2);
+        }
+    };
+    if let (Some(can), Err(error)) = (&can, canif_kernel::probe()) {
+        eprintln!("--bus socketcan:{can}: {error}");
+        return ExitCode::from(2);
+    }
     let mut terminal = emulated_terminal(&profile.model_capabilities(), &identity, &emulated);
-    eprintln!(
-        "canif device: {} ({}) on {interface}, vendor {:#010x} product {:#010x} revision {:#010x}; Ctrl-C stops",
-        profile.name, profile.device, identity.vendor_id, identity.product_code, identity.revision
-    );
+    // Said once both interfaces are open: from here a master finds it.
+    let ready = || {
+        eprintln!(
+            "canif device: {} ({}) on {interface}, vendor {:#010x} product {:#010x} revision {:#010x}, CAN side {}; Ctrl-C stops",
+            profile.name,
+            profile.device,
+            identity.vendor_id,
+            identity.product_code,
+            identity.revision,
+            can.as_deref()
+                .map_or("printed here (candump format)".to_string(), |c| format!("on {c}"))
+        )
+    };
     let stop = canif_harness::interrupt::requested;
-    match served::serve(interface, &mut terminal, &mut std::io::stdout(), &stop) {
+    let mut log = std::io::stdout();
+    match served::serve(
+        interface,
+        &mut terminal,
+        (can.as_deref(), &mut log),
+        (&ready, &stop),
+    ) {
         Ok(served) => {
             eprintln!(
                 "canif device: {} EtherCAT frames answered, {} cycles, {} CAN frames sent",
@@ -93,7 +120,7 @@ pub(crate) fn ethercat_terminal(
 #[cfg(not(feature = "socketcan"))]
 pub(crate) fn ethercat_terminal(
     _: &canif_spec::Catalogue,
-    interface: &str,
+    (interface, _): (&str, Option<&str>),
     _: &str,
     _: &[String],
 ) -> ExitCode {

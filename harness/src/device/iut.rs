@@ -10,6 +10,7 @@ use canif_model::frame::{CanId, Frame};
 use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 use canif_softdevice::{CanFrame, FilterRule, Format, Offer, Queue, Settings, SoftDevice};
+use std::borrow::BorrowMut;
 
 use crate::error::IutCause;
 pub use crate::error::IutError;
@@ -138,36 +139,38 @@ impl Iut for ModelIut {
 }
 
 /// The soft device behind the IUT interface; frames are translated here, so the
-/// soft device itself never sees a model type.
-pub struct SoftDeviceIut(pub SoftDevice);
+/// soft device itself never sees a model type. It owns the device, or borrows
+/// it (the device inside an emulated EtherCAT terminal, on a SocketCAN bus).
+pub struct SoftDeviceIut<D: BorrowMut<SoftDevice> = SoftDevice>(pub D);
 
-impl Iut for SoftDeviceIut {
+impl<D: BorrowMut<SoftDevice>> Iut for SoftDeviceIut<D> {
     fn cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError> {
         self.0
+            .borrow_mut()
             .sync_manager_event(outputs, now)
             .map(<[u8]>::to_vec)
             .map_err(|e| IutError::new(IutCause::Impossible, e.to_string()))
     }
     fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) -> Result<(), IutError> {
-        soft_controller::receive(&mut self.0, frame, end_of_reception);
+        soft_controller::receive(self.0.borrow_mut(), frame, end_of_reception);
         Ok(())
     }
     fn poll_transmit(&mut self, now: Nanos) -> Result<Transmit, IutError> {
-        Ok(soft_controller::poll_transmit(&mut self.0, now))
+        Ok(soft_controller::poll_transmit(self.0.borrow_mut(), now))
     }
     fn poll_timeout(&self) -> Option<Nanos> {
-        self.0.next_release()
+        self.0.borrow().next_release()
     }
     fn transmit_complete(&mut self) -> Result<(), IutError> {
-        self.0.tx_done_interrupt();
+        self.0.borrow_mut().tx_done_interrupt();
         Ok(())
     }
     fn controller_status(&mut self, status: &ControllerStatus) -> Result<(), IutError> {
-        soft_controller::status(&mut self.0, status);
+        soft_controller::status(self.0.borrow_mut(), status);
         Ok(())
     }
     fn transmit_plan(&self, now: Nanos) -> Option<Vec<Planned>> {
-        Some(soft_controller::plan(&self.0, now))
+        Some(soft_controller::plan(self.0.borrow(), now))
     }
 }
 

@@ -12,8 +12,9 @@ use crate::adapter::protocol::{Answer, Request};
 use crate::device::iut::Iut;
 use crate::error::{BusCause, BusError};
 
-/// The device's controller on a SocketCAN interface.
-struct DeviceBus {
+/// The device's controller on a SocketCAN interface (also the CAN side of
+/// the emulated EtherCAT terminal, `canif device --ethercat … --bus …`).
+pub(crate) struct DeviceBus {
     socket: KernelSocket,
     epoch: Nanos,
     /// The frame the controller is sending, and whether the kernel took it.
@@ -22,7 +23,7 @@ struct DeviceBus {
 }
 
 impl DeviceBus {
-    fn open(interface: &str, epoch: Nanos) -> Result<Self, String> {
+    pub(crate) fn open(interface: &str, epoch: Nanos) -> Result<Self, String> {
         canif_kernel::probe()?;
         Ok(DeviceBus {
             socket: KernelSocket::open(interface, true)?,
@@ -38,7 +39,7 @@ impl DeviceBus {
 
     /// The controller's interrupts: frames received (with the kernel's time
     /// stamp), the frame sent confirmed, the next one started.
-    fn pump(&mut self, iut: &mut dyn Iut) -> Result<(), BusError> {
+    pub(crate) fn pump(&mut self, iut: &mut dyn Iut) -> Result<(), BusError> {
         let name = &self.socket.interface;
         while let Some(received) = self
             .socket

@@ -1,18 +1,30 @@
-//! `canif device --ethercat IFACE`: the emulated terminal on a network
-//! interface, for any EtherCAT master (ethercrab, SOEM/pysoem, IgH) and the
-//! PLC-side drivers running on it. Its CAN controller sends into a bus where
-//! every frame is acknowledged at once, and each frame it sends is written on
-//! `log` in candump's format: what a driver asked for can be watched here.
+//! `canif device --ethercat IFACE [--bus socketcan:CANIFACE]`: the emulated
+//! terminal on a network interface, for any EtherCAT master (ethercrab,
+//! SOEM/pysoem, IgH) and the PLC-side drivers running on it. Its CAN
+//! controller is on a SocketCAN interface, where `canif run --iut
+//! ethercat:… --bus socketcan:…` certifies it as it would a real terminal;
+//! without one it sends into a bus where every frame is acknowledged at
+//! once, and each frame it sends is written on `log` in candump's format:
+//! what a driver asked for can be watched here.
 
 use std::io::Write;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use canif_ethercat::SubDevice;
 use canif_kernel::{KernelError, PacketSocket};
 use canif_softdevice::ethercat::Terminal;
 
+use crate::device::iut::SoftDeviceIut;
+use crate::device::server_bus::DeviceBus;
+use crate::error::BusError;
+
 /// How long one wait for a frame lasts before `stop` is asked again.
 const POLL: Duration = Duration::from_millis(50);
+
+/// How long one wait lasts when a CAN bus is to be served between frames:
+/// a batch's next frame goes out once the kernel confirms the one before,
+/// whenever the master sends.
+const CAN_POLL: Duration = Duration::from_micros(200);
 
 /// What a served terminal saw.
 #[derive(Debug, Default, Clone, PartialEq, Eq)]
@@ -24,13 +36,14 @@ pub struct Served {
 }
 
 /// Answers EtherCAT frames on `interface` with `answer` until `stop` says so;
-/// `after` runs once each answered frame is sent.
+/// `between` runs before each frame is answered, once its answer is sent, and
+/// after each `wait` that ended without a frame.
 pub fn answer_frames(
     interface: &str,
     socket: &PacketSocket,
     answer: &mut dyn FnMut(&[u8]) -> Option<Vec<u8>>,
-    after: &mut dyn FnMut(),
-    stop: &dyn Fn() -> bool,
+    between: &mut dyn FnMut(),
+    (wait, stop): (Duration, &dyn Fn() -> bool),
 ) -> Result<Served, KernelError> {
     let failed = |error: std::io::Error| KernelError::Interface {
         interface: interface.to_string(),
@@ -40,18 +53,22 @@ pub fn answer_frames(
     let mut served = Served::default();
     let mut buffer = vec![0u8; 2048];
     while !stop() {
-        let Some(n) = socket.recv(&mut buffer, POLL).map_err(failed)? else {
+        let Some(n) = socket.recv(&mut buffer, wait).map_err(failed)? else {
+            between();
             continue;
         };
         // An answer of another ESC (source address marked on its way back) is no request.
         if n < 12 || buffer[6] & 0x02 != 0 {
             continue;
         }
+        // What the kernel delivered before this frame happened before it:
+        // a CAN frame received just before the master's LRW is in that cycle.
+        between();
         match answer(&buffer[..n]) {
             Some(reply) => {
                 served.frames += 1;
                 socket.send(&reply).map_err(failed)?;
-                after();
+                between();
             }
             None => served.not_ethercat += 1,
         }
@@ -59,19 +76,53 @@ pub fn answer_frames(
     Ok(served)
 }
 
-/// `canif device --ethercat`: the terminal in wall-clock time, its CAN frames
-/// acknowledged at once and written on `log` in candump's format.
+/// Why serving the terminal ended.
+#[derive(Debug)]
+pub enum ServeError {
+    /// The EtherCAT interface failed.
+    Ethercat(KernelError),
+    /// The CAN interface failed (or could not be opened).
+    Can(BusError),
+}
+
+impl std::fmt::Display for ServeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ServeError::Ethercat(error) => write!(f, "{error}"),
+            ServeError::Can(error) => write!(f, "its CAN side: {error}"),
+        }
+    }
+}
+
+impl std::error::Error for ServeError {}
+
+/// `canif device --ethercat`: the terminal in wall-clock time (the kernel's
+/// clock, which also stamps the CAN frames it receives). Its CAN controller
+/// is on `can` (a SocketCAN interface); without one its frames are
+/// acknowledged at once and written on `log` in candump's format. `ready`
+/// runs once both interfaces are open: a master may scan from then on.
 pub fn serve(
     interface: &str,
     terminal: &mut SubDevice<Terminal>,
-    log: &mut dyn Write,
-    stop: &dyn Fn() -> bool,
-) -> Result<Served, KernelError> {
-    let started = Instant::now();
-    let now = || started.elapsed().as_nanos() as u64;
+    (can, log): (Option<&str>, &mut dyn Write),
+    (ready, stop): (&dyn Fn(), &dyn Fn() -> bool),
+) -> Result<Served, ServeError> {
+    let epoch = canif_kernel::realtime_ns();
+    let now = || canif_kernel::realtime_ns().saturating_sub(epoch);
+    let mut bus = match can {
+        Some(name) => Some(
+            DeviceBus::open(name, epoch)
+                .map_err(|e| ServeError::Can(BusError::new(crate::error::BusCause::Io, e)))?,
+        ),
+        None => None,
+    };
     let terminal = std::cell::RefCell::new(terminal);
     let can_frames = std::cell::Cell::new(0u64);
-    let socket = PacketSocket::open(interface, canif_ethercat::wire::ETHERTYPE)?;
+    let bus_failed = std::cell::RefCell::new(None);
+    let socket = PacketSocket::open(interface, canif_ethercat::wire::ETHERTYPE)
+        .map_err(ServeError::Ethercat)?;
+    let wait = if bus.is_some() { CAN_POLL } else { POLL };
+    ready();
     let mut served = answer_frames(
         interface,
         &socket,
@@ -81,31 +132,49 @@ pub fn serve(
             let Some(device) = terminal.application.device_mut() else {
                 return;
             };
-            let now = now();
-            while let Some(frame) = device.controller_idle(now) {
-                can_frames.set(can_frames.get() + 1);
-                let data: String = frame.data[..frame.len.min(64)]
-                    .iter()
-                    .map(|b| format!("{b:02X}"))
-                    .collect();
-                let id = if frame.extended {
-                    format!("{:08X}", frame.id)
-                } else {
-                    format!("{:03X}", frame.id)
-                };
-                let remote = if frame.remote { "R" } else { "" };
-                let _ = writeln!(
-                    log,
-                    "({}.{:06}) {interface} {id}#{remote}{data}",
-                    now / 1_000_000_000,
-                    now % 1_000_000_000 / 1_000
-                );
-                device.tx_done_interrupt();
+            match bus.as_mut() {
+                Some(bus) => {
+                    if let Err(error) = bus.pump(&mut SoftDeviceIut(device)) {
+                        bus_failed.borrow_mut().get_or_insert(error);
+                    }
+                }
+                None => {
+                    let now = now();
+                    while let Some(frame) = device.controller_idle(now) {
+                        can_frames.set(can_frames.get() + 1);
+                        log_frame(log, interface, now, &frame);
+                        device.tx_done_interrupt();
+                    }
+                }
             }
         },
-        stop,
-    )?;
+        (wait, &|| stop() || bus_failed.borrow().is_some()),
+    )
+    .map_err(ServeError::Ethercat)?;
+    if let Some(error) = bus_failed.into_inner() {
+        return Err(ServeError::Can(error));
+    }
     served.cycles = terminal.borrow().cycles;
     served.can_frames = can_frames.get();
     Ok(served)
+}
+
+/// One frame in candump's format: `(seconds.micros) IFACE ID#DATA`.
+fn log_frame(log: &mut dyn Write, interface: &str, now: u64, frame: &canif_softdevice::CanFrame) {
+    let data: String = frame.data[..frame.len.min(64)]
+        .iter()
+        .map(|b| format!("{b:02X}"))
+        .collect();
+    let id = if frame.extended {
+        format!("{:08X}", frame.id)
+    } else {
+        format!("{:03X}", frame.id)
+    };
+    let remote = if frame.remote { "R" } else { "" };
+    let _ = writeln!(
+        log,
+        "({}.{:06}) {interface} {id}#{remote}{data}",
+        now / 1_000_000_000,
+        now % 1_000_000_000 / 1_000
+    );
 }

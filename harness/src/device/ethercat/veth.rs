@@ -12,6 +12,9 @@ use canif_kernel::{KernelError, PacketSocket};
 
 use super::served::answer_frames;
 
+/// How long one wait for a frame lasts before the thread asks whether to stop.
+const POLL: std::time::Duration = std::time::Duration::from_millis(50);
+
 /// The thread serving the terminal; it stops and is joined on drop.
 pub(crate) struct Serving {
     stop: Arc<AtomicBool>,
@@ -40,7 +43,7 @@ impl Serving {
                         &socket,
                         &mut |frame| lock(&terminal).process(frame, clock.load(Ordering::SeqCst)),
                         &mut || {},
-                        &|| stop.load(Ordering::SeqCst),
+                        (POLL, &|| stop.load(Ordering::SeqCst)),
                     )
                     .map(|_| ())
                     .map_err(|e| e.to_string())
