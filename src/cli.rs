@@ -122,6 +122,13 @@ pub(crate) struct IutOptions {
     /// `canif faults`): it must still conform.
     #[arg(long)]
     pub choice: Vec<String>,
+    /// Device side: what the device does where the documents leave a choice,
+    /// as NAME=VALUE (repeatable; `canif faults` lists the choices), or
+    /// @FILE, the choices `canif probe` wrote. Undeclared, every documented
+    /// choice passes, and the first scenario that tells them apart settles
+    /// which one the device is held to.
+    #[arg(long, value_name = "NAME=VALUE|@FILE")]
+    pub declare: Vec<String>,
     /// Let an external IUT run on any CPU. By default it shares the harness's:
     /// the exchange strictly alternates, and on virtual machines a wake-up
     /// across CPUs costs about ten times one on the same CPU.
@@ -339,6 +346,10 @@ pub(crate) enum Command {
         /// Switch on a fault (repeatable).
         #[arg(long)]
         fault: Vec<String>,
+        /// Take a freedom the documents leave (repeatable; see `canif faults`).
+        /// Behind the protocol the device declares nothing: canif finds out.
+        #[arg(long)]
+        choice: Vec<String>,
         /// The highest adapter-protocol version to agree on (2 batches a cycle's
         /// bus events into one exchange; 1 is one request per event).
         #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u64).range(1..=2))]
@@ -357,6 +368,20 @@ pub(crate) enum Command {
         /// The terminal profile whose identity and offer it has (with --ethercat).
         #[arg(long, default_value = "el6751-mdp", requires = "ethercat")]
         profile: String,
+    },
+    /// Which of the choices the documents leave a device takes: the scenarios
+    /// that tell them apart, once under each choice. Writes the finding as a
+    /// file `canif run --declare @FILE` takes; exit 1 when the device passes
+    /// under no choice or under different ones.
+    Probe {
+        #[command(flatten)]
+        iut: IutOptions,
+        /// A profile name (see `canif profiles`; repeatable) or `all`.
+        #[arg(long, default_value = "all")]
+        profile: Vec<String>,
+        /// Where to write the finding (JSON: choice name to value).
+        #[arg(long, default_value = "choices.json")]
+        out: PathBuf,
     },
     /// The suite's power: run every fault on every profile; exit 1 if one goes uncaught.
     SelfCheck {

@@ -94,6 +94,7 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                 (trace.is_some(), "--trace"),
                 (no_fail_fast, "--no-fail-fast"),
                 (real_time.ethercat_soak_s > 0, "--ethercat-soak-s"),
+                (!iut.declare.is_empty(), "--declare"),
             ];
             let plc_only = [(!master.is_empty(), "--master")];
             if let Err(conflict) = cli::side_conflicts(side, &device_only, &plc_only) {
@@ -153,6 +154,10 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                     return Ok(ExitCode::from(2));
                 }
             }
+            let declared = match commands::declared_choices(&iut.declare) {
+                Ok(declared) => declared,
+                Err(code) => return Ok(code),
+            };
             let started = std::time::SystemTime::now()
                 .duration_since(std::time::UNIX_EPOCH)
                 .unwrap_or_default();
@@ -172,6 +177,8 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                 bus,
                 selection,
                 fail_fast: !no_fail_fast,
+                declared,
+                observed: Default::default(),
             };
             match run::Plan::new(profiles, options, product.product()) {
                 Ok(plan) => run::device::run(&catalogue, &iut, &plan, pace, &report),
@@ -195,6 +202,16 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
             ),
         },
         Command::SelfCheck { seed } => run::self_check(&catalogue, seed),
+        Command::Probe { iut, profile, out } => {
+            let profiles = match run::profiles(&catalogue, &profile) {
+                Ok(profiles) => profiles,
+                Err(code) => return Ok(code),
+            };
+            match commands::resolve_iut(&iut) {
+                Ok(kind) => tools::probe(&kind, &profiles, &out),
+                Err(code) => code,
+            }
+        }
         Command::Compare {
             base,
             new,
@@ -245,17 +262,24 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
         Command::Device {
             ethercat: Some(interface),
             fault,
+            choice,
             profile,
             bus,
             ..
-        } => device::ethercat_terminal(&catalogue, (&interface, bus.as_deref()), &profile, &fault),
+        } => device::ethercat_terminal(
+            &catalogue,
+            (&interface, bus.as_deref()),
+            &profile,
+            (&fault, &choice),
+        ),
         Command::Device {
             stdio,
             fault,
+            choice,
             protocol,
             bus,
             ..
-        } => device::device(stdio, &fault, protocol, bus.as_deref()),
+        } => device::device(stdio, (&fault, &choice), protocol, bus.as_deref()),
         Command::Faults => {
             for fault in Fault::ALL {
                 outln!(out, "{:<36} {}", fault.name(), fault.description());

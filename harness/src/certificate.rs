@@ -45,6 +45,10 @@ pub struct Certificate {
     pub canif_version: String,
     pub catalogue_sha256: String,
     pub certificate: String,
+    /// The choices the documents leave that the verdicts rest on: declared,
+    /// or shown by the device where it declared none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub choices: Vec<String>,
     pub conforms: bool,
     /// When the run started, RFC 3339 in UTC.
     pub date: String,
@@ -78,6 +82,7 @@ impl Certificate {
             canif_version: m.canif_version.clone(),
             catalogue_sha256: m.catalogue_sha256.clone(),
             certificate: "canif conformance certificate".into(),
+            choices: m.choices.iter().map(ToString::to_string).collect(),
             conforms: report.exit_code() == 0 && m.complete,
             date: crate::report::utc(m.started_unix),
             html_sha256: String::new(),

@@ -113,6 +113,50 @@ pub struct Capabilities {
     pub rx_queue_depth: usize,
     /// Local send queue depth in messages (assumption HS-TX-008).
     pub tx_queue_depth: usize,
+    /// Whether the frame on the wire counts against `tx_queue_depth`: a
+    /// choice the documents leave (HS-TX-012), which a device declares.
+    pub tx_queue_accounting: TxQueueAccounting,
+}
+
+/// What counts against the local send queue's depth when the device decides
+/// whether a batch fits (HS-TX-012). 003 says the first message goes out at
+/// once when the controller is idle and is queued otherwise, but not whether
+/// the frame being sent still takes a place: either reading is documented.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum TxQueueAccounting {
+    /// The frame on the wire has left the queue (canif's reading of 003).
+    #[default]
+    WireOutsideQueue,
+    /// The frame on the wire still takes its place until it is sent.
+    WireInQueue,
+}
+
+impl TxQueueAccounting {
+    pub const ALL: [TxQueueAccounting; 2] = [
+        TxQueueAccounting::WireOutsideQueue,
+        TxQueueAccounting::WireInQueue,
+    ];
+
+    /// The choice's name, as declared (`--declare tx-queue-accounting=NAME`).
+    pub fn name(self) -> &'static str {
+        match self {
+            TxQueueAccounting::WireOutsideQueue => "wire-outside-queue",
+            TxQueueAccounting::WireInQueue => "wire-in-queue",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|a| a.name() == name)
+    }
+
+    /// How many places the queue takes with `waiting` messages queued and,
+    /// perhaps, one on the wire.
+    pub fn taken(self, waiting: usize, on_wire: bool) -> usize {
+        match self {
+            TxQueueAccounting::WireOutsideQueue => waiting,
+            TxQueueAccounting::WireInQueue => waiting + usize::from(on_wire),
+        }
+    }
 }
 
 impl Capabilities {
@@ -145,6 +189,7 @@ impl Capabilities {
             max_slots: 32,
             rx_queue_depth: 150,
             tx_queue_depth: 64,
+            tx_queue_accounting: TxQueueAccounting::default(),
         }
     }
 }

@@ -160,8 +160,12 @@ impl Device {
         }
         // G3: never more than the slots the image has.
         let count = usize::from(outputs.no_of_tx_messages()).min(self.layout.tx_slots);
-        // HS-TX-012: the frame on the wire has left the queue (003).
-        let waiting = self.send_queue.len();
+        // HS-TX-012: whether the frame on the wire still takes a place is the
+        // device's declared choice (by default it has left the queue, 003).
+        let waiting = self
+            .caps
+            .tx_queue_accounting
+            .taken(self.send_queue.len(), self.in_flight.is_some());
         if waiting > 0 && waiting + count > self.caps.tx_queue_depth {
             return; // HS-TX-008: not accepted (and not acknowledged) until there is room.
         }

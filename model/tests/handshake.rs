@@ -3,7 +3,7 @@
 mod common;
 
 use canif_model::client::PlcClient;
-use canif_model::config::{FrameFormat, QueueMode};
+use canif_model::config::{FrameFormat, QueueMode, TxQueueAccounting};
 use canif_model::device::Device;
 use canif_model::handshake;
 use common::*;
@@ -121,8 +121,13 @@ fn counters_wrap_from_ffff_to_zero() {
 /// A device whose send queue holds 4 messages, after a batch of 4 (ids 0-3)
 /// was accepted.
 fn four_accepted_of_a_queue_of_four() -> Device {
+    four_accepted_counting(TxQueueAccounting::WireOutsideQueue)
+}
+
+fn four_accepted_counting(accounting: TxQueueAccounting) -> Device {
     let mut caps = caps();
     caps.tx_queue_depth = 4;
+    caps.tx_queue_accounting = accounting;
     let mut device =
         Device::new(&caps, config(FrameFormat::Base11, QueueMode::Standard, 4)).unwrap();
     let batch: Vec<_> = (0..4).map(|i| message(std_frame(i, &[]), 0)).collect();
@@ -168,6 +173,28 @@ fn the_frame_on_the_wire_has_left_the_send_queue() {
         inputs_of(&device).tx_counter(),
         2,
         "the frame on the wire does not count against tx_queue_depth"
+    );
+}
+
+/// The other documented reading of 003, as a device declares it.
+/// Covers: HS-TX-012
+#[test]
+fn a_device_that_declares_the_frame_on_the_wire_in_its_queue_waits_for_it() {
+    let mut device = four_accepted_counting(TxQueueAccounting::WireInQueue);
+    assert_eq!(device.poll_transmit(0), Some(std_frame(0, &[])));
+    let second = outputs_with(&device, 2, 0, &[message(std_frame(0x40, &[]), 0)], 1);
+    device.cycle(&second, 0).unwrap();
+    assert_eq!(
+        inputs_of(&device).tx_counter(),
+        1,
+        "three waiting and one on the wire fill a depth of 4"
+    );
+    device.handle_transmit_complete();
+    device.cycle(&second, 0).unwrap();
+    assert_eq!(
+        inputs_of(&device).tx_counter(),
+        2,
+        "accepted once it is sent"
     );
 }
 

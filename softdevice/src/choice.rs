@@ -8,15 +8,17 @@ pub enum Choice {
     RefusesOversizeBatch,
     DropsMessageWithBadLength,
     Sync1Jitter,
+    CountsFrameOnWire,
 }
 
 impl Choice {
-    pub const ALL: [Choice; 5] = [
+    pub const ALL: [Choice; 6] = [
         Choice::ClearsRxCountWhenIdle,
         Choice::KeepsStaleRxSlots,
         Choice::RefusesOversizeBatch,
         Choice::DropsMessageWithBadLength,
         Choice::Sync1Jitter,
+        Choice::CountsFrameOnWire,
     ];
 
     /// The name used on the command line.
@@ -27,6 +29,7 @@ impl Choice {
             Choice::RefusesOversizeBatch => "refuses-oversize-batch",
             Choice::DropsMessageWithBadLength => "drops-message-with-bad-length",
             Choice::Sync1Jitter => "sync1-jitter",
+            Choice::CountsFrameOnWire => "counts-frame-on-wire",
         }
     }
 
@@ -38,6 +41,7 @@ impl Choice {
             Choice::RefusesOversizeBatch => "acknowledges a batch whose NoOfTxMessages exceeds the slots and sends none of it (G3, HS-TX-010)",
             Choice::DropsMessageWithBadLength => "skips a Tx message whose length field is out of range instead of clamping it (G3, LAY-GEN-008)",
             Choice::Sync1Jitter => "starts the first message of a batch 400 ns after SYNC1, within the 500 ns jitter (003, PDX-004)",
+            Choice::CountsFrameOnWire => "counts the frame on the wire against the send queue's depth until it is sent (HS-TX-012 the other way; declared as tx-queue-accounting=wire-in-queue)",
         }
     }
 

@@ -225,8 +225,8 @@ impl SoftDevice {
         if self.has(Fault::SendsOneMoreThanAsked) {
             count = (count + 1).min(usize::from(self.settings.tx_slots));
         }
-        // The frame on the wire is no longer in the send queue (003).
-        let busy = self.send_fifo.len();
+        // HS-TX-012, a choice: does the frame on the wire still count?
+        let busy = self.queue_places_taken();
         if self.has(Fault::AckBeforeAccept) {
             put16(&mut self.input, header::TX_COUNTER, requested);
             self.deferred_tx = Some(requested);
@@ -560,6 +560,14 @@ impl SoftDevice {
         if let Some(word) = self.controller.get_mut(index) {
             *word = value;
         }
+    }
+
+    /// The places of the send queue a batch must find room beside: the
+    /// frames waiting, and the one on the wire where the device counts it
+    /// (003 leaves it open; by default it has left the queue).
+    fn queue_places_taken(&self) -> usize {
+        let on_wire = self.chose(Choice::CountsFrameOnWire) && self.on_wire.is_some();
+        self.send_fifo.len() + usize::from(on_wire)
     }
 }
 

@@ -72,6 +72,8 @@ impl Profile {
             max_slots: self.max_slots,
             rx_queue_depth: self.rx_queue_depth,
             tx_queue_depth: self.tx_queue_depth,
+            // A device's choice, not the profile's: declared per run.
+            tx_queue_accounting: Default::default(),
         }
     }
 

@@ -8,21 +8,23 @@ use canif_harness::device::bus::BusChoice;
 use canif_harness::device::server::{self, Build};
 use canif_harness::device::IutKind;
 
-use super::soft_device_faults;
+use super::{soft_device_choices, soft_device_faults};
 
 /// `canif device --stdio [--bus socketcan:IFACE]`: the soft device behind the
 /// adapter protocol.
-pub(crate) fn device(stdio: bool, faults: &[String], protocol: u64, bus: Option<&str>) -> ExitCode {
+pub(crate) fn device(
+    stdio: bool,
+    (faults, choices): (&[String], &[String]),
+    protocol: u64,
+    bus: Option<&str>,
+) -> ExitCode {
     if !stdio {
         eprintln!("canif device needs --stdio: its process image is served over the adapter protocol (docs/adapter-protocol.md)");
         return ExitCode::from(2);
     }
-    let kind = match soft_device_faults(faults) {
-        Ok(faults) => IutKind::SoftDevice {
-            faults,
-            choices: vec![],
-        },
-        Err(code) => return code,
+    let kind = match (soft_device_faults(faults), soft_device_choices(choices)) {
+        (Ok(faults), Ok(choices)) => IutKind::SoftDevice { faults, choices },
+        (Err(code), _) | (_, Err(code)) => return code,
     };
     let build: &Build<'_> = &|caps, config| kind.build(caps, config);
     let served = match bus {
@@ -47,7 +49,7 @@ pub(crate) fn ethercat_terminal(
     catalogue: &canif_spec::Catalogue,
     (interface, bus): (&str, Option<&str>),
     profile: &str,
-    faults: &[String],
+    (faults, choices): (&[String], &[String]),
 ) -> ExitCode {
     use canif_harness::device::ethercat::{emulated_terminal, served, Emulated};
     let Some(profile) = catalogue.profile(profile) else {
@@ -61,13 +63,13 @@ pub(crate) fn ethercat_terminal(
         );
         return ExitCode::from(2);
     };
-    let faults = match soft_device_faults(faults) {
-        Ok(faults) => faults,
-        Err(code) => return code,
+    let (faults, choices) = match (soft_device_faults(faults), soft_device_choices(choices)) {
+        (Ok(faults), Ok(choices)) => (faults, choices),
+        (Err(code), _) | (_, Err(code)) => return code,
     };
     let emulated = Emulated {
         faults,
-        choices: vec![],
+        choices,
         link_fault: None,
     };
     let can = match bus.map(canif_kernel::BusSpec::parse).transpose() {
@@ -122,7 +124,7 @@ pub(crate) fn ethercat_terminal(
     _: &canif_spec::Catalogue,
     (interface, _): (&str, Option<&str>),
     _: &str,
-    _: &[String],
+    _: (&[String], &[String]),
 ) -> ExitCode {
     eprintln!("--ethercat {interface}: this canif was built without Linux sockets (cargo feature `socketcan`)");
     ExitCode::from(2)

@@ -148,3 +148,40 @@ pub(crate) fn resolve_client(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
         (None, Some(_)) => unreachable!("a fault without --iut is the soft client"),
     }
 }
+
+/// The choices `--declare` names (NAME=VALUE, or @FILE as `canif probe`
+/// writes it: a JSON object of NAME: VALUE), or the exit code of a usage error.
+pub(crate) fn declared_choices(
+    declare: &[String],
+) -> Result<canif_harness::device::choices::Declared, ExitCode> {
+    let mut declared = canif_harness::device::choices::Declared::default();
+    for text in declare {
+        let lines: Vec<String> = match text.strip_prefix('@') {
+            None => vec![text.clone()],
+            Some(path) => {
+                let read = std::fs::read_to_string(path)
+                    .map_err(|e| e.to_string())
+                    .and_then(|json| {
+                        serde_json::from_str::<std::collections::BTreeMap<String, String>>(&json)
+                            .map_err(|e| {
+                                format!("not a JSON object of choice names and values: {e}")
+                            })
+                    });
+                match read {
+                    Ok(choices) => choices.iter().map(|(n, v)| format!("{n}={v}")).collect(),
+                    Err(error) => {
+                        eprintln!("--declare @{path}: {error}");
+                        return Err(ExitCode::from(2));
+                    }
+                }
+            }
+        };
+        for line in lines {
+            if let Err(error) = declared.declare(&line) {
+                eprintln!("--declare {text}: {error}");
+                return Err(ExitCode::from(2));
+            }
+        }
+    }
+    Ok(declared)
+}

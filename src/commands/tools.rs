@@ -136,3 +136,73 @@ pub(crate) fn frame_time(
     }
     ExitCode::SUCCESS
 }
+
+/// `canif probe`: each profile's scenarios that tell the send queue's
+/// accountings apart, under each; the finding written to `out`.
+pub(crate) fn probe(
+    kind: &canif_harness::device::IutKind,
+    profiles: &[&canif_spec::Profile],
+    out: &std::path::Path,
+) -> ExitCode {
+    use canif_harness::device::probe::{finding, probe, Finding};
+    let options = canif_harness::device::Options::quick(1);
+    let mut probes = Vec::new();
+    for profile in profiles {
+        for probed in probe(kind, profile, &options) {
+            let passes: Vec<&str> = probed.passes.iter().map(|a| a.name()).collect();
+            eprintln!(
+                "{:<16} {:<40} passes under: {}{}",
+                probed.profile,
+                probed.scenario,
+                if passes.is_empty() {
+                    "none".to_string()
+                } else {
+                    passes.join(", ")
+                },
+                probed
+                    .errors
+                    .iter()
+                    .map(|e| format!("; {e}"))
+                    .collect::<String>()
+            );
+            probes.push(probed);
+        }
+    }
+    let choice = "tx-queue-accounting";
+    let (said, code, json) = match finding(&probes) {
+        Finding::Takes(accounting) => (
+            format!("{choice}={}", accounting.name()),
+            ExitCode::SUCCESS,
+            Some(serde_json::json!({ choice: accounting.name() })),
+        ),
+        Finding::Undecided => (
+            format!("{choice}: no scenario told the choices apart; nothing to declare"),
+            ExitCode::SUCCESS,
+            Some(serde_json::json!({})),
+        ),
+        Finding::Neither => (
+            format!("{choice}: a scenario passed under no documented choice (HS-TX-012 broken either way)"),
+            ExitCode::from(1),
+            None,
+        ),
+        Finding::Inconsistent => (
+            format!("{choice}: the scenarios disagree (one passed only under one choice, another only under the other)"),
+            ExitCode::from(1),
+            None,
+        ),
+    };
+    println!("{said}");
+    if let Some(json) = json {
+        let text = serde_json::to_string_pretty(&json).expect("a JSON object") + "\n";
+        if let Err(error) = std::fs::write(out, text) {
+            eprintln!("cannot write {}: {error}", out.display());
+            return ExitCode::from(2);
+        }
+        eprintln!(
+            "written to {} (canif run --declare @{})",
+            out.display(),
+            out.display()
+        );
+    }
+    code
+}

@@ -4,11 +4,13 @@
 
 use std::time::Duration;
 
-use canif_model::config::{Capabilities, InterfaceConfig};
+use canif_model::config::{Capabilities, InterfaceConfig, TxQueueAccounting};
 use canif_model::device::Device;
 use canif_softdevice::{Choice, Fault, SoftDevice};
 
 use crate::adapter::protocol::OwnedBus;
+use crate::device::choices::Declared;
+use crate::device::ethercat::EthercatLink;
 use crate::device::exec_iut::{Configured, ExecIut};
 use crate::device::iut::{soft_settings, BuildError, Iut, ModelIut, SoftDeviceIut};
 use crate::error::{IutCause, IutError};
@@ -67,9 +69,17 @@ impl IutKind {
     ) -> Result<Box<dyn Iut>, BuildError> {
         let refused = |e: &dyn std::fmt::Display| BuildError::Refused(e.to_string());
         match self {
-            IutKind::Model => Ok(Box::new(ModelIut(
-                Device::new(caps, config.clone()).map_err(|e| refused(&e))?,
-            ))),
+            // The model as an IUT takes its own choices, whatever canif
+            // judges it by (what it declares: `IutKind::declared`).
+            IutKind::Model => {
+                let own = Capabilities {
+                    tx_queue_accounting: TxQueueAccounting::default(),
+                    ..caps.clone()
+                };
+                Ok(Box::new(ModelIut(
+                    Device::new(&own, config.clone()).map_err(|e| refused(&e))?,
+                )))
+            }
             IutKind::Lib { path } => {
                 Ok(Box::new(crate::device::lib_iut::build(path, caps, config)?))
             }
@@ -161,6 +171,32 @@ impl IutKind {
                     ..
                 }
         )
+    }
+
+    /// What this IUT declares where the documents leave a choice. The soft
+    /// device and the model know their own (the soft device's `--choice`); a
+    /// device elsewhere declares on the command line, or not at all.
+    pub fn declared(&self) -> Declared {
+        let soft = |choices: &[Choice]| Declared {
+            tx_queue_accounting: Some(match choices.contains(&Choice::CountsFrameOnWire) {
+                true => TxQueueAccounting::WireInQueue,
+                false => TxQueueAccounting::WireOutsideQueue,
+            }),
+        };
+        match self {
+            IutKind::Model => soft(&[]),
+            IutKind::SoftDevice { choices, .. } => soft(choices),
+            IutKind::Ethercat {
+                link: EthercatLink::Emulated(emulated) | EthercatLink::Veth { emulated, .. },
+                ..
+            } => soft(&emulated.choices),
+            IutKind::Exec { .. }
+            | IutKind::Lib { .. }
+            | IutKind::Ethercat {
+                link: EthercatLink::Interface { .. },
+                ..
+            } => Declared::default(),
+        }
     }
 
     /// This IUT for `profile`: an EtherCAT terminal is checked against the profile's identity.

@@ -2,11 +2,14 @@
 //! scenario of every interface the profile offers, each in lockstep with the
 //! model. The device side of [`crate::run::Side`].
 
-use canif_model::config::Capabilities;
+use std::sync::{Arc, Mutex};
+
+use canif_model::config::{Capabilities, TxQueueAccounting};
 use canif_model::Nanos;
 use canif_spec::{Profile, ReqId, Scope, Side as SideName, Suite};
 
 use super::cases::scenarios;
+use super::choices::{Declared, Observed, TX_QUEUE_ACCOUNTING_IDS, TX_QUEUE_ACCOUNTING_SETTLED_BY};
 use super::iut_kind::IutKind;
 use super::lockstep::run_scenario;
 use super::refusals::{check_refusals, refused, REFUSALS, REFUSAL_IDS};
@@ -38,6 +41,12 @@ pub struct Options {
     /// After the IUT breaks in a profile, report the profile's remaining
     /// scenarios as skipped instead of starting the broken IUT again.
     pub fail_fast: bool,
+    /// What the command line declares of the device's choices (over what
+    /// the IUT kind declares itself).
+    pub declared: Declared,
+    /// What each profile's run saw an undeclared device choose (shared by
+    /// the clones a run makes, read when the report is written).
+    pub observed: Arc<Mutex<Vec<Observed>>>,
 }
 
 impl Options {
@@ -53,6 +62,8 @@ impl Options {
             bus: BusChoice::Sim,
             fail_fast: true,
             selection: Selection::default(),
+            declared: Declared::default(),
+            observed: Arc::default(),
         }
     }
 }
@@ -64,6 +75,77 @@ impl Default for Options {
             generated_cycles: 200,
             counter_wrap: true,
             ..Options::quick(1)
+        }
+    }
+}
+
+impl Options {
+    /// What the device declares: the command line's word over the IUT's own.
+    pub fn declared_by(&self, kind: &IutKind) -> Declared {
+        self.declared.or(kind.declared())
+    }
+
+    /// What an undeclared device was seen to choose on `profile` so far.
+    fn observed_on(&self, profile: &str) -> Option<TxQueueAccounting> {
+        let observed = self.observed.lock().unwrap_or_else(|e| e.into_inner());
+        observed
+            .iter()
+            .find(|o| o.profile == profile)
+            .map(|o| o.tx_queue_accounting)
+    }
+
+    fn observe(&self, profile: &str, tx_queue_accounting: TxQueueAccounting, scenario: &str) {
+        let mut observed = self.observed.lock().unwrap_or_else(|e| e.into_inner());
+        if !observed.iter().any(|o| o.profile == profile) {
+            observed.push(Observed {
+                profile: profile.to_string(),
+                tx_queue_accounting,
+                scenario: scenario.to_string(),
+            });
+        }
+    }
+
+    /// One scenario, judged by the choice the device declared, or the one a
+    /// scenario before showed; a device that declared none and has shown
+    /// none yet passes under any documented choice, and the first scenario
+    /// that tells them apart settles which one holds for the rest.
+    fn run_judged_by_choice(
+        &self,
+        kind: &IutKind,
+        mut caps: Capabilities,
+        scenario: &Scenario,
+        profile: &str,
+    ) -> ScenarioRun {
+        let declared = self.declared_by(kind).tx_queue_accounting;
+        let settled = declared.or_else(|| self.observed_on(profile));
+        caps.tx_queue_accounting = settled.unwrap_or_default();
+        let run = run_scenario(kind, &caps, scenario, scenario.steps());
+        if settled.is_some() {
+            return run;
+        }
+        match &run.outcome {
+            Outcome::Fail(failure)
+                if failure
+                    .requirements
+                    .iter()
+                    .any(|id| TX_QUEUE_ACCOUNTING_IDS.contains(id)) =>
+            {
+                let tried = caps.tx_queue_accounting;
+                for other in TxQueueAccounting::ALL.into_iter().filter(|a| *a != tried) {
+                    caps.tx_queue_accounting = other;
+                    let again = run_scenario(kind, &caps, scenario, scenario.steps());
+                    if matches!(again.outcome, Outcome::Pass) {
+                        self.observe(profile, other, &scenario.name);
+                        return again;
+                    }
+                }
+                run
+            }
+            Outcome::Pass if scenario.covers.contains(&TX_QUEUE_ACCOUNTING_SETTLED_BY) => {
+                self.observe(profile, caps.tx_queue_accounting, &scenario.name);
+                run
+            }
+            _ => run,
         }
     }
 }
@@ -131,7 +213,7 @@ impl Side for Options {
                 .collect();
             scenario.trace = Some((dir.join(&profile.name), name, self.trace_epoch));
         }
-        let mut run = run_scenario(kind, &caps, &scenario, scenario.steps());
+        let mut run = self.run_judged_by_choice(kind, caps, &scenario, &profile.name);
         // Refusing an interface the profile offers is the device's failure,
         // not a broken exchange; what the scenario needed it for is not run.
         if let Outcome::Error(RunError::Configuration(Refusal::Iut(reason))) = &run.outcome {
@@ -219,6 +301,8 @@ impl SelfCheck for Options {
     fn with_fault(&self, fault: Self::Fault) -> (Self, IutKind) {
         let options = Options {
             counter_wrap: fault == canif_softdevice::Fault::CounterDoesNotWrap,
+            // Each fault's run sees its own device's choices, not another's.
+            observed: Arc::default(),
             ..self.clone()
         };
         let kind = IutKind::SoftDevice {

@@ -57,6 +57,43 @@ pub struct RunMeta {
     /// The EtherCAT terminals the run met, one per profile (device side over EtherCAT).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub terminals: Vec<TerminalEntry>,
+    /// The choices the documents leave, as the device declared them or a
+    /// scenario showed them (device side).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub choices: Vec<ChoiceEntry>,
+}
+
+/// One choice the run judged the device by.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ChoiceEntry {
+    /// `NAME=VALUE`, as `--declare` takes it.
+    pub choice: String,
+    /// How canif knows it.
+    pub how: ChoiceSource,
+}
+
+/// Where a choice came from.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ChoiceSource {
+    /// The device (or the command line for it) declared it, for every profile.
+    Declared,
+    /// Undeclared: on this profile, this scenario passed only under it (or
+    /// passed under it, being the first to tell the choices apart).
+    Observed { profile: String, scenario: String },
+}
+
+impl std::fmt::Display for ChoiceEntry {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.how {
+            ChoiceSource::Declared => write!(f, "{} (declared)", self.choice),
+            ChoiceSource::Observed { profile, scenario } => write!(
+                f,
+                "{} on {profile} (undeclared; shown by `{scenario}`)",
+                self.choice
+            ),
+        }
+    }
 }
 
 /// An EtherCAT terminal as canif's master found it.
@@ -103,6 +140,7 @@ impl RunMeta {
                 .map_or(0, |d| d.as_secs()),
             suite: SuiteKind::Interface,
             terminals: Vec::new(),
+            choices: Vec::new(),
         }
     }
 }

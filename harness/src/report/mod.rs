@@ -10,8 +10,8 @@ mod summary;
 
 pub use diagram::timing_diagram;
 pub use file::{
-    CheckEntry, FailureEntry, Product, ProfileEntry, ReportFile, RunMeta, SuiteKind, TerminalEntry,
-    TotalsEntry, VerdictEntry, REPORT_FORMAT,
+    CheckEntry, ChoiceEntry, ChoiceSource, FailureEntry, Product, ProfileEntry, ReportFile,
+    RunMeta, SuiteKind, TerminalEntry, TotalsEntry, VerdictEntry, REPORT_FORMAT,
 };
 pub use summary::utc;
 

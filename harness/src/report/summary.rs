@@ -60,6 +60,14 @@ impl RunReport {
         if let Some(left_out) = &self.meta.left_out {
             let _ = writeln!(md, "\nLeft out: {left_out}.");
         }
+        if !self.meta.choices.is_empty() {
+            let choices: Vec<String> = self.meta.choices.iter().map(ToString::to_string).collect();
+            let _ = writeln!(
+                md,
+                "\nJudged by the choices the documents leave: {}.",
+                choices.join("; ")
+            );
+        }
         if !self.meta.terminals.is_empty() {
             md.push_str("\n| EtherCAT terminal | identity (vendor, product, revision, serial) | 0x1C32:05 | idle cycles | period | missed | mean | worst |\n|---|---|---|---|---|---|---|---|\n");
             for t in &self.meta.terminals {

@@ -9,7 +9,7 @@ use canif_harness::device::ethercat::Pace;
 #[cfg(feature = "socketcan")]
 use canif_harness::device::kernel_bus::KernelBusOptions;
 use canif_harness::device::{IutKind, Options};
-use canif_harness::report::{RunMeta, RunReport};
+use canif_harness::report::{ChoiceEntry, ChoiceSource, RunMeta, RunReport};
 use canif_harness::{Outcome, RunError};
 use canif_spec::Catalogue;
 
@@ -157,6 +157,7 @@ pub(crate) fn execute(
     let mut meta = meta;
     meta.terminals = survey_terminals(kind, plan, pace);
     let lockstep = plan.run_profiles(catalogue, kind, "cycles");
+    meta.choices = judged_choices(options, kind);
     let iut_broke = lockstep.iter().flat_map(|p| &p.runs).any(|r| {
         matches!(
             r.outcome,
@@ -179,6 +180,33 @@ pub(crate) fn execute(
         plan.run_gherkin(&canif_features::UnderTest::Device(kind.clone()))
     };
     plan.assemble(catalogue, lockstep, gherkin, left_out, meta, started)
+}
+
+/// The choices the verdicts rest on: declared for the device, or shown by a
+/// scenario on a profile where it declared none.
+fn judged_choices(options: &Options, kind: &IutKind) -> Vec<ChoiceEntry> {
+    let declared = options
+        .declared_by(kind)
+        .lines()
+        .into_iter()
+        .map(|choice| ChoiceEntry {
+            choice,
+            how: ChoiceSource::Declared,
+        });
+    let observed = options
+        .observed
+        .lock()
+        .map(|o| o.clone())
+        .unwrap_or_default();
+    declared
+        .chain(observed.into_iter().map(|o| ChoiceEntry {
+            choice: o.line(),
+            how: ChoiceSource::Observed {
+                profile: o.profile,
+                scenario: o.scenario,
+            },
+        }))
+        .collect()
 }
 
 /// The bus as the report names it.

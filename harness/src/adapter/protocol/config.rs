@@ -108,6 +108,9 @@ struct CapsFields {
     max_slots: u8,
     rx_queue_depth: usize,
     tx_queue_depth: usize,
+    /// The device's own choice, declared to canif, never sent to it.
+    #[serde(skip)]
+    tx_queue_accounting: canif_model::config::TxQueueAccounting,
 }
 
 /// `configure.bus`: a SocketCAN interface an external IUT opens itself; its

@@ -1,0 +1,165 @@
+//! Issue 26's declared choices, as a user meets them: where 003 leaves open
+//! whether the frame on the wire counts against the send queue (HS-TX-012),
+//! a device that declares its choice is judged by it, one that declares
+//! nothing passes under either and is held to the one it showed, and `canif
+//! probe` finds the choice and writes it as a declaration `run` takes.
+//!
+//! The device that counts the frame on the wire is the soft device with
+//! `--choice counts-frame-on-wire`; behind the adapter protocol (`canif
+//! device --stdio`) it declares nothing, as an independent device would.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const BIN: &str = env!("CARGO_BIN_EXE_canif");
+
+fn canif(args: &[&str]) -> Output {
+    Command::new(BIN).args(args).output().expect("canif runs")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("canif-choices-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+fn report(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap()
+}
+
+/// The device that counts the frame on the wire, as another process.
+fn counting_device() -> String {
+    format!("exec:{BIN} device --stdio --choice counts-frame-on-wire")
+}
+
+/// `canif run` of the scenario that tells the accountings apart, on fc510x.
+fn backpressure(name: &str, iut: &str, extra: &[&str]) -> (Output, PathBuf) {
+    let dir = scratch(name);
+    let mut args = vec![
+        "run",
+        "--profile",
+        "fc510x",
+        "--scenario",
+        "tx-backpressure",
+        "--iut",
+        iut,
+        "--report",
+        dir.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    (canif(&args), dir)
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+#[test]
+fn an_undeclared_device_passes_under_the_choice_it_shows_and_the_report_says_which() {
+    let (out, dir) = backpressure("undeclared", &counting_device(), &[]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let choices = &report(&dir)["meta"]["choices"];
+    assert_eq!(
+        choices[0]["choice"], "tx-queue-accounting=wire-in-queue",
+        "{choices}"
+    );
+    assert_eq!(
+        choices[0]["how"]["observed"]["profile"], "fc510x",
+        "{choices}"
+    );
+    let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap();
+    assert!(
+        summary.contains("undeclared; shown by `tx-backpressure"),
+        "{summary}"
+    );
+}
+
+#[test]
+fn a_declared_choice_is_judged_as_declared_and_breaking_it_fails() {
+    let declare = ["--declare", "tx-queue-accounting=wire-in-queue"];
+    let (out, dir) = backpressure("declared", &counting_device(), &declare);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert_eq!(report(&dir)["meta"]["choices"][0]["how"], "declared");
+    // The same device declaring the other reading fails the Tx handshake.
+    let other = ["--declare", "tx-queue-accounting=wire-outside-queue"];
+    let (out, dir) = backpressure("declared-other", &counting_device(), &other);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap();
+    assert!(summary.contains("FAIL fc510x::HS-TX-"), "{summary}");
+    // And the soft device, which does not count it, fails when declared to.
+    let (out, _) = backpressure("soft-declared", "softdevice", &declare);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+}
+
+#[test]
+fn the_soft_devices_choice_is_its_declaration() {
+    let (out, dir) = backpressure(
+        "soft-choice",
+        "softdevice",
+        &["--choice", "counts-frame-on-wire"],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert_eq!(
+        report(&dir)["meta"]["choices"][0]["choice"],
+        "tx-queue-accounting=wire-in-queue"
+    );
+}
+
+#[test]
+fn probe_finds_the_choice_and_run_takes_its_file() {
+    let dir = scratch("probe");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("choices.json");
+    let out = canif(&[
+        "probe",
+        "--profile",
+        "fc510x",
+        "--iut",
+        &counting_device(),
+        "--out",
+        file.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout).trim(),
+        "tx-queue-accounting=wire-in-queue"
+    );
+    let written: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+    assert_eq!(
+        written,
+        serde_json::json!({"tx-queue-accounting": "wire-in-queue"})
+    );
+    let at_file = format!("@{}", file.display());
+    let (out, report_dir) = backpressure("probed", &counting_device(), &["--declare", &at_file]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert_eq!(report(&report_dir)["meta"]["choices"][0]["how"], "declared");
+}
+
+#[test]
+fn a_declaration_that_cannot_be_read_is_a_usage_error_naming_it() {
+    for (declare, says) in [
+        ("wire-in-queue", "is not NAME=VALUE"),
+        ("queue=deep", "no choice is called `queue`"),
+        (
+            "tx-queue-accounting=maybe",
+            "wire-outside-queue or wire-in-queue",
+        ),
+        (
+            "@/nonexistent/choices.json",
+            "--declare @/nonexistent/choices.json",
+        ),
+    ] {
+        let out = canif(&["run", "--profile", "fc510x", "--declare", declare]);
+        assert_eq!(out.status.code(), Some(2), "{declare}: {}", stderr(&out));
+        assert!(stderr(&out).contains(says), "{declare}: {}", stderr(&out));
+    }
+    let out = canif(&[
+        "run",
+        "--side",
+        "plc",
+        "--declare",
+        "tx-queue-accounting=wire-in-queue",
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+}
