@@ -163,3 +163,36 @@ fn a_declaration_that_cannot_be_read_is_a_usage_error_naming_it() {
     ]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
 }
+
+/// Ruling R10: a device's first message starts its own output delay after
+/// SYNC1, within 500 ns, and no document gives the delay. A device that
+/// starts every batch 2 µs after SYNC1 conforms when it declares nothing or
+/// declares 2 µs, and fails PDX-004 when it declares 0.
+#[test]
+fn a_constant_output_delay_after_sync1_conforms_unless_another_is_declared() {
+    let late = format!("exec:{BIN} device --stdio --fault sync1-late");
+    let dc = |name: &str, extra: &[&str]| {
+        let dir = scratch(name);
+        let mut args = vec![
+            "run",
+            "--profile",
+            "el6751-mdp",
+            "--scenario",
+            "distributed-clocks",
+            "--iut",
+            &late,
+            "--report",
+            dir.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        (canif(&args), dir)
+    };
+    let (out, _) = dc("r10-undeclared", &[]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let (out, _) = dc("r10-declared", &["--declare", "sync1-output-delay-ns=2000"]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let (out, dir) = dc("r10-zero", &["--declare", "sync1-output-delay-ns=0"]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap();
+    assert!(summary.contains("FAIL el6751-mdp::PDX-004"), "{summary}");
+}

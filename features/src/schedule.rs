@@ -62,15 +62,24 @@ pub fn run(profile: &Profile, scenario: &ScenarioInfo, under_test: &UnderTest) -
     let started = std::time::Instant::now();
     let (caps, name) = (profile.model_capabilities(), profile.name.clone());
     let outcome = match under_test {
-        UnderTest::Device(iut) => run_scenario(
-            &scenario.file,
-            scenario.line,
-            Target {
-                iut: iut.for_profile(profile),
-                profile: name,
-                caps,
-            },
-        ),
+        UnderTest::Device(iut) => {
+            // Judged by what the device declares where the documents leave a choice.
+            let declared = iut.declared();
+            let caps = canif_model::config::Capabilities {
+                tx_queue_accounting: declared.tx_queue_accounting.unwrap_or_default(),
+                sync1_output_delay: declared.sync1_output_delay,
+                ..caps
+            };
+            run_scenario(
+                &scenario.file,
+                scenario.line,
+                Target {
+                    iut: iut.for_profile(profile),
+                    profile: name,
+                    caps,
+                },
+            )
+        }
         UnderTest::Client(client) => run_client_scenario(
             &scenario.file,
             scenario.line,

@@ -440,6 +440,11 @@ impl CanWorld {
         Ok(())
     }
 
+    /// The output delay after SYNC1 the IUT is judged by (R10), once known.
+    pub fn sync1_output_delay(&self) -> Option<Nanos> {
+        self.run.as_ref()?.pair.sync1_output_delay()
+    }
+
     /// How many frames other nodes have sent, ended or still on their way.
     pub fn frames_from_nodes(&self) -> usize {
         self.sent_by_nodes.len() + self.awaited.len()

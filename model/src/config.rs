@@ -116,6 +116,10 @@ pub struct Capabilities {
     /// Whether the frame on the wire counts against `tx_queue_depth`: a
     /// choice the documents leave (HS-TX-012), which a device declares.
     pub tx_queue_accounting: TxQueueAccounting,
+    /// With Distributed Clocks, the time from SYNC1 to the start of the first
+    /// Tx message (003's output delay; ruling R10: the device's constant, no
+    /// document gives it): declared, or `None` and measured at the first batch.
+    pub sync1_output_delay: Option<Nanos>,
 }
 
 /// What counts against the local send queue's depth when the device decides
@@ -190,6 +194,7 @@ impl Capabilities {
             rx_queue_depth: 150,
             tx_queue_depth: 64,
             tx_queue_accounting: TxQueueAccounting::default(),
+            sync1_output_delay: None,
         }
     }
 }

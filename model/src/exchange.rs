@@ -30,7 +30,9 @@ impl ExchangeMode {
     }
 }
 
-/// The largest jitter of the first Tx message's start against SYNC1.
+/// The largest jitter of the first Tx message's start against SYNC1 plus the
+/// device's output delay (003; ruling R10: the start lies in
+/// `[SYNC1 + delay, SYNC1 + delay + SYNC1_TX_JITTER]`).
 ///
 /// Requirements: PDX-004.
 pub const SYNC1_TX_JITTER: Nanos = 500;

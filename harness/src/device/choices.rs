@@ -7,6 +7,7 @@
 use std::fmt;
 
 use canif_model::config::TxQueueAccounting;
+use canif_model::Nanos;
 use canif_spec::{req_ids, ReqId};
 
 /// What a device says it does where the documents leave a choice; `None`: it
@@ -15,15 +16,26 @@ use canif_spec::{req_ids, ReqId};
 pub struct Declared {
     /// HS-TX-012: whether the frame on the wire counts against the send queue.
     pub tx_queue_accounting: Option<TxQueueAccounting>,
+    /// PDX-004 (ruling R10): the time from SYNC1 to the start of the first Tx
+    /// message, in ns. Undeclared, each scenario measures it and holds every
+    /// batch to within the 500 ns jitter of the others.
+    pub sync1_output_delay: Option<Nanos>,
 }
 
 /// The choices a device can declare, by name.
-pub const CHOICES: &[(&str, &str)] = &[(
-    TX_QUEUE_ACCOUNTING,
-    "whether the frame on the wire counts against the send queue's depth (HS-TX-012): wire-outside-queue | wire-in-queue",
-)];
+pub const CHOICES: &[(&str, &str)] = &[
+    (
+        TX_QUEUE_ACCOUNTING,
+        "whether the frame on the wire counts against the send queue's depth (HS-TX-012): wire-outside-queue | wire-in-queue",
+    ),
+    (
+        SYNC1_OUTPUT_DELAY,
+        "with Distributed Clocks, ns from SYNC1 to the start of the first Tx message (PDX-004, ruling R10)",
+    ),
+];
 
 const TX_QUEUE_ACCOUNTING: &str = "tx-queue-accounting";
+const SYNC1_OUTPUT_DELAY: &str = "sync1-output-delay-ns";
 
 /// The requirements the send queue's accounting decides: a failure blamed on
 /// one of them, while the device declared none, is tried under the other.
@@ -54,6 +66,10 @@ impl fmt::Display for DeclareError {
                 f,
                 "no choice is called `{name}`; the choices are {}",
                 names.join(", ")
+            ),
+            DeclareError::UnknownValue { choice, value } if choice == SYNC1_OUTPUT_DELAY => write!(
+                f,
+                "{choice} cannot be `{value}`; it is a number of nanoseconds"
             ),
             DeclareError::UnknownValue { choice, value } => {
                 let values: Vec<&str> = TxQueueAccounting::ALL.iter().map(|a| a.name()).collect();
@@ -88,6 +104,14 @@ impl Declared {
                 self.tx_queue_accounting = Some(accounting);
                 Ok(())
             }
+            SYNC1_OUTPUT_DELAY => {
+                let delay = value.parse().map_err(|_| DeclareError::UnknownValue {
+                    choice: name.to_string(),
+                    value: value.to_string(),
+                })?;
+                self.sync1_output_delay = Some(delay);
+                Ok(())
+            }
             other => Err(DeclareError::UnknownChoice(other.to_string())),
         }
     }
@@ -96,15 +120,19 @@ impl Declared {
     pub fn or(self, fallback: Declared) -> Declared {
         Declared {
             tx_queue_accounting: self.tx_queue_accounting.or(fallback.tx_queue_accounting),
+            sync1_output_delay: self.sync1_output_delay.or(fallback.sync1_output_delay),
         }
     }
 
     /// Each declared choice as `NAME=VALUE`.
     pub fn lines(&self) -> Vec<String> {
-        self.tx_queue_accounting
-            .map(|a| format!("{TX_QUEUE_ACCOUNTING}={}", a.name()))
-            .into_iter()
-            .collect()
+        let accounting = self
+            .tx_queue_accounting
+            .map(|a| format!("{TX_QUEUE_ACCOUNTING}={}", a.name()));
+        let delay = self
+            .sync1_output_delay
+            .map(|ns| format!("{SYNC1_OUTPUT_DELAY}={ns}"));
+        accounting.into_iter().chain(delay).collect()
     }
 }
 
@@ -151,15 +179,31 @@ mod tests {
             value.contains("wire-outside-queue or wire-in-queue"),
             "{value}"
         );
+        declared.declare("sync1-output-delay-ns=2500").unwrap();
+        assert_eq!(declared.sync1_output_delay, Some(2_500));
+        assert_eq!(
+            declared.lines(),
+            [
+                "tx-queue-accounting=wire-in-queue",
+                "sync1-output-delay-ns=2500"
+            ]
+        );
+        let delay = declared
+            .declare("sync1-output-delay-ns=-1")
+            .unwrap_err()
+            .to_string();
+        assert!(delay.contains("a number of nanoseconds"), "{delay}");
     }
 
     #[test]
     fn what_is_declared_wins_over_the_fallback() {
         let wire_in = Declared {
             tx_queue_accounting: Some(TxQueueAccounting::WireInQueue),
+            sync1_output_delay: Some(2_000),
         };
         let outside = Declared {
             tx_queue_accounting: Some(TxQueueAccounting::WireOutsideQueue),
+            sync1_output_delay: None,
         };
         assert_eq!(wire_in.or(outside), wire_in);
         assert_eq!(Declared::default().or(outside), outside);

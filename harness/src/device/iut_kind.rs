@@ -182,6 +182,8 @@ impl IutKind {
                 true => TxQueueAccounting::WireInQueue,
                 false => TxQueueAccounting::WireOutsideQueue,
             }),
+            // It starts at SYNC1 (`sync1-jitter`: within the 500 ns after).
+            sync1_output_delay: Some(0),
         };
         match self {
             IutKind::Model => soft(&[]),

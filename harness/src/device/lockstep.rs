@@ -113,6 +113,7 @@ impl<B: Bus + ?Sized> Lockstep<B> {
         if scenario.judgement == Judgement::Bounds {
             pair.bounds = Some(Bounds::default());
         }
+        pair.sync1_delay = caps.sync1_output_delay;
         Ok(Lockstep {
             plc: PlcSide::new(pair.layout, scenario.exchange),
             rules: Rules {

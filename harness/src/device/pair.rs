@@ -41,6 +41,13 @@ pub struct Pair {
     /// Bounds judging (G3) instead of the model's frames and images, when
     /// the scenario asks for it.
     pub bounds: Option<Bounds>,
+    /// With Distributed Clocks, the IUT's declared output delay from SYNC1
+    /// to its first Tx message (R10); `None`: undeclared, measured.
+    pub sync1_delay: Option<Nanos>,
+    /// The earliest and latest output delay measured so far (undeclared).
+    sync1_band: Option<(Nanos, Nanos)>,
+    /// When the IUT's last frame ended: a controller busy at SYNC1 starts later.
+    own_frame_ended: Nanos,
     /// Scenario time.
     pub now: Nanos,
     pub cycle: u64,
@@ -75,6 +82,9 @@ impl Pair {
             iut_pending: None,
             iut_busy: false,
             bounds: None,
+            sync1_delay: None,
+            sync1_band: None,
+            own_frame_ended: 0,
             now: 0,
             cycle: 0,
             frames: 0,
@@ -143,20 +153,15 @@ impl Pair {
         let judged = match self.bounds.as_mut() {
             Some(bounds) => bounds.transmit(actual),
             None => {
-                // Distributed Clocks: the first message of a batch starts at
-                // SYNC1 give or take the jitter (003), and is missing only after it.
-                let now = self.now;
+                // Distributed Clocks: the first message of a batch waits for
+                // SYNC1 and the device's output delay (003, R10).
                 let sync1 = self.model.poll_timeout();
-                let expected = match (sync1, &actual) {
-                    (Some(due), None) if now < due + SYNC1_TX_JITTER => {
-                        self.tolerated += u64::from(now >= due);
-                        None
-                    }
-                    (Some(due), Some(_)) if now + SYNC1_TX_JITTER >= due => {
-                        self.tolerated += u64::from(now != due);
-                        self.model.poll_transmit(due.max(now))
-                    }
-                    _ => self.model.poll_transmit(now),
+                let expected = match sync1 {
+                    Some(due) => match self.held_for_sync1(due, actual.is_some()) {
+                        Ok(expected) => expected,
+                        Err(difference) => return Err(self.fail(difference)),
+                    },
+                    None => self.model.poll_transmit(self.now),
                 };
                 let nothing_sent = actual.is_none();
                 self.transmit_difference(expected, actual)
@@ -171,6 +176,64 @@ impl Pair {
             }
             Err(difference) => Err(self.fail(difference)),
         }
+    }
+
+    /// What the model hands its controller of a batch held for SYNC1 at
+    /// `due`, now that the IUT has `sent` its first frame or not. The start
+    /// lies in [SYNC1 + delay, SYNC1 + delay + 500 ns] (R10): the declared
+    /// delay, or one no document gives, measured: then every start the
+    /// controller was free for lies within 500 ns of every other.
+    fn held_for_sync1(&mut self, due: Nanos, sent: bool) -> Result<Option<Frame>, Difference> {
+        let now = self.now;
+        let jitter = SYNC1_TX_JITTER;
+        match (sent, self.sync1_delay) {
+            (false, Some(delay)) if now < due + delay + jitter => Ok(None),
+            // Undeclared: the IUT's own due time says it still holds the batch.
+            (false, None) if now < due + jitter || self.iut.poll_timeout().is_some() => Ok(None),
+            // Missing past the deadline: late (blamed in `at_sync1`).
+            (false, _) => Ok(self.model.poll_transmit(now)),
+            // Before SYNC1, or before its declared delay: early (`at_sync1`).
+            (true, _) if now < due => Ok(None),
+            (true, Some(delay)) if now < due + delay => Ok(None),
+            (true, Some(delay)) => {
+                self.tolerated += u64::from(now != due + delay);
+                Ok(self.model.poll_transmit(now))
+            }
+            (true, None) => {
+                // A controller still busy at SYNC1 could not start then: its
+                // start says nothing of the delay.
+                if self.own_frame_ended <= due {
+                    let offset = now - due;
+                    let (lo, hi) = self.sync1_band.map_or((offset, offset), |(lo, hi)| {
+                        (lo.min(offset), hi.max(offset))
+                    });
+                    if hi - lo > jitter {
+                        let (lo, hi) = self.sync1_band.unwrap_or((offset, offset));
+                        return Err(Difference {
+                            frames: None,
+                            candidates: blame::SYNC1_LATE,
+                            what: "output delay of the batch's first frame (one delay, 500 ns jitter: R10)"
+                                .into(),
+                            expected: format!(
+                                "{}..={} ns after SYNC1, as the batches before",
+                                hi.saturating_sub(jitter),
+                                lo + jitter
+                            ),
+                            actual: format!("{offset} ns after SYNC1"),
+                        });
+                    }
+                    self.tolerated += u64::from(hi != lo);
+                    self.sync1_band = Some((lo, hi));
+                }
+                Ok(self.model.poll_transmit(now))
+            }
+        }
+    }
+
+    /// The output delay the IUT is judged by: declared, or the shortest
+    /// measured so far (R10); `None` before any batch was held for SYNC1.
+    pub fn sync1_output_delay(&self) -> Option<Nanos> {
+        self.sync1_delay.or(self.sync1_band.map(|(lo, _)| lo))
     }
 
     /// The frame both devices agree to send (or none), or how they differ.
@@ -271,11 +334,14 @@ impl Pair {
     }
 
     /// When the controller must be asked again: the IUT's own due time, or the
-    /// latest the model's SYNC1 allows, whichever comes first.
+    /// latest the model's SYNC1 and the output delay allow, whichever comes first.
     pub fn due(&self) -> Option<Nanos> {
         let deadline = match self.bounds {
             Some(_) => None,
-            None => self.model.poll_timeout().map(|t| t + SYNC1_TX_JITTER),
+            None => self
+                .model
+                .poll_timeout()
+                .map(|t| t + self.sync1_delay.unwrap_or(0) + SYNC1_TX_JITTER),
         };
         [self.iut.poll_timeout(), deadline]
             .into_iter()
@@ -287,6 +353,7 @@ impl Pair {
     pub fn complete(&mut self, frame: Frame, from_iut: bool, end: Nanos) -> Result<(), Outcome> {
         let told = if from_iut {
             self.iut_busy = false;
+            self.own_frame_ended = end;
             self.iut.transmit_complete()
         } else {
             self.iut.receive(&frame, end)
@@ -496,5 +563,38 @@ mod tests {
             .transmit_difference(None, Some(Err(too_wide)))
             .unwrap_err();
         assert_eq!(identifier.candidates, blame::TX_ID_RESERVED);
+    }
+
+    /// R10 without a declared delay: the first start sets it, later starts
+    /// the controller was free for must lie within 500 ns of it; a declared
+    /// delay makes an earlier start early.
+    #[test]
+    fn an_undeclared_output_delay_is_measured_and_held_within_the_jitter() {
+        let mut pair = pair(Box::new(Babbler(frame())));
+        let sync1 = 1_000_000;
+        pair.now = sync1 + 2_000;
+        assert!(
+            pair.held_for_sync1(sync1, true).is_ok(),
+            "the first start sets 2 µs"
+        );
+        assert_eq!(pair.sync1_output_delay(), Some(2_000));
+        pair.now = 2 * sync1 + 2_400;
+        assert!(
+            pair.held_for_sync1(2 * sync1, true).is_ok(),
+            "400 ns later: jitter"
+        );
+        pair.now = 3 * sync1 + 2_600;
+        let wide = pair.held_for_sync1(3 * sync1, true).unwrap_err();
+        assert_eq!(wide.candidates, blame::SYNC1_LATE);
+        assert_eq!(wide.actual, "2600 ns after SYNC1");
+        // A controller still sending at SYNC1 starts later: that says nothing.
+        pair.own_frame_ended = 4 * sync1 + 50_000;
+        pair.now = 4 * sync1 + 50_000;
+        assert!(pair.held_for_sync1(4 * sync1, true).is_ok());
+        // Declared: before the delay is early, the frame not expected yet.
+        pair.sync1_delay = Some(10_000);
+        pair.own_frame_ended = 0;
+        pair.now = 5 * sync1 + 1_000;
+        assert_eq!(pair.held_for_sync1(5 * sync1, true), Ok(None));
     }
 }

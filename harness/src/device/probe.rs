@@ -59,6 +59,7 @@ pub fn probe(kind: &IutKind, profile: &Profile, options: &Options) -> Vec<Probed
                 let under = Options {
                     declared: Declared {
                         tx_queue_accounting: Some(accounting),
+                        ..options.declared
                     },
                     observed: Default::default(),
                     ..options.clone()

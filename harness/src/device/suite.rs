@@ -116,8 +116,11 @@ impl Options {
         scenario: &Scenario,
         profile: &str,
     ) -> ScenarioRun {
-        let declared = self.declared_by(kind).tx_queue_accounting;
-        let settled = declared.or_else(|| self.observed_on(profile));
+        let declared = self.declared_by(kind);
+        caps.sync1_output_delay = declared.sync1_output_delay;
+        let settled = declared
+            .tx_queue_accounting
+            .or_else(|| self.observed_on(profile));
         caps.tx_queue_accounting = settled.unwrap_or_default();
         let run = run_scenario(kind, &caps, scenario, scenario.steps());
         if settled.is_some() {

@@ -111,6 +111,8 @@ struct CapsFields {
     /// The device's own choice, declared to canif, never sent to it.
     #[serde(skip)]
     tx_queue_accounting: canif_model::config::TxQueueAccounting,
+    #[serde(skip)]
+    sync1_output_delay: Option<canif_model::Nanos>,
 }
 
 /// `configure.bus`: a SocketCAN interface an external IUT opens itself; its
