@@ -206,8 +206,13 @@ impl Esc {
                 count |= 2;
             }
         }
-        // An ESC counts a read and a write once each, however many FMMUs served them.
-        (count & 1) + (count >> 1) * 2
+        // An ESC counts a read and a write once each, however many FMMUs
+        // served them: a read 1, a write 1 (LWR) or 2 beside a read (LRW).
+        let write = match datagram.command {
+            Command::Lrw => 2,
+            _ => 1,
+        };
+        (count & 1) + (count >> 1) * write
     }
 
     /// A physically addressed datagram at its ESC. Of a read-multiple-write,
@@ -339,5 +344,44 @@ mod tests {
         assert_eq!(lrw.data, [1, 2, 3, 4, 7, 8]);
         assert_eq!(&esc.memory[0x1100..0x1104], &[1, 2, 3, 4]);
         assert!(touched.completed(&(0x1100..0x1104)));
+    }
+
+    #[test]
+    fn logical_working_counters_follow_the_command() {
+        let mut esc = Esc::new();
+        // FMMU 0 writes logical 0..4 to 0x1000, FMMU 1 reads logical 4..8 from 0x1100.
+        let fmmu = |logical: u32, physical: u16, kind: u8| {
+            let mut record = vec![0u8; 16];
+            record[0..4].copy_from_slice(&logical.to_le_bytes());
+            record[4..6].copy_from_slice(&4u16.to_le_bytes());
+            record[8..10].copy_from_slice(&physical.to_le_bytes());
+            record[11] = kind;
+            record[12] = 1;
+            record
+        };
+        let base = usize::from(crate::register::FMMU_BASE);
+        esc.memory[base..base + 16].copy_from_slice(&fmmu(0, 0x1000, 2));
+        esc.memory[base + 16..base + 32].copy_from_slice(&fmmu(4, 0x1100, 1));
+        let logical = |command, address, len| Datagram {
+            address,
+            ..Datagram::physical(command, 0, 0, vec![0; len])
+        };
+        assert_eq!(
+            run(&mut esc, logical(Command::Lwr, 0, 4)).working_counter,
+            1
+        );
+        assert_eq!(
+            run(&mut esc, logical(Command::Lrd, 4, 4)).working_counter,
+            1
+        );
+        assert_eq!(
+            run(&mut esc, logical(Command::Lrw, 0, 8)).working_counter,
+            3
+        );
+        // An LRD of the output window reads nothing the FMMUs allow.
+        assert_eq!(
+            run(&mut esc, logical(Command::Lrd, 0, 4)).working_counter,
+            0
+        );
     }
 }

@@ -15,4 +15,4 @@ pub mod wire;
 
 pub use sdo::{Entry, ObjectDictionary};
 pub use sii::Identity;
-pub use subdevice::{AlState, Application, Start, SubDevice, Synchronization};
+pub use subdevice::{AlState, Application, Start, SubDevice, Synchronization, Telegrams};

@@ -84,6 +84,17 @@ pub struct SubDevice<A> {
     sdo: SdoServer,
     /// How many SyncManager 2 events ran (for a report).
     pub cycles: u64,
+    /// The logical telegrams that reached it: how a master exchanged the
+    /// process data (003: LRW, or LWR then LRD for separate input update).
+    pub telegrams: Telegrams,
+}
+
+/// Counts of the logical commands a SubDevice processed.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Telegrams {
+    pub lrw: u64,
+    pub lwr: u64,
+    pub lrd: u64,
 }
 
 const MAILBOX_OUT: u16 = 0;
@@ -103,6 +114,7 @@ impl<A: Application> SubDevice<A> {
             state: AlState::Init,
             sdo: SdoServer::default(),
             cycles: 0,
+            telegrams: Telegrams::default(),
         };
         device.set_status(AlState::Init, None);
         device
@@ -119,6 +131,12 @@ impl<A: Application> SubDevice<A> {
         self.esc.local_time = now;
         let mut touched = Touched::default();
         for datagram in &mut frame.datagrams {
+            match datagram.command {
+                crate::wire::Command::Lrw => self.telegrams.lrw += 1,
+                crate::wire::Command::Lwr => self.telegrams.lwr += 1,
+                crate::wire::Command::Lrd => self.telegrams.lrd += 1,
+                _ => {}
+            }
             self.esc.process(datagram, &mut touched);
         }
         self.after(&touched, now);

@@ -5,6 +5,7 @@
 
 use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig, QueueMode, Synchronization};
 use canif_model::device::Device;
+use canif_model::exchange::ExchangeMode;
 use canif_model::filter::{FilterAction, FilterMatch};
 use canif_model::frame::{CanId, Frame};
 use canif_model::info_data::ControllerStatus;
@@ -44,6 +45,12 @@ pub trait Iut {
     fn transmit_plan(&self, now: Nanos) -> Option<Vec<Planned>> {
         let _ = now;
         None
+    }
+    /// How the played master exchanges the process data (003): a device
+    /// reached through real telegrams is sent them that way (LRW, or LWR
+    /// then LRD); one reached otherwise sees no difference.
+    fn exchange_with(&mut self, mode: ExchangeMode) {
+        let _ = mode;
     }
 }
 

@@ -97,7 +97,13 @@ impl<B: Bus + ?Sized> Lockstep<B> {
     ) -> Result<Self, RunError> {
         let model = Device::new(caps, scenario.interface.clone())
             .map_err(|e| RunError::Configuration(Refusal::Model(e)))?;
-        let iut = match kind.build_on(caps, &scenario.interface, bus.owned_bus().as_ref()) {
+        let built = kind
+            .build_on(caps, &scenario.interface, bus.owned_bus().as_ref())
+            .map(|mut iut| {
+                iut.exchange_with(scenario.exchange);
+                iut
+            });
+        let iut = match built {
             // On a real-time bus the kernel's clock, not the harness, orders the times.
             Ok(iut) if bus.real_time() => iut,
             Ok(iut) => Box::new(Ordered::new(iut)),

@@ -96,6 +96,9 @@ impl Iut for Ordered {
     fn transmit_plan(&self, now: Nanos) -> Option<Vec<Planned>> {
         self.inner.transmit_plan(now)
     }
+    fn exchange_with(&mut self, mode: canif_model::exchange::ExchangeMode) {
+        self.inner.exchange_with(mode);
+    }
 }
 
 #[cfg(test)]

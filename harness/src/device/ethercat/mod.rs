@@ -8,6 +8,7 @@
 //! checked to be exactly those.
 
 mod coe;
+mod exchange;
 mod link;
 pub mod objects;
 #[cfg(feature = "socketcan")]
@@ -21,6 +22,7 @@ use std::sync::{Arc, Mutex};
 
 use canif_ethercat::{Identity, SubDevice};
 use canif_model::config::{Capabilities, InterfaceConfig};
+use canif_model::exchange::ExchangeMode;
 use canif_model::frame::Frame;
 use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
@@ -28,7 +30,7 @@ use canif_softdevice::ethercat::{Terminal, TerminalIdentity};
 use canif_softdevice::{Choice, Fault, SoftDevice};
 use canif_spec::EthercatIdentity;
 use ethercrab::subdevice_group::Op;
-use ethercrab::{Command, DefaultLock, SubDeviceGroup};
+use ethercrab::{DefaultLock, SubDeviceGroup};
 
 use crate::device::iut::{soft_controller, soft_settings, BuildError, Iut, Planned, Transmit};
 use crate::error::{IutCause, IutError};
@@ -263,6 +265,10 @@ pub struct EthercatIut {
     serving: Option<veth::Serving>,
     /// What the previous cycle's SyncManager 2 event left in the inputs.
     previous_inputs: Option<Vec<u8>>,
+    /// How the played master exchanges the process data (LRW by default).
+    telegrams: ExchangeMode,
+    /// Where the logical image maps the terminal (read once, for LWR and LRD).
+    windows: Option<exchange::Windows>,
     pub facts: TerminalFacts,
 }
 
@@ -408,6 +414,8 @@ pub fn build(
         #[cfg(feature = "socketcan")]
         serving,
         previous_inputs: None,
+        telegrams: ExchangeMode::Lrw,
+        windows: None,
         facts,
     })
 }
@@ -467,59 +475,17 @@ impl Iut for EthercatIut {
                 .clock
                 .store(now, std::sync::atomic::Ordering::SeqCst);
         }
-        let md = self.master.maindevice();
-        let sub = self
-            .group
-            .subdevice(md, self.position)
-            .map_err(|e| master_error(e, "finding the terminal"))?;
-        {
-            let mut mapped = sub.outputs_raw_mut();
-            if mapped.len() != outputs.len() {
-                return Err(IutError::new(
-                    IutCause::Impossible,
-                    format!(
-                        "the terminal mapped {} output bytes; the configuration's image has {}",
-                        mapped.len(),
-                        outputs.len()
-                    ),
-                ));
-            }
-            mapped.copy_from_slice(outputs);
-        }
-        let response = self
-            .master
-            .drive(self.group.tx_rx(md))
-            .map_err(|e| master_error(e, "LRW"))?;
-        if response.working_counter != LRW_WORKING_COUNTER {
+        let mapped = self.output_len();
+        if mapped != outputs.len() {
             return Err(IutError::new(
-                IutCause::Protocol,
+                IutCause::Impossible,
                 format!(
-                    "LRW came back with working counter {}, {LRW_WORKING_COUNTER} expected (inputs read, outputs written)",
-                    response.working_counter
+                    "the terminal mapped {mapped} output bytes; the configuration's image has {}",
+                    outputs.len()
                 ),
             ));
         }
-        let confirmed = sub.inputs_raw().to_vec();
-        if let Some(previous) = &self.previous_inputs {
-            if &confirmed != previous {
-                return Err(IutError::new(
-                    IutCause::Impossible,
-                    "the LRW returned other inputs than the previous cycle's SyncManager 2 event left",
-                ));
-            }
-        }
-        let station = self.station;
-        let fresh = self.master.drive(async {
-            let sm = Command::fprd(station, SM3).receive_slice(md, 8).await?;
-            let sm = canif_ethercat::register::SyncManager::parse(&sm);
-            Command::fprd(station, sm.start)
-                .receive_slice(md, sm.length)
-                .await
-                .map(|inputs| inputs.to_vec())
-        });
-        let fresh = fresh.map_err(|e| master_error(e, "reading the input SyncManager"))?;
-        self.previous_inputs = Some(fresh.clone());
-        Ok(fresh)
+        self.exchange(self.telegrams, outputs)
     }
 
     fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) -> Result<(), IutError> {
@@ -552,6 +518,10 @@ impl Iut for EthercatIut {
             .application
             .device()
             .map(|d| soft_controller::plan(d, now))
+    }
+
+    fn exchange_with(&mut self, mode: ExchangeMode) {
+        self.telegrams = mode;
     }
 }
 
