@@ -169,6 +169,17 @@ fn an_iut_that_forks_and_hangs_leaves_no_process() {
     );
 }
 
+/// A child that leaves the IUT's process group and session (`setsid`) ends
+/// with the IUT all the same (issue 26: it survived the run).
+#[test]
+fn an_iut_whose_child_leaves_its_session_leaves_no_process() {
+    let iut = format!("exec:python3 {} setsid-hang", script("misbehave.py"));
+    let run = run("setsid", &iut, &[]);
+    run.is_an_error(30, &["no answer to `cycle` within 1000 ms"]);
+    let pids = std::fs::read_to_string(run.dir.join("pids")).unwrap();
+    assert!(pids.lines().count() >= 2, "recorded: {pids}");
+}
+
 #[test]
 fn time_that_does_not_advance_is_an_error() {
     let iut = format!("exec:python3 {} stuck-time", script("misbehave.py"));

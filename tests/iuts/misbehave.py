@@ -6,6 +6,7 @@ cycle with an empty input image) except for one misbehaviour, chosen by argv[1]:
   stuck-time   every poll_transmit answers next_ns = now_ns + 1
   lie-len      every poll_transmit answers a frame whose len says 15, data 8
   fork-hang    starts a child that sleeps, records both pids, then hangs
+  setsid-hang  the same with a child in a session of its own (out of the process group)
 """
 import json
 import os
@@ -17,8 +18,8 @@ pids = os.environ.get("CANIF_TEST_PIDS")
 if pids:
     with open(pids, "a") as f:
         f.write(f"{os.getpid()}\n")
-if mode == "fork-hang":
-    child = subprocess.Popen(["sleep", "3600"])
+if mode in ("fork-hang", "setsid-hang"):
+    child = subprocess.Popen(["sleep", "3600"], start_new_session=mode == "setsid-hang")
     if pids:
         with open(pids, "a") as f:
             f.write(f"{child.pid}\n")
@@ -30,7 +31,7 @@ for line in sys.stdin:
         input_size = request["config"]["input_size"]
         answer = {"type": "configured", "protocol": 1, "accepted": True}
     elif kind == "cycle":
-        if mode == "fork-hang":
+        if mode in ("fork-hang", "setsid-hang"):
             continue  # never answers: the harness's timeout must end both processes
         answer = {"type": "inputs", "inputs": "00" * input_size}
     elif kind == "poll_transmit":

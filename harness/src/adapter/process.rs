@@ -123,11 +123,58 @@ fn share_cpu() {
     }
 }
 
+/// The environment variable that marks every process an IUT starts: its
+/// value is this IUT's own, and outlives a child's `setsid`.
+const TOKEN: &str = "CANIF_IUT_TOKEN";
+
+/// A value of [`TOKEN`] no other IUT of any canif has: this process's id and
+/// a count.
+fn new_token() -> String {
+    static COUNT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    let n = COUNT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    format!("{}-{n}", std::process::id())
+}
+
+/// Ends every process whose environment carries `token`: what an IUT
+/// started and took out of its process group (a new session, a daemon's
+/// double fork). Rounds until none is left, as one may fork while another
+/// is killed. Processes of other users cannot be read, nor killed.
+fn kill_marked(token: &str) {
+    use nix::sys::signal::{kill, Signal};
+    use nix::unistd::Pid;
+    let marker = format!("{TOKEN}={token}");
+    for _ in 0..10 {
+        let Ok(entries) = std::fs::read_dir("/proc") else {
+            return;
+        };
+        let marked: Vec<i32> = entries
+            .filter_map(|e| e.ok()?.file_name().to_str()?.parse::<i32>().ok())
+            .filter(|pid| {
+                std::fs::read(format!("/proc/{pid}/environ")).is_ok_and(|environ| {
+                    environ
+                        .split(|b| *b == 0)
+                        .any(|variable| variable == marker.as_bytes())
+                })
+            })
+            .collect();
+        if marked.is_empty() {
+            return;
+        }
+        for pid in marked {
+            let _ = kill(Pid::from_raw(pid), Signal::SIGKILL);
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
 /// An implementation under test in another process, in a process group of
-/// its own (whatever it starts ends with it), in either role: a device
-/// (`device::exec_iut`) or a client (`client::exec`).
+/// its own (whatever it starts ends with it, and what leaves the group is
+/// found by its [`TOKEN`]), in either role: a device (`device::exec_iut`)
+/// or a client (`client::exec`).
 pub(crate) struct AdapterProcess {
     command: String,
+    /// Marks every process the IUT starts (see [`TOKEN`]).
+    token: String,
     child: Child,
     stdin: Option<ChildStdin>,
     lines: LineReader,
@@ -149,9 +196,11 @@ impl AdapterProcess {
         if same_cpu {
             share_cpu();
         }
+        let token = new_token();
         let mut child = Command::new("sh")
             .arg("-c")
             .arg(command)
+            .env(TOKEN, &token)
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
@@ -195,6 +244,7 @@ impl AdapterProcess {
         let stdin = child.stdin.take();
         Ok(AdapterProcess {
             command: command.to_string(),
+            token,
             child,
             stdin,
             lines,
@@ -211,6 +261,7 @@ impl AdapterProcess {
         let _ = killpg(Pid::from_raw(self.child.id() as i32), Signal::SIGKILL);
         let _ = self.child.kill();
         let _ = self.child.wait();
+        kill_marked(&self.token);
     }
 
     /// The IUT's exit status, waiting a moment for it; `None` if it still runs.
