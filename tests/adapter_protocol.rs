@@ -424,3 +424,104 @@ fn the_configure_of_a_socketcan_bus_fits_the_schema() {
     );
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// Each way of breaking a well-formed request the schema refuses (a field
+/// left out, of another type, out of range, one field too many), and
+/// `canif device --stdio` refuses it too with an `error` answer: it used to
+/// read a frame without its flags as a classic 11-bit data frame, and a
+/// `transmit_complete` with a stray field as a plain one.
+#[test]
+fn canif_device_refuses_every_request_the_schema_refuses() {
+    use serde_json::{json, Value};
+    let schema = schema();
+    let document = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/docs/adapter-protocol.md"
+    ))
+    .unwrap();
+    let configure = document
+        .lines()
+        .find_map(|l| {
+            l.strip_prefix("→ ")
+                .filter(|l| l.contains("\"protocol\":2"))
+        })
+        .expect("the document's protocol-2 session configures");
+    let frame = json!({"id": 0x123, "extended": false, "rtr": false, "fd": false,
+                       "brs": false, "esi": false, "len": 2, "data": "0102"});
+    let outputs = "00".repeat(46);
+    let requests = [
+        json!({"type": "cycle", "now_ns": 1000, "outputs": outputs}),
+        json!({"type": "receive", "frame": frame, "end_ns": 1000}),
+        json!({"type": "poll_transmit", "now_ns": 1000}),
+        json!({"type": "transmit_complete"}),
+        json!({"type": "bye"}),
+    ];
+    let bad_values = [
+        json!(-1),
+        json!(1.5),
+        json!("x"),
+        Value::Null,
+        json!(1u64 << 40),
+    ];
+    let mut broken = Vec::new();
+    for request in &requests {
+        let fields: Vec<String> = request.as_object().unwrap().keys().cloned().collect();
+        let mut with = |edit: &dyn Fn(&mut Value)| {
+            let mut variant = request.clone();
+            edit(&mut variant);
+            broken.push(variant);
+        };
+        with(&|v| {
+            v["extra"] = json!(1);
+        });
+        for field in fields.iter().filter(|f| *f != "type") {
+            with(&|v| {
+                v.as_object_mut().unwrap().remove(field);
+            });
+            for bad in &bad_values {
+                with(&|v| v[field] = bad.clone());
+            }
+        }
+        if request.get("frame").is_some() {
+            for field in frame.as_object().unwrap().keys() {
+                with(&|v| {
+                    v["frame"].as_object_mut().unwrap().remove(field);
+                });
+                for bad in bad_values.iter().chain(&[json!(65), json!(0x2000_0000)]) {
+                    with(&|v| v["frame"][field] = bad.clone());
+                }
+            }
+        }
+    }
+    let refused_by_schema: Vec<&Value> = broken.iter().filter(|v| !schema.is_valid(v)).collect();
+    assert!(refused_by_schema.len() > 60, "{}", refused_by_schema.len());
+    let mut accepted = Vec::new();
+    for request in refused_by_schema {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_canif"))
+            .args(["device", "--stdio"])
+            .stdin(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::piped())
+            .spawn()
+            .and_then(|mut child| {
+                use std::io::Write;
+                let mut stdin = child.stdin.take().unwrap();
+                writeln!(stdin, "{configure}\n{request}")?;
+                drop(stdin);
+                child.wait_with_output()
+            })
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stdout);
+        let answer: Option<Value> = text
+            .lines()
+            .nth(1)
+            .and_then(|l| serde_json::from_str(l).ok());
+        if answer.as_ref().and_then(|a| a["type"].as_str()) != Some("error") {
+            accepted.push(format!("{request} -> {answer:?}"));
+        }
+    }
+    assert!(
+        accepted.is_empty(),
+        "answered, not refused:\n{}",
+        accepted.join("\n")
+    );
+}

@@ -445,7 +445,7 @@ impl Drop for AdapterProcess {
     fn drop(&mut self) {
         if self.failed.is_none() {
             if let Some(stdin) = self.stdin.as_mut() {
-                let bye = serde_json::to_string(&Request::Bye).expect("requests serialize");
+                let bye = serde_json::to_string(&Request::Bye {}).expect("requests serialize");
                 let _ = writeln!(stdin, "{bye}");
             }
         }
@@ -481,7 +481,9 @@ mod tests {
         // Let the line arrive before the request, as a slow harness would.
         std::thread::sleep(Duration::from_millis(300));
         let started = std::time::Instant::now();
-        let error = iut.exchange_line(&Request::TransmitComplete).unwrap_err();
+        let error = iut
+            .exchange_line(&Request::TransmitComplete {})
+            .unwrap_err();
         assert_eq!(error.cause, IutCause::Protocol, "{error}");
         assert!(
             error.to_string().contains("not UTF-8")

@@ -233,7 +233,7 @@ impl Iut for ExecIut {
             return Ok(());
         }
         self.process
-            .exchange(&Request::TransmitComplete, Answer::OK)
+            .exchange(&Request::TransmitComplete {}, Answer::OK)
     }
 
     fn controller_status(&mut self, status: &ControllerStatus) -> Result<(), IutError> {

@@ -68,7 +68,7 @@ impl<'a> Server<'a> {
     /// The answer to one request; `None` for `bye`.
     pub fn answer(&mut self, request: &Request) -> Option<Answer> {
         let iut = match (request, self.iut.as_mut()) {
-            (Request::Bye, _) => return None,
+            (Request::Bye {}, _) => return None,
             (Request::Start { .. } | Request::Task { .. }, _) => {
                 return Some(Answer::error(
                     "this is a device; `start` and `task` are the client role's requests",
@@ -123,7 +123,7 @@ impl<'a> Server<'a> {
                 },
                 Err(error) => Answer::error(error.to_string()),
             },
-            Request::TransmitComplete => ok_or_error(iut.transmit_complete()),
+            Request::TransmitComplete {} => ok_or_error(iut.transmit_complete()),
             Request::ControllerStatus { status } => {
                 ok_or_error(iut.controller_status(&status.into()))
             }
@@ -136,7 +136,7 @@ impl<'a> Server<'a> {
                 Err(error) => Answer::error(error.to_string()),
             },
             Request::Configure { .. }
-            | Request::Bye
+            | Request::Bye {}
             | Request::Start { .. }
             | Request::Task { .. } => unreachable!("answered above"),
         })

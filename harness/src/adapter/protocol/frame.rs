@@ -89,18 +89,14 @@ fn shorten(text: &str) -> String {
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct WireFrame {
+    // Every field is required, as the schema says: a frame without its
+    // flags is refused, not read as a classic 11-bit data frame.
     pub id: u32,
-    #[serde(default)]
     pub extended: bool,
-    #[serde(default)]
     pub rtr: bool,
-    #[serde(default)]
     pub fd: bool,
-    #[serde(default)]
     pub brs: bool,
-    #[serde(default)]
     pub esi: bool,
-    #[serde(default)]
     pub len: u8,
     pub data: Hex,
 }

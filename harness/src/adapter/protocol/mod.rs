@@ -42,7 +42,8 @@ pub enum Request {
     PollTransmit {
         now_ns: Nanos,
     },
-    TransmitComplete,
+    /// (A struct variant, so a field the schema does not allow is refused.)
+    TransmitComplete {},
     ControllerStatus {
         status: Status,
     },
@@ -67,7 +68,7 @@ pub enum Request {
         outputs: Hex,
         requests: Vec<WireMessage>,
     },
-    Bye,
+    Bye {},
 }
 
 impl Request {
@@ -78,12 +79,12 @@ impl Request {
             Request::Cycle { .. } => "cycle",
             Request::Receive { .. } => "receive",
             Request::PollTransmit { .. } => "poll_transmit",
-            Request::TransmitComplete => "transmit_complete",
+            Request::TransmitComplete {} => "transmit_complete",
             Request::ControllerStatus { .. } => "controller_status",
             Request::Step { .. } => "step",
             Request::Start { .. } => "start",
             Request::Task { .. } => "task",
-            Request::Bye => "bye",
+            Request::Bye {} => "bye",
         }
     }
 
@@ -93,7 +94,7 @@ impl Request {
             self,
             Request::Receive { .. }
                 | Request::PollTransmit { .. }
-                | Request::TransmitComplete
+                | Request::TransmitComplete {}
                 | Request::Step { .. }
         )
     }
