@@ -294,7 +294,9 @@ mod tests {
 
     #[test]
     fn a_frame_that_is_no_frame_is_refused_with_the_reason() {
-        let wire: WireFrame = serde_json::from_str(r#"{"id":2048,"len":0,"data":""}"#).unwrap();
+        let flags = r#""extended":false,"rtr":false,"fd":false,"brs":false,"esi":false"#;
+        let wire: WireFrame =
+            serde_json::from_str(&format!(r#"{{"id":2048,{flags},"len":0,"data":""}}"#)).unwrap();
         assert_eq!(
             Frame::try_from(&wire).unwrap_err(),
             "identifier 0x800 does not fit an 11-bit identifier"
@@ -303,8 +305,12 @@ mod tests {
         assert!(serde_json::from_str::<WireFrame>(r#"{"id":4294967297,"data":""}"#).is_err());
         assert!(serde_json::from_str::<WireFrame>(r#"{"id":1,"data":"+0"}"#).is_err());
         assert!(serde_json::from_str::<WireFrame>(r#"{"id":1,"data":"","color":1}"#).is_err());
-        let lie: WireFrame =
-            serde_json::from_str(r#"{"id":1,"len":15,"data":"0102030405060708"}"#).unwrap();
+        // The schema's required fields: a frame without its flags is none.
+        assert!(serde_json::from_str::<WireFrame>(r#"{"id":1,"len":0,"data":""}"#).is_err());
+        let lie: WireFrame = serde_json::from_str(&format!(
+            r#"{{"id":1,{flags},"len":15,"data":"0102030405060708"}}"#
+        ))
+        .unwrap();
         assert_eq!(
             Frame::try_from(&lie).unwrap_err(),
             "\"len\" is 15 but \"data\" has 8 bytes"
