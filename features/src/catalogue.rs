@@ -62,18 +62,18 @@ fn named_profile(
     }
 }
 
-const CAPABILITIES: [&str; 10] = [
-    "base11",
-    "ext29",
-    "fd",
-    "fast_queue",
-    "optimized_queue",
-    "transaction_number",
-    "timestamp",
-    "filters",
-    "info_data",
-    "distributed_clocks",
-];
+/// The capabilities a tag can name: those of the catalogue (`spec/capabilities.yaml`).
+fn is_capability(tag: &str) -> bool {
+    static NAMES: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
+    NAMES
+        .get_or_init(|| {
+            canif_spec::Catalogue::embedded()
+                .map(|c| c.capabilities.into_iter().map(|c| c.name).collect())
+                .unwrap_or_default()
+        })
+        .iter()
+        .any(|name| name == tag)
+}
 
 /// The embedded feature parsed, by file name.
 pub fn feature(file: &str) -> Option<Feature> {
@@ -133,7 +133,7 @@ pub fn scenarios() -> Result<Vec<ScenarioInfo>, String> {
                         .collect(),
                     capabilities: tags
                         .iter()
-                        .filter(|t| CAPABILITIES.contains(&t.as_str()))
+                        .filter(|t| is_capability(t))
                         .map(|t| t.to_string())
                         .collect(),
                     model_only: tags.iter().any(|t| *t == "model"),
