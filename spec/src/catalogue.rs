@@ -115,6 +115,9 @@ pub struct Area {
 pub struct SourceDocument {
     pub file: String,
     pub title: String,
+    /// Which document wins where this one and another say different things.
+    #[serde(default)]
+    pub precedence: Option<String>,
 }
 
 #[derive(Debug, Clone, PartialEq, Eq, Deserialize)]

@@ -289,3 +289,52 @@ fn every_ruling_a_requirement_cites_can_be_found() {
         }
     }
 }
+
+/// Every seed document says which document wins where they differ (issue 26:
+/// the catalogue followed 001 over 000 in places without saying so).
+#[test]
+fn every_seed_document_states_its_precedence() {
+    let catalogue = canif_spec::Catalogue::embedded().unwrap();
+    let silent: Vec<&str> = catalogue
+        .sources
+        .iter()
+        .filter(|s| s.file.ends_with(".txt") && s.precedence.as_deref().is_none_or(str::is_empty))
+        .map(|s| s.file.as_str())
+        .collect();
+    assert!(silent.is_empty(), "no precedence: {silent:?}");
+    let manual = catalogue
+        .sources
+        .iter()
+        .find(|s| s.file.starts_with("000_"))
+        .unwrap();
+    assert!(manual.precedence.as_deref().unwrap().contains("001 wins"));
+}
+
+/// The review of the catalogue against its sources (issue 26): what is
+/// inferred is `derived`, a citation names the document that says it, and a
+/// statement of the EL6751 on EtherCAT binds only the EL6751.
+#[test]
+fn the_reviewed_statements_say_what_their_sources_say() {
+    use canif_spec::Status;
+    let catalogue = canif_spec::Catalogue::embedded().unwrap();
+    let requirement = |id: &str| catalogue.requirement(id).unwrap();
+    for id in [
+        "HS-TX-009",
+        "BQ-004",
+        "TIM-007",
+        "PROF-010",
+        "PROF-012",
+        "INFO-001",
+        "FD-BIT-003",
+        "FD-BIT-004",
+        "HB-001",
+    ] {
+        assert_eq!(requirement(id).status, Status::Derived, "{id} is inferred");
+    }
+    assert_eq!(requirement("HB-001").source.file, "CiA-301");
+    for id in ["PDX-001", "PDX-002", "PDX-003"] {
+        assert_eq!(requirement(id).capabilities, ["el6751"], "{id}");
+    }
+    let pdx004 = requirement("PDX-004");
+    assert!(pdx004.statement.contains("output delay") && pdx004.rulings == ["R10"]);
+}
