@@ -104,6 +104,8 @@ fn a_terminal_that_answers_wrongly_is_an_error_naming_what_it_did() {
         (LinkFault::Truncated, "EtherCAT"),
         (LinkFault::Oversized, "EtherCAT"),
         (LinkFault::SilentAfter(400), "timeout"),
+        // 0x0011, invalid requested state change: an AL error, no refusal.
+        (LinkFault::AlError(0x0011), "code 0x0011"),
     ] {
         let run = run(profile, vec![], Some(fault));
         assert!(

@@ -69,6 +69,8 @@ pub struct Terminal {
     measure_cycle: u16,
     longest_cycle: u32,
     device: Option<SoftDevice>,
+    /// A firmware fault for the harness's tests: SAFEOP refused with this AL status code.
+    refuses_start: Option<u16>,
 }
 
 fn u16_of(bytes: &[u8]) -> u16 {
@@ -113,6 +115,7 @@ impl Terminal {
             measure_cycle: 0,
             longest_cycle: 0,
             device: None,
+            refuses_start: None,
         }
     }
 
@@ -122,6 +125,12 @@ impl Terminal {
 
     pub fn choose(&mut self, choice: Choice) {
         self.choices.push(choice);
+    }
+
+    /// Makes the firmware refuse every PREOP → SAFEOP with this AL status
+    /// code (for the harness's tests of a terminal in error).
+    pub fn refuse_start_with(&mut self, code: u16) {
+        self.refuses_start = Some(code);
     }
 
     /// The soft device, from SAFEOP on: the CAN controller's side is driven here.
@@ -445,6 +454,9 @@ impl Application for Terminal {
     }
 
     fn start(&mut self, start: Start) -> Result<(), u16> {
+        if let Some(code) = self.refuses_start {
+            return Err(code);
+        }
         let mut settings = self.draft.clone();
         settings.dc_sync1_shift = match start.synchronization {
             Synchronization::SyncManager2 => None,

@@ -29,6 +29,9 @@ pub enum LinkFault {
     Truncated,
     /// Each datagram comes back two bytes longer than it was sent.
     Oversized,
+    /// The terminal's firmware refuses SAFEOP with this AL status code (an
+    /// AL error that is no refusal of the configuration, e.g. 0x0011).
+    AlError(u16),
 }
 
 thread_local! {
@@ -68,7 +71,7 @@ impl Peer {
         self.frames.set(n);
         let mut answer = lock(&self.terminal).process(frame, now())?;
         match self.fault {
-            None => {}
+            None | Some(LinkFault::AlError(_)) => {}
             Some(LinkFault::SilentAfter(after)) if n > after => return None,
             Some(LinkFault::SilentAfter(_)) => {}
             Some(LinkFault::Truncated) => answer.truncate(20),

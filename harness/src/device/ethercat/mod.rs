@@ -297,6 +297,9 @@ pub fn emulated_terminal(
     for choice in &emulated.choices {
         terminal.choose(*choice);
     }
+    if let Some(LinkFault::AlError(code)) = emulated.link_fault {
+        terminal.refuse_start_with(code);
+    }
     SubDevice::new(
         &Identity {
             vendor_id: identity.vendor_id,
