@@ -123,6 +123,30 @@ fn a_terminal_that_answers_wrongly_is_an_error_naming_what_it_did() {
     }
 }
 
+/// A well-formed LRW with the wrong inputs is what the terminal did wrong
+/// in the exchange: a failure of the LRW's confirmation (PDX-001/002), not
+/// an error of the telegram.
+#[test]
+fn an_lrw_that_reads_the_wrong_inputs_fails_the_exchange() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("el6751-legacy").unwrap();
+    let run = run(profile, vec![], Some(LinkFault::LrwReadsZeros));
+    assert!(errors(&run).is_empty(), "{:?}", errors(&run).first());
+    assert!(!run.failures.is_empty(), "the wrong LRW went unnoticed");
+    for failure in &run.failures {
+        assert!(
+            failure
+                .requirements
+                .iter()
+                .all(|id| ["PDX-001", "PDX-002"].contains(&id.as_str())),
+            "{}: {:?}",
+            failure.scenario,
+            failure.requirements
+        );
+        assert!(failure.what.contains("LRW"), "{}", failure.what);
+    }
+}
+
 /// The survey a report shows: the terminal's identity as the profile gives
 /// it, 0x1C32:05 read back, and a paced soak's cycles (how many missed their
 /// deadline is the machine's load, not asserted).

@@ -52,6 +52,12 @@ pub trait Iut {
     fn exchange_with(&mut self, mode: ExchangeMode) {
         let _ = mode;
     }
+    /// What the last cycle showed the device doing wrong below the image the
+    /// lockstep compares (the inputs an EtherCAT telegram carried): a
+    /// well-formed answer that breaks a requirement, judged as a failure.
+    fn take_deviation(&mut self) -> Option<Deviation> {
+        None
+    }
 }
 
 /// One frame of a [`Iut::transmit_plan`]: the frame (or what is no frame) and
@@ -143,6 +149,17 @@ impl Iut for ModelIut {
             Device::poll_timeout,
         ))
     }
+}
+
+/// A device's answer that is well formed and breaks a requirement, seen
+/// where the lockstep does not look (see [`Iut::take_deviation`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Deviation {
+    /// The requirements it may break (narrowed to what the scenario covers).
+    pub candidates: &'static [canif_spec::ReqId],
+    pub what: String,
+    pub expected: String,
+    pub actual: String,
 }
 
 /// The soft device behind the IUT interface; frames are translated here, so the

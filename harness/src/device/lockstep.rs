@@ -250,6 +250,15 @@ impl<B: Bus + ?Sized> Lockstep<B> {
             .iut
             .cycle(outputs, t)
             .map_err(|e| Outcome::Error(e.into()))?;
+        if let Some(deviation) = self.pair.iut.take_deviation() {
+            return Err(self.pair.fail(Difference {
+                frames: None,
+                candidates: deviation.candidates,
+                what: deviation.what,
+                expected: deviation.expected,
+                actual: deviation.actual,
+            }));
+        }
         self.pair
             .history
             .cycle(layout, (k, self.pair.now), outputs, expected, &actual);

@@ -99,6 +99,9 @@ impl Iut for Ordered {
     fn exchange_with(&mut self, mode: canif_model::exchange::ExchangeMode) {
         self.inner.exchange_with(mode);
     }
+    fn take_deviation(&mut self) -> Option<crate::device::iut::Deviation> {
+        self.inner.take_deviation()
+    }
 }
 
 #[cfg(test)]

@@ -12,6 +12,8 @@ use ethercrab::{Command, Reads};
 
 use super::start_up::master_error;
 use super::{EthercatIut, LRW_WORKING_COUNTER, SM3};
+use crate::device::blame;
+use crate::device::iut::Deviation;
 use crate::error::{IutCause, IutError};
 
 /// FMMUs an ESC may have; the terminal's SII says 4.
@@ -88,12 +90,19 @@ impl EthercatIut {
             ));
         }
         let confirmed = sub.inputs_raw().to_vec();
+        // 003: what an LRW reads is what the previous SyncManager 2 event
+        // left; other inputs are the terminal's deviation from the exchange,
+        // a failure of it, not a broken telegram.
         if let Some(previous) = &self.previous_inputs {
             if &confirmed != previous {
-                return Err(IutError::new(
-                    IutCause::Impossible,
-                    "the LRW returned other inputs than the previous cycle's SyncManager 2 event left",
-                ));
+                let head = |bytes: &[u8]| format!("{:02X?}", &bytes[..bytes.len().min(8)]);
+                self.deviation = Some(Deviation {
+                    candidates: blame::CONFIRMATION,
+                    what: "the inputs the LRW read (the previous cycle's SyncManager 2 event)"
+                        .into(),
+                    expected: head(previous),
+                    actual: head(&confirmed),
+                });
             }
         }
         let station = self.station;

@@ -32,6 +32,10 @@ pub enum LinkFault {
     /// The terminal's firmware refuses SAFEOP with this AL status code (an
     /// AL error that is no refusal of the configuration, e.g. 0x0011).
     AlError(u16),
+    /// An LRW reads zeros instead of what the last SyncManager 2 event left
+    /// (a well-formed telegram with the wrong inputs: a failure of the
+    /// exchange, PDX-001).
+    LrwReadsZeros,
 }
 
 thread_local! {
@@ -79,6 +83,15 @@ impl Peer {
                 let mut parsed = canif_ethercat::wire::Frame::parse(&answer).ok()?;
                 for d in &mut parsed.datagrams {
                     d.data.extend_from_slice(&[0xEE, 0xEE]);
+                }
+                answer = parsed.emit();
+            }
+            Some(LinkFault::LrwReadsZeros) => {
+                let mut parsed = canif_ethercat::wire::Frame::parse(&answer).ok()?;
+                for d in &mut parsed.datagrams {
+                    if d.command == canif_ethercat::wire::Command::Lrw {
+                        d.data.fill(0);
+                    }
                 }
                 answer = parsed.emit();
             }

@@ -267,6 +267,8 @@ pub struct EthercatIut {
     previous_inputs: Option<Vec<u8>>,
     /// How the played master exchanges the process data (LRW by default).
     telegrams: ExchangeMode,
+    /// What the last LRW showed the terminal doing wrong, for the lockstep.
+    deviation: Option<crate::device::iut::Deviation>,
     /// Where the logical image maps the terminal (read once, for LWR and LRD).
     windows: Option<exchange::Windows>,
     pub facts: TerminalFacts,
@@ -418,6 +420,7 @@ pub fn build(
         serving,
         previous_inputs: None,
         telegrams: ExchangeMode::Lrw,
+        deviation: None,
         windows: None,
         facts,
     })
@@ -525,6 +528,10 @@ impl Iut for EthercatIut {
 
     fn exchange_with(&mut self, mode: ExchangeMode) {
         self.telegrams = mode;
+    }
+
+    fn take_deviation(&mut self) -> Option<crate::device::iut::Deviation> {
+        self.deviation.take()
     }
 }
 
