@@ -364,8 +364,9 @@ pub fn judge(
             Verdict::NotTestable(match (&requirement.reason, requirement.verification) {
                 (Some(reason), _) => reason.clone(),
                 (None, Verification::Inspection) => "verified by inspection".into(),
-                (None, _) => {
-                    "no run against an implementation can show it; the model's own tests check it"
+                (None, Verification::Model) => "checked on the reference model".into(),
+                (None, Verification::Test) => {
+                    "no scenario of this suite reaches it on the interfaces this profile offers"
                         .into()
                 }
             })
@@ -487,5 +488,24 @@ mod tests {
         let verdicts = judge(&catalogue, profile, &[], &client);
         assert!(verdicts.keys().all(|id| id.starts_with("CL-")));
         assert!(!verdicts.is_empty());
+    }
+
+    /// Every "not testable" says why: the catalogue's reason for a statement
+    /// checked on the model, or that no scenario reaches it on this profile.
+    #[test]
+    fn not_testable_names_why() {
+        let catalogue = catalogue();
+        let profile = catalogue.profile("fc532x").unwrap();
+        let verdicts = judge(&catalogue, profile, &[], &Reach::default());
+        let reason = |id: &str| verdicts[id].reason().unwrap();
+        assert!(
+            reason("TIM-001").contains("frame-time model"),
+            "{}",
+            reason("TIM-001")
+        );
+        assert_eq!(
+            reason("HS-TX-001"),
+            "no scenario of this suite reaches it on the interfaces this profile offers"
+        );
     }
 }

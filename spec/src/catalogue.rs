@@ -30,6 +30,10 @@ pub enum Verification {
     Test,
     /// Not by running anything; `reason` says why.
     Inspection,
+    /// By the reference model's own tests and `@model` scenarios: a statement
+    /// of the documents' tables, formulas or samples that no implementation's
+    /// images or bus show; `reason` says what it is.
+    Model,
 }
 
 /// Where a statement comes from.
@@ -545,15 +549,15 @@ impl Catalogue {
                 }
             }
             match (requirement.verification, &requirement.reason) {
-                (Verification::Inspection, None) => error(
+                (Verification::Inspection | Verification::Model, None) => error(
                     "reason",
                     "verification:",
-                    "inspection needs a reason".into(),
+                    "inspection and model verification need a reason".into(),
                 ),
                 (Verification::Test, Some(_)) => error(
                     "reason",
                     "reason:",
-                    "a reason belongs to `verification: inspection`".into(),
+                    "a reason belongs to `verification: inspection` or `model`".into(),
                 ),
                 _ => {}
             }

@@ -45,11 +45,15 @@ pub(crate) fn spec(catalogue: &Catalogue, command: SpecCommand, out: &mut String
                     outln!(out, "  covered by: {file}:{line}");
                 }
             }
+            let reason_label = match r.verification {
+                Verification::Model => "checked on the reference model",
+                _ => "not tested because",
+            };
             for (label, text) in [
                 ("document says", &r.document_says),
                 ("corrected", &r.corrected),
                 ("notes", &r.notes),
-                ("not tested because", &r.reason),
+                (reason_label, &r.reason),
             ] {
                 if let Some(text) = text {
                     outln!(out, "  {label}: {}", text.trim());
@@ -127,6 +131,16 @@ pub(crate) fn summary(catalogue: &Catalogue, out: &mut String) {
         out,
         "\nchecked by inspection, not by tests: {}",
         inspection.join(", ")
+    );
+    let model: Vec<_> = catalogue
+        .requirements()
+        .filter(|r| r.verification == Verification::Model)
+        .map(|r| r.id.as_str())
+        .collect();
+    outln!(
+        out,
+        "checked on the reference model (no implementation shows them): {}",
+        model.join(", ")
     );
 }
 
