@@ -347,9 +347,14 @@ pub(crate) enum Command {
         #[arg(long)]
         fault: Vec<String>,
         /// Take a freedom the documents leave (repeatable; see `canif faults`).
-        /// Behind the protocol the device declares nothing: canif finds out.
+        /// Behind the protocol the device declares nothing (canif finds out)
+        /// unless --declare says what to declare.
         #[arg(long)]
         choice: Vec<String>,
+        /// With --stdio: declare NAME=VALUE in every `configured` answer
+        /// (repeatable; docs/choices.md), as a device declares its choices.
+        #[arg(long, value_name = "NAME=VALUE", requires = "stdio")]
+        declare: Vec<String>,
         /// The highest adapter-protocol version to agree on (2 batches a cycle's
         /// bus events into one exchange; 1 is one request per event).
         #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u64).range(1..=2))]

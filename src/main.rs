@@ -179,6 +179,7 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                 fail_fast: !no_fail_fast,
                 declared,
                 observed: Default::default(),
+                iut_declared: Default::default(),
             };
             match run::Plan::new(profiles, options, product.product()) {
                 Ok(plan) => run::device::run(&catalogue, &iut, &plan, pace, &report),
@@ -276,10 +277,11 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
             stdio,
             fault,
             choice,
+            declare,
             protocol,
             bus,
             ..
-        } => device::device(stdio, (&fault, &choice), protocol, bus.as_deref()),
+        } => device::device(stdio, (&fault, &choice, &declare), protocol, bus.as_deref()),
         Command::Faults => {
             for fault in Fault::ALL {
                 outln!(out, "{:<36} {}", fault.name(), fault.description());

@@ -196,3 +196,29 @@ fn a_constant_output_delay_after_sync1_conforms_unless_another_is_declared() {
     let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap();
     assert!(summary.contains("FAIL el6751-mdp::PDX-004"), "{summary}");
 }
+
+/// A device can declare its choice itself, in its `configured` answer: it is
+/// judged by it, the report says the IUT declared it, and a device that
+/// declares the frame on the wire in its queue but does not count it fails.
+#[test]
+fn a_device_declares_its_choice_in_its_configured_answer() {
+    let declaring = |extra: &str| {
+        format!("exec:{BIN} device --stdio {extra} --declare tx-queue-accounting=wire-in-queue")
+    };
+    let (out, dir) = backpressure(
+        "self-declared",
+        &declaring("--choice counts-frame-on-wire"),
+        &[],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let choices = &report(&dir)["meta"]["choices"];
+    assert_eq!(
+        choices[0]["choice"], "tx-queue-accounting=wire-in-queue",
+        "{choices}"
+    );
+    assert_eq!(choices[0]["how"], "declared_by_iut", "{choices}");
+    let (out, dir) = backpressure("self-declared-broken", &declaring(""), &[]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap();
+    assert!(summary.contains("FAIL fc510x::HS-TX-"), "{summary}");
+}

@@ -253,6 +253,7 @@ impl CanWorld {
             trace: None,
             bus: BusChoice::Sim,
             judgement: Judgement::Exact,
+            declared: self.target.iut.declared(),
             steps: Steps::Scripted(Vec::new()),
         }
     }

@@ -113,6 +113,9 @@ pub struct ScenarioRun {
     pub tolerated: u64,
     /// Wall time the scenario took.
     pub elapsed: std::time::Duration,
+    /// What the IUT itself declared where the documents leave a choice (its
+    /// `configure` answer), as `NAME=VALUE`: the run judged it by these.
+    pub iut_declares: Vec<String>,
 }
 
 /// How one Gherkin scenario (or Examples row) ended.

@@ -76,6 +76,7 @@ fn scenario_of(cycles: &[Cycle]) -> Scenario {
         trace: None,
         bus: canif_harness::device::bus::BusChoice::Sim,
         judgement: canif_harness::device::scenario::Judgement::Exact,
+        declared: Default::default(),
         steps: Steps::Scripted(steps),
     }
 }

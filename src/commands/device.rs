@@ -14,7 +14,7 @@ use super::{soft_device_choices, soft_device_faults};
 /// adapter protocol.
 pub(crate) fn device(
     stdio: bool,
-    (faults, choices): (&[String], &[String]),
+    (faults, choices, declare): (&[String], &[String], &[String]),
     protocol: u64,
     bus: Option<&str>,
 ) -> ExitCode {
@@ -26,10 +26,28 @@ pub(crate) fn device(
         (Ok(faults), Ok(choices)) => IutKind::SoftDevice { faults, choices },
         (Err(code), _) | (_, Err(code)) => return code,
     };
+    // Checked as `run --declare` checks them, then said as the protocol says them.
+    let mut declares = std::collections::BTreeMap::new();
+    for text in declare {
+        let mut checked = canif_harness::device::choices::Declared::default();
+        if let Err(error) = checked.declare(text) {
+            eprintln!("--declare {text}: {error}");
+            return ExitCode::from(2);
+        }
+        if let Some((name, value)) = text.split_once('=') {
+            declares.insert(name.trim().to_string(), value.trim().to_string());
+        }
+    }
     let build: &Build<'_> = &|caps, config| kind.build(caps, config);
     let served = match bus {
-        None => server::serve(build, protocol, std::io::stdin().lock(), std::io::stdout())
-            .map_err(|e| e.to_string()),
+        None => server::serve(
+            server::Server::new(build, true)
+                .at_most(protocol)
+                .declaring(declares),
+            std::io::stdin().lock(),
+            std::io::stdout(),
+        )
+        .map_err(|e| e.to_string()),
         Some(bus) => serve_on_bus(build, bus),
     };
     match served {

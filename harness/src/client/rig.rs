@@ -254,6 +254,7 @@ fn run_with(
         .cloned()
         .collect();
     let run = ScenarioRun {
+        iut_declares: Vec::new(),
         scenario: name,
         covers,
         outcome,

@@ -17,6 +17,7 @@ use crate::adapter::protocol::{
     Answer, BusEvent, Caps, Config, Hex, OwnedBus, PlannedFrame, Request, SteppedLine, Transmitted,
     WireFrame, PROTOCOL_VERSION,
 };
+use crate::device::choices::Declared;
 use crate::device::iut::{InvalidFrame, Iut, Planned, Transmit};
 use crate::error::{IutCause, IutError};
 
@@ -42,6 +43,8 @@ pub struct ExecIut {
     plan: VecDeque<Planned>,
     /// Protocol 2: a frame of the plan is on the wire.
     on_wire: bool,
+    /// What it declared in its `configured` answer.
+    declared: Declared,
 }
 
 impl ExecIut {
@@ -55,6 +58,7 @@ impl ExecIut {
             events: Vec::new(),
             plan: VecDeque::new(),
             on_wire: false,
+            declared: Declared::default(),
         })
     }
 
@@ -78,7 +82,19 @@ impl ExecIut {
             capabilities: Caps::from(caps),
             bus: bus.cloned(),
         };
-        let (protocol, accepted, reason) = self.process.exchange(&request, Answer::CONFIGURED)?;
+        let configured = self.process.exchange(&request, Answer::CONFIGURED)?;
+        let (protocol, accepted, reason) =
+            (configured.protocol, configured.accepted, configured.reason);
+        let mut declared = Declared::default();
+        for (name, value) in &configured.declares {
+            if let Err(error) = declared.declare(&format!("{name}={value}")) {
+                return Err(self.fail(
+                    IutCause::Protocol,
+                    format!("`configured` declares `{name}`: `{value}`: {error}"),
+                ));
+            }
+        }
+        self.declared = declared;
         if !(1..=offered).contains(&protocol) {
             return Err(self.fail(
                 IutCause::Protocol,
@@ -143,6 +159,10 @@ impl ExecIut {
 }
 
 impl Iut for ExecIut {
+    fn declared(&self) -> Declared {
+        self.declared
+    }
+
     fn cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError> {
         let inputs = if self.version >= 2 {
             self.step(outputs, now)?

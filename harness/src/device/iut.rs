@@ -58,6 +58,11 @@ pub trait Iut {
     fn take_deviation(&mut self) -> Option<Deviation> {
         None
     }
+    /// What the device itself declares where the documents leave a choice
+    /// (the adapter protocol's `configured` answer).
+    fn declared(&self) -> crate::device::choices::Declared {
+        crate::device::choices::Declared::default()
+    }
 }
 
 /// One frame of a [`Iut::transmit_plan`]: the frame (or what is no frame) and

@@ -13,6 +13,7 @@ use canif_model::Nanos;
 use crate::device::blame;
 use crate::device::bounds::Bounds;
 use crate::device::bus::Bus;
+use crate::device::choices::Declared;
 use crate::device::diff::{Difference, InputCheck, RxState};
 use crate::device::iut::BuildError;
 use crate::device::iut_kind::IutKind;
@@ -39,6 +40,7 @@ pub fn run_scenario(
         frames_checked: frames,
         tolerated,
         elapsed: std::time::Duration::ZERO,
+        iut_declares: Vec::new(),
     };
     let bus = match scenario.bus.open(scenario.bit_rates, kind.owns_its_bus()) {
         Ok(bus) => bus,
@@ -49,15 +51,20 @@ pub fn run_scenario(
         Err(error) => return run(Outcome::Error(error), 0, (0, 0)),
     };
     let result = lockstep.run(steps);
+    let iut_declares = std::mem::take(&mut lockstep.iut_declares);
     let pair = &mut lockstep.pair;
     let result = match (result, pair.bounds.as_ref().and_then(Bounds::still_cycling)) {
         (Ok(cycles), Some(stopped)) => Err((pair.fail(stopped), cycles)),
         (result, _) => result,
     };
     pair.finish();
-    match result {
+    let run = match result {
         Ok(cycles) => run(Outcome::Pass, cycles, (pair.frames, pair.tolerated)),
         Err((outcome, cycle)) => run(outcome, cycle, (pair.frames, pair.tolerated)),
+    };
+    ScenarioRun {
+        iut_declares,
+        ..run
     }
 }
 
@@ -82,6 +89,8 @@ pub struct Lockstep<B: Bus + ?Sized = dyn Bus> {
     pub plc: PlcSide,
     pub rules: Rules,
     pub bus: Box<B>,
+    /// What the IUT itself declared and was judged by (`NAME=VALUE`).
+    pub iut_declares: Vec<String>,
     cycle_time: Nanos,
     time_stamp_tolerance: Nanos,
 }
@@ -95,7 +104,8 @@ impl<B: Bus + ?Sized> Lockstep<B> {
         scenario: &Scenario,
         bus: Box<B>,
     ) -> Result<Self, RunError> {
-        let model = Device::new(caps, scenario.interface.clone())
+        // Checked first: a configuration the model refuses starts no IUT.
+        Device::new(caps, scenario.interface.clone())
             .map_err(|e| RunError::Configuration(Refusal::Model(e)))?;
         let built = kind
             .build_on(caps, &scenario.interface, bus.owned_bus().as_ref())
@@ -112,6 +122,31 @@ impl<B: Bus + ?Sized> Lockstep<B> {
             }
             Err(BuildError::Failed(error)) => return Err(error.into()),
         };
+        // What the IUT declares itself counts where canif was told nothing.
+        let own = iut.declared();
+        let told = scenario.declared;
+        let caps = &Capabilities {
+            tx_queue_accounting: match (told.tx_queue_accounting, own.tx_queue_accounting) {
+                (None, Some(own)) => own,
+                _ => caps.tx_queue_accounting,
+            },
+            sync1_output_delay: told
+                .sync1_output_delay
+                .or(own.sync1_output_delay)
+                .or(caps.sync1_output_delay),
+            ..caps.clone()
+        };
+        let iut_declares = Declared {
+            tx_queue_accounting: own
+                .tx_queue_accounting
+                .filter(|_| told.tx_queue_accounting.is_none()),
+            sync1_output_delay: own
+                .sync1_output_delay
+                .filter(|_| told.sync1_output_delay.is_none()),
+        }
+        .lines();
+        let model = Device::new(caps, scenario.interface.clone())
+            .map_err(|e| RunError::Configuration(Refusal::Model(e)))?;
         let trace = scenario.trace.as_ref().and_then(|(dir, name, epoch)| {
             TraceWriter::create(dir, name, &bus.interface_name(), *epoch).ok()
         });
@@ -136,6 +171,7 @@ impl<B: Bus + ?Sized> Lockstep<B> {
                 .max(bus.time_stamp_tolerance()),
             pair,
             bus,
+            iut_declares,
         })
     }
 

@@ -102,6 +102,9 @@ impl Iut for Ordered {
     fn take_deviation(&mut self) -> Option<crate::device::iut::Deviation> {
         self.inner.take_deviation()
     }
+    fn declared(&self) -> crate::device::choices::Declared {
+        self.inner.declared()
+    }
 }
 
 #[cfg(test)]

@@ -190,6 +190,7 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
         Outcome::Fail(Box::new(first))
     });
     ScenarioRun {
+        iut_declares: Vec::new(),
         scenario: REFUSALS.into(),
         covers: REFUSAL_IDS.to_vec(),
         outcome,

@@ -28,6 +28,8 @@ pub struct Server<'a> {
     most: u64,
     /// The version the last `configure` agreed.
     version: u64,
+    /// What the served device declares in its `configured` answer.
+    declares: std::collections::BTreeMap<String, String>,
 }
 
 impl<'a> Server<'a> {
@@ -38,7 +40,14 @@ impl<'a> Server<'a> {
             drives_bus,
             most: PROTOCOL_VERSION,
             version: 1,
+            declares: Default::default(),
         }
+    }
+
+    /// Declares these choices (name to value) in every `configured` answer.
+    pub fn declaring(mut self, declares: std::collections::BTreeMap<String, String>) -> Self {
+        self.declares = declares;
+        self
     }
 
     /// Speaks at most `version` (1 keeps a harness to one request per event).
@@ -150,6 +159,7 @@ impl<'a> Server<'a> {
                     protocol: self.version,
                     accepted: true,
                     reason: None,
+                    declares: self.declares.clone(),
                 }
             }
             Err(error) => {
@@ -158,6 +168,7 @@ impl<'a> Server<'a> {
                     protocol: self.version,
                     accepted: false,
                     reason: Some(error.to_string()),
+                    declares: Default::default(),
                 }
             }
         }
@@ -239,12 +250,11 @@ pub fn write_answer(output: &mut impl Write, answer: &Answer) -> std::io::Result
 /// harness says `bye` or closes the input. Whatever a line holds — not JSON,
 /// not UTF-8, fields the protocol does not name — it gets an `error` answer.
 pub fn serve(
-    build: &Build<'_>,
-    most: u64,
+    server: Server<'_>,
     mut input: impl BufRead,
     mut output: impl Write,
 ) -> std::io::Result<()> {
-    let mut server = Server::new(build, true).at_most(most);
+    let mut server = server;
     let mut bytes = Vec::new();
     loop {
         bytes.clear();

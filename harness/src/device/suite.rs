@@ -47,6 +47,8 @@ pub struct Options {
     /// What each profile's run saw an undeclared device choose (shared by
     /// the clones a run makes, read when the report is written).
     pub observed: Arc<Mutex<Vec<Observed>>>,
+    /// What the IUT declared itself in its `configured` answers (`NAME=VALUE`).
+    pub iut_declared: Arc<Mutex<std::collections::BTreeSet<String>>>,
 }
 
 impl Options {
@@ -64,6 +66,7 @@ impl Options {
             selection: Selection::default(),
             declared: Declared::default(),
             observed: Arc::default(),
+            iut_declared: Arc::default(),
         }
     }
 }
@@ -118,12 +121,25 @@ impl Options {
     ) -> ScenarioRun {
         let declared = self.declared_by(kind);
         caps.sync1_output_delay = declared.sync1_output_delay;
+        let scenario = &Scenario {
+            declared,
+            ..scenario.clone()
+        };
         let settled = declared
             .tx_queue_accounting
             .or_else(|| self.observed_on(profile));
         caps.tx_queue_accounting = settled.unwrap_or_default();
         let run = run_scenario(kind, &caps, scenario, scenario.steps());
-        if settled.is_some() {
+        if !run.iut_declares.is_empty() {
+            let mut said = self.iut_declared.lock().unwrap_or_else(|e| e.into_inner());
+            said.extend(run.iut_declares.iter().cloned());
+        }
+        // The IUT declared its accounting itself: judged by that, nothing to find out.
+        let self_declared = run
+            .iut_declares
+            .iter()
+            .any(|line| line.starts_with("tx-queue-accounting="));
+        if settled.is_some() || self_declared {
             return run;
         }
         match &run.outcome {
@@ -306,6 +322,7 @@ impl SelfCheck for Options {
             counter_wrap: fault == canif_softdevice::Fault::CounterDoesNotWrap,
             // Each fault's run sees its own device's choices, not another's.
             observed: Arc::default(),
+            iut_declared: Arc::default(),
             ..self.clone()
         };
         let kind = IutKind::SoftDevice {

@@ -78,6 +78,8 @@ pub struct ChoiceEntry {
 pub enum ChoiceSource {
     /// The device (or the command line for it) declared it, for every profile.
     Declared,
+    /// The IUT declared it itself, in its `configured` answer.
+    DeclaredByIut,
     /// Undeclared: on this profile, this scenario passed only under it (or
     /// passed under it, being the first to tell the choices apart).
     Observed { profile: String, scenario: String },
@@ -87,6 +89,7 @@ impl std::fmt::Display for ChoiceEntry {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match &self.how {
             ChoiceSource::Declared => write!(f, "{} (declared)", self.choice),
+            ChoiceSource::DeclaredByIut => write!(f, "{} (declared by the IUT)", self.choice),
             ChoiceSource::Observed { profile, scenario } => write!(
                 f,
                 "{} on {profile} (undeclared; shown by `{scenario}`)",

@@ -150,6 +150,7 @@ pub fn run_profile<S: Side>(
         }
         let run = match &broken {
             Some(after) => ScenarioRun {
+                iut_declares: Vec::new(),
                 scenario: name,
                 covers: S::covers(&case).to_vec(),
                 outcome: Outcome::Error(RunError::Skipped(Box::new(after.clone()))),

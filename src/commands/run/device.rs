@@ -182,8 +182,9 @@ pub(crate) fn execute(
     plan.assemble(catalogue, lockstep, gherkin, left_out, meta, started)
 }
 
-/// The choices the verdicts rest on: declared for the device, or shown by a
-/// scenario on a profile where it declared none.
+/// The choices the verdicts rest on: declared for the device (on the command
+/// line, by its kind, or by the IUT itself), or shown by a scenario on a
+/// profile where it declared none.
 fn judged_choices(options: &Options, kind: &IutKind) -> Vec<ChoiceEntry> {
     let declared = options
         .declared_by(kind)
@@ -198,7 +199,16 @@ fn judged_choices(options: &Options, kind: &IutKind) -> Vec<ChoiceEntry> {
         .lock()
         .map(|o| o.clone())
         .unwrap_or_default();
+    let by_iut = options
+        .iut_declared
+        .lock()
+        .map(|d| d.clone())
+        .unwrap_or_default();
     declared
+        .chain(by_iut.into_iter().map(|choice| ChoiceEntry {
+            choice,
+            how: ChoiceSource::DeclaredByIut,
+        }))
         .chain(observed.into_iter().map(|o| ChoiceEntry {
             choice: o.line(),
             how: ChoiceSource::Observed {

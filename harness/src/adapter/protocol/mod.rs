@@ -100,6 +100,15 @@ impl Request {
     }
 }
 
+/// The fields of a `configured` answer.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Configured {
+    pub protocol: u64,
+    pub accepted: bool,
+    pub reason: Option<String>,
+    pub declares: std::collections::BTreeMap<String, String>,
+}
+
 /// What the IUT answers.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
@@ -109,6 +118,10 @@ pub enum Answer {
         accepted: bool,
         #[serde(default, skip_serializing_if = "Option::is_none")]
         reason: Option<String>,
+        /// What the device declares where the documents leave a choice
+        /// (docs/choices.md), choice name to value.
+        #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+        declares: std::collections::BTreeMap<String, String>,
     },
     Inputs {
         inputs: Hex,
@@ -165,15 +178,22 @@ impl Answer {
         }
     }
 
-    /// `configured`: the version agreed, accepted or not, and why not.
-    pub const CONFIGURED: Expected<(u64, bool, Option<String>)> = Expected {
+    /// `configured`: the version agreed, accepted or not, why not, and
+    /// what the device declares.
+    pub const CONFIGURED: Expected<Configured> = Expected {
         name: "configured",
         take: |answer| match answer {
             Answer::Configured {
                 protocol,
                 accepted,
                 reason,
-            } => Ok((protocol, accepted, reason)),
+                declares,
+            } => Ok(Configured {
+                protocol,
+                accepted,
+                reason,
+                declares,
+            }),
             other => Err(other),
         },
     };
@@ -333,6 +353,7 @@ mod tests {
             r#"{"type":"transmit","frame":null,"next_ns":null}"#
         );
         let configured = Answer::Configured {
+            declares: Default::default(),
             protocol: 1,
             accepted: false,
             reason: Some("no".into()),

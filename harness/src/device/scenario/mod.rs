@@ -119,6 +119,9 @@ pub struct Scenario {
     /// The bus it runs on.
     pub bus: BusChoice,
     pub judgement: Judgement,
+    /// What the command line or the IUT's kind declared of the device's
+    /// choices; where it says nothing, the IUT's own declaration counts.
+    pub declared: crate::device::choices::Declared,
     pub steps: Steps,
 }
 
@@ -263,6 +266,7 @@ pub(crate) fn scenario(
         trace: None,
         bus: BusChoice::Sim,
         judgement: Judgement::Exact,
+        declared: Default::default(),
         steps,
     }
 }
