@@ -150,6 +150,7 @@ fn an_lrw_that_reads_the_wrong_inputs_fails_the_exchange() {
 /// The survey a report shows: the terminal's identity as the profile gives
 /// it, 0x1C32:05 read back, and a paced soak's cycles (how many missed their
 /// deadline is the machine's load, not asserted).
+/// Covers: PDX-006
 #[test]
 fn a_survey_names_the_terminal_and_counts_a_soak() {
     use canif_harness::device::ethercat::{survey, Pace};
