@@ -240,6 +240,29 @@ fn every_choice_the_documents_leave_conforms() {
     assert!(failed.is_empty(), "{}", failed.join("\n\n"));
 }
 
+/// The choices together: a device may take all of them at once, and still
+/// conforms on every profile (issue 26: "the soft device run with every
+/// --choice combination conforms"; each alone is the test above, all at once
+/// is the combination where they could interfere).
+#[test]
+fn all_the_choices_at_once_conform() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let kind = IutKind::SoftDevice {
+        faults: vec![],
+        choices: Choice::ALL.to_vec(),
+    };
+    let failed: Vec<String> = catalogue
+        .profiles
+        .iter()
+        .flat_map(|profile| {
+            problems(&run(&kind, &profile.name, &quick()))
+                .into_iter()
+                .map(move |p| format!("{}: {p}", profile.name))
+        })
+        .collect();
+    assert!(failed.is_empty(), "{}", failed.join("\n"));
+}
+
 #[test]
 fn runs_check_real_traffic() {
     let result = run(
