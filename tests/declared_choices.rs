@@ -222,3 +222,39 @@ fn a_device_declares_its_choice_in_its_configured_answer() {
     let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap();
     assert!(summary.contains("FAIL fc510x::HS-TX-"), "{summary}");
 }
+
+/// HS-TX-008's depth is an assumption (no document gives it): a device
+/// declares its own and is judged by it. The soft device holds the profile's
+/// 64 messages: declared as 64 it conforms, declared as 8 it fails the Tx
+/// handshake, as a device that claims a depth it does not have would.
+#[test]
+fn a_declared_send_queue_depth_is_the_one_judged() {
+    let (out, dir) = backpressure(
+        "depth-64",
+        "softdevice",
+        &["--declare", "tx-queue-depth=64"],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap();
+    assert!(
+        summary.contains("tx-queue-depth=64 (declared)"),
+        "{summary}"
+    );
+    let (out, dir) = backpressure("depth-8", "softdevice", &["--declare", "tx-queue-depth=8"]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap();
+    assert!(summary.contains("FAIL fc510x::HS-TX-"), "{summary}");
+    let out = canif(&[
+        "run",
+        "--profile",
+        "fc510x",
+        "--declare",
+        "tx-queue-depth=0",
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("a number of messages"),
+        "{}",
+        stderr(&out)
+    );
+}

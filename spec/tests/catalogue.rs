@@ -331,6 +331,13 @@ fn the_reviewed_statements_say_what_their_sources_say() {
         assert_eq!(requirement(id).status, Status::Derived, "{id} is inferred");
     }
     assert_eq!(requirement("HB-001").source.file, "CiA-301");
+    assert_eq!(requirement("SDO-009").source.file, "CiA-301");
+    assert!(requirement("HS-RX-006").source.file.starts_with("000_"));
+    assert_eq!(requirement("LAY-FD-004").status, Status::Assumption);
+    assert!(requirement("LAY-GEN-008")
+        .notes
+        .as_deref()
+        .is_some_and(|n| n.contains("RTR with EDL is added here")));
     for id in ["PDX-001", "PDX-002", "PDX-003"] {
         assert_eq!(requirement(id).capabilities, ["el6751"], "{id}");
     }

@@ -20,6 +20,9 @@ pub struct Declared {
     /// message, in ns. Undeclared, each scenario measures it and holds every
     /// batch to within the 500 ns jitter of the others.
     pub sync1_output_delay: Option<Nanos>,
+    /// HS-TX-008: how many messages the local send queue holds. No document
+    /// gives it; undeclared, the profile's assumed depth is judged.
+    pub tx_queue_depth: Option<usize>,
 }
 
 /// The choices a device can declare, by name.
@@ -32,10 +35,15 @@ pub const CHOICES: &[(&str, &str)] = &[
         SYNC1_OUTPUT_DELAY,
         "with Distributed Clocks, ns from SYNC1 to the start of the first Tx message (PDX-004, ruling R10)",
     ),
+    (
+        TX_QUEUE_DEPTH,
+        "messages the local send queue holds (HS-TX-008; no document gives it, the profiles assume 64)",
+    ),
 ];
 
 const TX_QUEUE_ACCOUNTING: &str = "tx-queue-accounting";
 const SYNC1_OUTPUT_DELAY: &str = "sync1-output-delay-ns";
+const TX_QUEUE_DEPTH: &str = "tx-queue-depth";
 
 /// The requirements the send queue's accounting decides: a failure blamed on
 /// one of them, while the device declared none, is tried under the other.
@@ -70,6 +78,10 @@ impl fmt::Display for DeclareError {
             DeclareError::UnknownValue { choice, value } if choice == SYNC1_OUTPUT_DELAY => write!(
                 f,
                 "{choice} cannot be `{value}`; it is a number of nanoseconds"
+            ),
+            DeclareError::UnknownValue { choice, value } if choice == TX_QUEUE_DEPTH => write!(
+                f,
+                "{choice} cannot be `{value}`; it is a number of messages, at least 1"
             ),
             DeclareError::UnknownValue { choice, value } => {
                 let values: Vec<&str> = TxQueueAccounting::ALL.iter().map(|a| a.name()).collect();
@@ -112,6 +124,16 @@ impl Declared {
                 self.sync1_output_delay = Some(delay);
                 Ok(())
             }
+            TX_QUEUE_DEPTH => {
+                let depth = value.parse().ok().filter(|d| *d > 0).ok_or_else(|| {
+                    DeclareError::UnknownValue {
+                        choice: name.to_string(),
+                        value: value.to_string(),
+                    }
+                })?;
+                self.tx_queue_depth = Some(depth);
+                Ok(())
+            }
             other => Err(DeclareError::UnknownChoice(other.to_string())),
         }
     }
@@ -121,6 +143,7 @@ impl Declared {
         Declared {
             tx_queue_accounting: self.tx_queue_accounting.or(fallback.tx_queue_accounting),
             sync1_output_delay: self.sync1_output_delay.or(fallback.sync1_output_delay),
+            tx_queue_depth: self.tx_queue_depth.or(fallback.tx_queue_depth),
         }
     }
 
@@ -132,7 +155,8 @@ impl Declared {
         let delay = self
             .sync1_output_delay
             .map(|ns| format!("{SYNC1_OUTPUT_DELAY}={ns}"));
-        accounting.into_iter().chain(delay).collect()
+        let depth = self.tx_queue_depth.map(|n| format!("{TX_QUEUE_DEPTH}={n}"));
+        accounting.into_iter().chain(delay).chain(depth).collect()
     }
 }
 
@@ -200,12 +224,18 @@ mod tests {
         let wire_in = Declared {
             tx_queue_accounting: Some(TxQueueAccounting::WireInQueue),
             sync1_output_delay: Some(2_000),
+            tx_queue_depth: None,
         };
         let outside = Declared {
             tx_queue_accounting: Some(TxQueueAccounting::WireOutsideQueue),
             sync1_output_delay: None,
+            tx_queue_depth: Some(8),
         };
-        assert_eq!(wire_in.or(outside), wire_in);
+        assert_eq!(wire_in.or(outside).tx_queue_depth, Some(8));
+        assert_eq!(
+            wire_in.or(outside).tx_queue_accounting,
+            wire_in.tx_queue_accounting
+        );
         assert_eq!(Declared::default().or(outside), outside);
     }
 }

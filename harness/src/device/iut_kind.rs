@@ -184,6 +184,8 @@ impl IutKind {
             }),
             // It starts at SYNC1 (`sync1-jitter`: within the 500 ns after).
             sync1_output_delay: Some(0),
+            // Its send queue is the profile's (it is built from the same).
+            tx_queue_depth: None,
         };
         match self {
             IutKind::Model => soft(&[]),

@@ -134,6 +134,10 @@ impl<B: Bus + ?Sized> Lockstep<B> {
                 .sync1_output_delay
                 .or(own.sync1_output_delay)
                 .or(caps.sync1_output_delay),
+            tx_queue_depth: told
+                .tx_queue_depth
+                .or(own.tx_queue_depth)
+                .unwrap_or(caps.tx_queue_depth),
             ..caps.clone()
         };
         let iut_declares = Declared {
@@ -143,6 +147,7 @@ impl<B: Bus + ?Sized> Lockstep<B> {
             sync1_output_delay: own
                 .sync1_output_delay
                 .filter(|_| told.sync1_output_delay.is_none()),
+            tx_queue_depth: own.tx_queue_depth.filter(|_| told.tx_queue_depth.is_none()),
         }
         .lines();
         let model = Device::new(caps, scenario.interface.clone())
