@@ -132,6 +132,9 @@ fn each_faulty_client_is_caught_on_exactly_its_requirements() {
     }
 }
 
+/// Every client requirement a test can judge (not those verified by
+/// inspection, such as CL-ORD-001's order inside one task) is broken by some
+/// faulty client.
 #[test]
 fn every_client_requirement_is_broken_by_some_faulty_client() {
     let catalogue = Catalogue::embedded().unwrap();
@@ -141,7 +144,7 @@ fn every_client_requirement_is_broken_by_some_faulty_client() {
         .collect();
     let client: BTreeSet<&str> = catalogue
         .requirements()
-        .filter(|r| r.side == Side::Plc)
+        .filter(|r| r.side == Side::Plc && r.verification == canif_spec::Verification::Test)
         .map(|r| r.id.as_str())
         .collect();
     assert_eq!(killed, client);
