@@ -362,48 +362,27 @@ fn wait_with_timeout(mut child: Child, timeout: Duration) -> Result<Output, Fail
 }
 
 /// `canif device --ethercat TERMINAL --bus socketcan:CAN`, until dropped.
-struct TerminalProcess(Child);
-
-impl TerminalProcess {
-    fn start(
-        terminal: &str,
-        can: &str,
-        profile: &str,
-        fault: Option<&str>,
-    ) -> Result<Self, Failed> {
-        let mut command = Command::new(canif_bin());
-        command.args([
-            "device",
-            "--ethercat",
-            terminal,
-            "--bus",
-            &format!("socketcan:{can}"),
-            "--profile",
-            profile,
-        ]);
-        if let Some(fault) = fault {
-            command.args(["--fault", fault]);
-        }
-        let mut child = command
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()?;
-        // It says so once both interfaces are open: a master may scan then.
-        let mut line = String::new();
-        BufReader::new(child.stderr.take().ok_or("no stderr")?).read_line(&mut line)?;
-        if !line.starts_with("canif device:") {
-            let _ = child.kill();
-            return Err(format!("the terminal did not start: {line:?}").into());
-        }
-        Ok(TerminalProcess(child))
+/// It says so on stderr once both interfaces are open: a master may scan then.
+fn terminal_process(
+    terminal: &str,
+    can: &str,
+    profile: &str,
+    fault: Option<&str>,
+) -> Result<Background, Failed> {
+    let mut command = Command::new(canif_bin());
+    command.args([
+        "device",
+        "--ethercat",
+        terminal,
+        "--bus",
+        &format!("socketcan:{can}"),
+        "--profile",
+        profile,
+    ]);
+    if let Some(fault) = fault {
+        command.args(["--fault", fault]);
     }
-}
-
-impl Drop for TerminalProcess {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
+    Background::start(command, Said::OnStderr("canif device:"), "the terminal")
 }
 
 /// Issue 25's two ends, as a lab runs them against a real terminal: `canif
@@ -448,7 +427,7 @@ fn ethercat_terminal_over(can: &str) -> Result<(), Failed> {
             Ok((output, dir))
         };
     for profile in ["el6751-legacy", "el6751-mdp"] {
-        let _terminal = TerminalProcess::start(&pair.terminal, can, profile, None)?;
+        let _terminal = terminal_process(&pair.terminal, can, profile, None)?;
         let (output, dir) = run(
             profile,
             &format!("ethercat-{profile}"),
@@ -474,7 +453,7 @@ fn ethercat_terminal_over(can: &str) -> Result<(), Failed> {
             .into());
         }
     }
-    let _terminal = TerminalProcess::start(
+    let _terminal = terminal_process(
         &pair.terminal,
         can,
         "el6751-mdp",
@@ -493,36 +472,55 @@ fn ethercat_terminal_over(can: &str) -> Result<(), Failed> {
 }
 
 /// `canif coupler --bus` on an interface, until dropped.
-struct CouplerProcess(Child);
+fn coupler_process(interface: &str, fault: Option<&str>) -> Result<Background, Failed> {
+    let mut command = Command::new(canif_bin());
+    command.args([
+        "coupler",
+        "--bus",
+        &format!("socketcan:{interface}"),
+        "--node",
+        "5",
+    ]);
+    if let Some(fault) = fault {
+        command.args(["--fault", fault]);
+    }
+    Background::start(command, Said::OnStdout("ready"), "the coupler")
+}
 
-impl CouplerProcess {
-    fn start(interface: &str, fault: Option<&str>) -> Result<Self, Failed> {
-        let mut command = Command::new(canif_bin());
-        command.args([
-            "coupler",
-            "--bus",
-            &format!("socketcan:{interface}"),
-            "--node",
-            "5",
-        ]);
-        if let Some(fault) = fault {
-            command.args(["--fault", fault]);
-        }
-        let mut child = command
-            .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
-            .spawn()?;
+/// Where a background process says it is ready, and how the line begins.
+enum Said {
+    OnStdout(&'static str),
+    OnStderr(&'static str),
+}
+
+/// A canif process a trial needs beside the run (a coupler, a terminal),
+/// killed when dropped.
+struct Background(Child);
+
+impl Background {
+    /// Starts `command` and waits for its ready line.
+    fn start(mut command: Command, said: Said, what: &str) -> Result<Self, Failed> {
+        let (stdout, stderr, prefix) = match said {
+            Said::OnStdout(prefix) => (Stdio::piped(), Stdio::inherit(), prefix),
+            Said::OnStderr(prefix) => (Stdio::null(), Stdio::piped(), prefix),
+        };
+        let mut child = command.stdout(stdout).stderr(stderr).spawn()?;
         let mut line = String::new();
-        BufReader::new(child.stdout.take().ok_or("no stdout")?).read_line(&mut line)?;
-        if !line.starts_with("ready") {
+        match (child.stdout.take(), child.stderr.take()) {
+            (Some(out), _) => BufReader::new(out).read_line(&mut line)?,
+            (None, Some(err)) => BufReader::new(err).read_line(&mut line)?,
+            (None, None) => 0,
+        };
+        if !line.starts_with(prefix) {
             let _ = child.kill();
-            return Err(format!("the coupler did not start: {line:?}").into());
+            let _ = child.wait();
+            return Err(format!("{what} did not start: {line:?}").into());
         }
-        Ok(CouplerProcess(child))
+        Ok(Background(child))
     }
 }
 
-impl Drop for CouplerProcess {
+impl Drop for Background {
     fn drop(&mut self) {
         let _ = self.0.kill();
         let _ = self.0.wait();
@@ -536,7 +534,7 @@ fn canopen_checks_over(interface: &str) -> Result<(), Failed> {
     let dir = report_path("canopen");
     let report = dir.to_string_lossy().into_owned();
     let check = |fault: Option<&str>| -> Result<Output, Failed> {
-        let _coupler = CouplerProcess::start(interface, fault)?;
+        let _coupler = coupler_process(interface, fault)?;
         Ok(canif(&[
             "run", "--suite", "canopen", "--bus", &bus, "--node", "5", "--report", &report,
         ]))
@@ -574,7 +572,7 @@ fn quick_start_over(interface: &str) -> Result<(), Failed> {
         let caps = profile.model_capabilities();
         let config = InterfaceConfig::new(caps.first_format(), 8);
         // A coupler from boot for each profile (its guarding toggle starts at 0).
-        let _coupler = CouplerProcess::start(interface, None)?;
+        let _coupler = coupler_process(interface, None)?;
         let layout = ImageLayout::new(&config, caps.info_data);
         let mut iut = ExecIut::spawn(
             &device_command(interface, None)["exec:".len()..],
@@ -629,7 +627,7 @@ fn quick_start_over(interface: &str) -> Result<(), Failed> {
 
 /// Python's canopen package (python-can's socketcan interface) against the coupler.
 fn python_canopen_over(interface: &str) -> Result<(), Failed> {
-    let _coupler = CouplerProcess::start(interface, None)?;
+    let _coupler = coupler_process(interface, None)?;
     let script = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/tests/python/canopen_crosscheck.py"

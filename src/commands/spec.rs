@@ -122,25 +122,23 @@ pub(crate) fn summary(catalogue: &Catalogue, out: &mut String) {
         totals[2],
         totals.iter().sum::<usize>()
     );
-    let inspection: Vec<_> = catalogue
-        .requirements()
-        .filter(|r| r.verification == Verification::Inspection)
-        .map(|r| r.id.as_str())
-        .collect();
+    let verified = |how: Verification| -> String {
+        let ids: Vec<&str> = catalogue
+            .requirements()
+            .filter(|r| r.verification == how)
+            .map(|r| r.id.as_str())
+            .collect();
+        ids.join(", ")
+    };
     outln!(
         out,
         "\nchecked by inspection, not by tests: {}",
-        inspection.join(", ")
+        verified(Verification::Inspection)
     );
-    let model: Vec<_> = catalogue
-        .requirements()
-        .filter(|r| r.verification == Verification::Model)
-        .map(|r| r.id.as_str())
-        .collect();
     outln!(
         out,
         "checked on the reference model (no implementation shows them): {}",
-        model.join(", ")
+        verified(Verification::Model)
     );
 }
 
