@@ -139,6 +139,19 @@ fn conforms_on(bus: &str, iut: &str, profile: &str, extra: &[&str]) -> Result<()
     Ok(())
 }
 
+/// A run that must fail on `requirement`: exit 1, and the requirement in its summary.
+fn failed_on(output: &Output, dir: &std::path::Path, requirement: &str) -> Result<(), Failed> {
+    let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap_or_default();
+    if output.status.code() != Some(1) || !summary.contains(requirement) {
+        return Err(format!(
+            "expected a failure of {requirement}\n{}\nsummary:\n{summary}",
+            text(output)
+        )
+        .into());
+    }
+    Ok(())
+}
+
 fn device_command(interface: &str, fault: Option<&str>) -> String {
     format!(
         "exec:{} device --stdio --bus socketcan:{interface}{}",
@@ -165,15 +178,7 @@ fn fault_caught_over(interface: &str) -> Result<(), Failed> {
         "--report",
         &dir.display().to_string(),
     ]);
-    let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap_or_default();
-    if output.status.code() != Some(1) || !summary.contains("HS-TX-006") {
-        return Err(format!(
-            "expected a failure of HS-TX-006\n{}\nsummary:\n{summary}",
-            text(&output)
-        )
-        .into());
-    }
-    Ok(())
+    failed_on(&output, &dir, "HS-TX-006")
 }
 
 /// The PLC side over a kernel: the model device's controller and the other
@@ -460,15 +465,7 @@ fn ethercat_terminal_over(can: &str) -> Result<(), Failed> {
         Some("sends-batch-reversed"),
     )?;
     let (output, dir) = run("el6751-mdp", "ethercat-fault", &["tx-batches"])?;
-    let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap_or_default();
-    if output.status.code() != Some(1) || !summary.contains("HS-TX-006") {
-        return Err(format!(
-            "expected a failure of HS-TX-006\n{}\nsummary:\n{summary}",
-            text(&output)
-        )
-        .into());
-    }
-    Ok(())
+    failed_on(&output, &dir, "HS-TX-006")
 }
 
 /// `canif coupler --bus` on an interface, until dropped.
