@@ -108,6 +108,12 @@ void canif_transmit_complete(void *device);
 
 void canif_controller_status(void *device, const canif_status *status);
 
+/* Optional. What the device declares where the documents leave a choice
+ * (docs/choices.md): "name=value" lines separated by '\n', NUL-terminated,
+ * valid while the device lives; NULL declares nothing. Asked once, after
+ * canif_create made the device. */
+const char *canif_declares(void *device);
+
 /* ---- The client role: a PLC-side client in a shared library ------------
  * `canif run --side plc --iut lib:path/to/libclient.so` (docs/plc-side.md).
  * The harness plays the device, the EtherCAT master and the application; the

@@ -93,6 +93,62 @@ fn canif_run_takes_a_library_from_the_command_line() {
     );
 }
 
+/// A device in a library declares its choices through the optional
+/// `canif_declares` (docs/choices.md): the run is judged by them and the
+/// report says the IUT declared them; a line that is no declaration is an
+/// error naming what it said.
+#[test]
+fn a_library_declares_its_choices_through_canif_declares() {
+    let run = |name: &str, declares: &str| {
+        let extra = format!(
+            "\nconst char *canif_declares(void *p) {{ (void)p; return \"{declares}\"; }}\n"
+        );
+        let library = build(name, &example(), &extra);
+        let report = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("c-abi-{name}"));
+        let _ = std::fs::remove_dir_all(&report);
+        let output = Command::new(env!("CARGO_BIN_EXE_canif"))
+            .args([
+                "run",
+                "--profile",
+                "fc510x-before-fw2.14",
+                "--scenario",
+                "tx-batches",
+            ])
+            .arg(format!("--iut=lib:{}", library.display()))
+            .arg("--report")
+            .arg(&report)
+            .output()
+            .expect("canif runs");
+        let json = std::fs::read_to_string(report.join("report.json")).unwrap_or_default();
+        (output, json)
+    };
+    let (output, report) = run("declaring", "sync1-output-delay-ns=1234\\n");
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_str(&report).unwrap();
+    let choices = &report["meta"]["choices"];
+    assert_eq!(
+        choices[0]["choice"], "sync1-output-delay-ns=1234",
+        "{choices}"
+    );
+    assert_eq!(choices[0]["how"], "declared_by_iut", "{choices}");
+    let (output, report) = run("declaring-nonsense", "depth=deep");
+    assert_eq!(
+        output.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(
+        report.contains("canif_declares said `depth=deep`"),
+        "{report}"
+    );
+}
+
 #[test]
 fn a_library_of_another_version_or_without_a_function_is_an_error() {
     let source = std::fs::read_to_string(example()).unwrap().replace(

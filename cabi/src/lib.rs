@@ -140,6 +140,7 @@ type Receive = unsafe extern "C" fn(*mut c_void, *const CFrame, u64);
 type Poll = unsafe extern "C" fn(*mut c_void, u64, *mut CFrame, *mut u64) -> c_int;
 type Complete = unsafe extern "C" fn(*mut c_void);
 type Status = unsafe extern "C" fn(*mut c_void, *const CStatus);
+type Declares = unsafe extern "C" fn(*mut c_void) -> *const c_char;
 
 /// The functions of one loaded library.
 #[derive(Clone, Copy)]
@@ -151,6 +152,8 @@ struct Functions {
     poll: Poll,
     complete: Complete,
     status: Status,
+    /// Optional: a device that declares nothing leaves it out.
+    declares: Option<Declares>,
 }
 
 /// Loads `path` and checks that it speaks this ABI version.
@@ -221,6 +224,7 @@ impl Library {
             poll: symbol(&library, "canif_poll_transmit")?,
             complete: symbol(&library, "canif_transmit_complete")?,
             status: symbol(&library, "canif_controller_status")?,
+            declares: symbol(&library, "canif_declares").ok(),
         };
         Ok(Library {
             functions,
@@ -284,6 +288,26 @@ impl Device {
     pub fn receive(&mut self, frame: &CFrame, end_ns: u64) {
         // SAFETY: `frame` lives through the call; the handle is live.
         unsafe { (self.functions.receive)(self.handle, frame, end_ns) }
+    }
+
+    /// The lines `canif_declares` gave ("name=value"), none without it.
+    pub fn declares(&self) -> Vec<String> {
+        let Some(declares) = self.functions.declares else {
+            return Vec::new();
+        };
+        // SAFETY: the handle is live; the library returns NULL or a
+        // NUL-terminated string valid while the device lives.
+        let text = unsafe { declares(self.handle) };
+        if text.is_null() {
+            return Vec::new();
+        }
+        // SAFETY: non-null and NUL-terminated (the ABI's promise above).
+        let text = unsafe { CStr::from_ptr(text) }.to_string_lossy();
+        text.lines()
+            .map(str::trim)
+            .filter(|line| !line.is_empty())
+            .map(str::to_string)
+            .collect()
     }
 
     /// The frame the controller starts at `now`, if any, and when a held one is due.

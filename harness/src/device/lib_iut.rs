@@ -11,6 +11,7 @@ use canif_model::image::ImageLayout;
 use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 
+use crate::device::choices::Declared;
 use crate::device::iut::{BuildError, InvalidFrame, Iut, Transmit};
 use crate::error::{IutCause, IutError};
 
@@ -18,6 +19,8 @@ use crate::error::{IutCause, IutError};
 pub(crate) struct LibIut {
     device: Device,
     next: Option<Nanos>,
+    /// What it declared through the optional `canif_declares`.
+    declared: Declared,
 }
 
 /// Loads the library and makes its device for a configuration.
@@ -48,7 +51,20 @@ pub(crate) fn build(
     let device = library
         .create(&c_config, &c_caps)
         .map_err(BuildError::Refused)?;
-    Ok(LibIut { device, next: None })
+    let mut declared = Declared::default();
+    for line in device.declares() {
+        declared.declare(&line).map_err(|error| {
+            BuildError::Failed(IutError::new(
+                IutCause::Protocol,
+                format!("canif_declares said `{line}`: {error}"),
+            ))
+        })?;
+    }
+    Ok(LibIut {
+        device,
+        next: None,
+        declared,
+    })
 }
 
 /// The configuration as the C ABI carries it (`canif_config`).
@@ -143,6 +159,10 @@ pub(crate) fn from_c(c: &CFrame) -> Result<Frame, InvalidFrame> {
 }
 
 impl Iut for LibIut {
+    fn declared(&self) -> Declared {
+        self.declared
+    }
+
     fn cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError> {
         self.device
             .cycle(now, outputs)
