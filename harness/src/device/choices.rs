@@ -147,6 +147,16 @@ impl Declared {
         }
     }
 
+    /// What these `NAME=VALUE` lines declare (as [`Declared::lines`] gave them;
+    /// a line that is none is left out).
+    pub fn from_lines(lines: &[String]) -> Declared {
+        let mut declared = Declared::default();
+        for line in lines {
+            let _ = declared.declare(line);
+        }
+        declared
+    }
+
     /// Each declared choice as `NAME=VALUE`.
     pub fn lines(&self) -> Vec<String> {
         let accounting = self
@@ -191,6 +201,7 @@ mod tests {
             Some(TxQueueAccounting::WireInQueue)
         );
         assert_eq!(declared.lines(), ["tx-queue-accounting=wire-in-queue"]);
+        assert_eq!(Declared::from_lines(&declared.lines()), declared);
         let form = declared.declare("wire-in-queue").unwrap_err();
         assert_eq!(form.to_string(), "`wire-in-queue` is not NAME=VALUE");
         let name = declared.declare("queue=x").unwrap_err().to_string();

@@ -135,10 +135,9 @@ impl Options {
             said.extend(run.iut_declares.iter().cloned());
         }
         // The IUT declared its accounting itself: judged by that, nothing to find out.
-        let self_declared = run
-            .iut_declares
-            .iter()
-            .any(|line| line.starts_with("tx-queue-accounting="));
+        let self_declared = Declared::from_lines(&run.iut_declares)
+            .tx_queue_accounting
+            .is_some();
         if settled.is_some() || self_declared {
             return run;
         }
