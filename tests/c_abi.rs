@@ -39,6 +39,29 @@ fn build_with(name: &str, source: &Path, extra: &str, flags: &[&str]) -> PathBuf
     library
 }
 
+/// `canif run` of `library` on fc510x-before-fw2.14's tx-batches scenarios,
+/// its reports in `report`, with `env` set for canif.
+fn run_tx_batches(
+    library: &Path,
+    report: &Path,
+    env: &[(&str, &std::ffi::OsStr)],
+) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_canif"))
+        .args([
+            "run",
+            "--profile",
+            "fc510x-before-fw2.14",
+            "--scenario",
+            "tx-batches",
+        ])
+        .arg(format!("--iut=lib:{}", library.display()))
+        .arg("--report")
+        .arg(report)
+        .envs(env.iter().copied())
+        .output()
+        .expect("canif runs")
+}
+
 fn example() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/c/minimal_device.c")
 }
@@ -106,19 +129,7 @@ fn a_library_declares_its_choices_through_canif_declares() {
         let library = build(name, &example(), &extra);
         let report = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("c-abi-{name}"));
         let _ = std::fs::remove_dir_all(&report);
-        let output = Command::new(env!("CARGO_BIN_EXE_canif"))
-            .args([
-                "run",
-                "--profile",
-                "fc510x-before-fw2.14",
-                "--scenario",
-                "tx-batches",
-            ])
-            .arg(format!("--iut=lib:{}", library.display()))
-            .arg("--report")
-            .arg(&report)
-            .output()
-            .expect("canif runs");
+        let output = run_tx_batches(&library, &report, &[]);
         let json = std::fs::read_to_string(report.join("report.json")).unwrap_or_default();
         (output, json)
     };
@@ -223,21 +234,14 @@ fn address_sanitizer_catches_a_device_writing_past_the_input_image() {
         "",
         &["-fsanitize=address", "-g", "-Wno-error"],
     );
-    let output = Command::new(env!("CARGO_BIN_EXE_canif"))
-        .args([
-            "run",
-            "--profile",
-            "fc510x-before-fw2.14",
-            "--scenario",
-            "tx-batches",
-            "--report",
-        ])
-        .arg(dir.join("overflow-report"))
-        .arg(format!("--iut=lib:{}", library.display()))
-        .env("LD_PRELOAD", &asan)
-        .env("ASAN_OPTIONS", "detect_leaks=0")
-        .output()
-        .unwrap();
+    let output = run_tx_batches(
+        &library,
+        &dir.join("overflow-report"),
+        &[
+            ("LD_PRELOAD", asan.as_ref()),
+            ("ASAN_OPTIONS", "detect_leaks=0".as_ref()),
+        ],
+    );
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(!output.status.success());
     assert!(

@@ -37,6 +37,15 @@ pub struct TraceWriter {
     pcapng: PcapNgWriter<BufWriter<File>>,
 }
 
+/// One line of a candump log: `(SECONDS.MICROS) IFACE ID#DATA`, `at` in ns.
+pub(crate) fn candump_line(at: Nanos, interface: &str, frame: &Frame) -> String {
+    format!(
+        "({}.{:06}) {interface} {frame}",
+        at / 1_000_000_000,
+        (at % 1_000_000_000) / 1_000
+    )
+}
+
 fn pcap_error(error: pcap_file::PcapError) -> io::Error {
     match error {
         pcap_file::PcapError::IoError(error) => error,
@@ -98,13 +107,7 @@ impl TraceWriter {
     /// A frame that ended on the bus at `at`; `from_iut`: the IUT sent it.
     pub fn frame(&mut self, at: Nanos, frame: &Frame, from_iut: bool) -> io::Result<()> {
         let at = self.epoch.saturating_add(at);
-        writeln!(
-            self.candump,
-            "({}.{:06}) {} {frame}",
-            at / 1_000_000_000,
-            (at % 1_000_000_000) / 1_000,
-            self.interface
-        )?;
+        writeln!(self.candump, "{}", candump_line(at, &self.interface, frame))?;
         let packet = socketcan_packet(frame);
         let flags = if from_iut {
             direction::OUTBOUND

@@ -27,15 +27,11 @@ pub(crate) fn device(
         (Err(code), _) | (_, Err(code)) => return code,
     };
     // Checked as `run --declare` checks them, then said as the protocol says them.
-    let mut declares = std::collections::BTreeMap::new();
+    let mut declared = canif_harness::device::choices::Declared::default();
     for text in declare {
-        let mut checked = canif_harness::device::choices::Declared::default();
-        if let Err(error) = checked.declare(text) {
+        if let Err(error) = declared.declare(text) {
             eprintln!("--declare {text}: {error}");
             return ExitCode::from(2);
-        }
-        if let Some((name, value)) = text.split_once('=') {
-            declares.insert(name.trim().to_string(), value.trim().to_string());
         }
     }
     let build: &Build<'_> = &|caps, config| kind.build(caps, config);
@@ -43,7 +39,7 @@ pub(crate) fn device(
         None => server::serve(
             server::Server::new(build, true)
                 .at_most(protocol)
-                .declaring(declares),
+                .declaring(declared.entries()),
             std::io::stdin().lock(),
             std::io::stdout(),
         )

@@ -168,17 +168,20 @@ pub(crate) fn probe(
             probes.push(probed);
         }
     }
-    let choice = "tx-queue-accounting";
-    let (said, code, json) = match finding(&probes) {
+    use canif_harness::device::choices::{Declared, TX_QUEUE_ACCOUNTING as choice};
+    let (said, code, declared) = match finding(&probes) {
         Finding::Takes(accounting) => (
             format!("{choice}={}", accounting.name()),
             ExitCode::SUCCESS,
-            Some(serde_json::json!({ choice: accounting.name() })),
+            Some(Declared {
+                tx_queue_accounting: Some(accounting),
+                ..Declared::default()
+            }),
         ),
         Finding::Undecided => (
             format!("{choice}: no scenario told the choices apart; nothing to declare"),
             ExitCode::SUCCESS,
-            Some(serde_json::json!({})),
+            Some(Declared::default()),
         ),
         Finding::Neither => (
             format!("{choice}: a scenario passed under no documented choice (HS-TX-012 broken either way)"),
@@ -192,8 +195,8 @@ pub(crate) fn probe(
         ),
     };
     println!("{said}");
-    if let Some(json) = json {
-        let text = serde_json::to_string_pretty(&json).expect("a JSON object") + "\n";
+    if let Some(declared) = declared {
+        let text = serde_json::to_string_pretty(&declared.entries()).expect("a JSON object") + "\n";
         if let Err(error) = std::fs::write(out, text) {
             eprintln!("cannot write {}: {error}", out.display());
             return ExitCode::from(2);

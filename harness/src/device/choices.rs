@@ -41,7 +41,8 @@ pub const CHOICES: &[(&str, &str)] = &[
     ),
 ];
 
-const TX_QUEUE_ACCOUNTING: &str = "tx-queue-accounting";
+/// The name the send queue's accounting is declared by.
+pub const TX_QUEUE_ACCOUNTING: &str = "tx-queue-accounting";
 const SYNC1_OUTPUT_DELAY: &str = "sync1-output-delay-ns";
 const TX_QUEUE_DEPTH: &str = "tx-queue-depth";
 
@@ -157,6 +158,16 @@ impl Declared {
         declared
     }
 
+    /// Each declared choice by name, as a probe's file and the protocol's
+    /// `declares` carry them.
+    pub fn entries(&self) -> std::collections::BTreeMap<String, String> {
+        self.lines()
+            .iter()
+            .filter_map(|line| line.split_once('='))
+            .map(|(name, value)| (name.to_string(), value.to_string()))
+            .collect()
+    }
+
     /// Each declared choice as `NAME=VALUE`.
     pub fn lines(&self) -> Vec<String> {
         let accounting = self
@@ -202,6 +213,7 @@ mod tests {
         );
         assert_eq!(declared.lines(), ["tx-queue-accounting=wire-in-queue"]);
         assert_eq!(Declared::from_lines(&declared.lines()), declared);
+        assert_eq!(declared.entries()["tx-queue-accounting"], "wire-in-queue");
         let form = declared.declare("wire-in-queue").unwrap_err();
         assert_eq!(form.to_string(), "`wire-in-queue` is not NAME=VALUE");
         let name = declared.declare("queue=x").unwrap_err().to_string();

@@ -264,7 +264,7 @@ fn to_soft(frame: &Frame) -> CanFrame {
     soft
 }
 
-fn from_soft(soft: &CanFrame) -> Result<Frame, InvalidFrame> {
+pub(crate) fn from_soft(soft: &CanFrame) -> Result<Frame, InvalidFrame> {
     let id = if soft.extended {
         CanId::extended(soft.id)
     } else {

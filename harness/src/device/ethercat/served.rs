@@ -159,22 +159,12 @@ pub fn serve(
     Ok(served)
 }
 
-/// One frame in candump's format: `(seconds.micros) IFACE ID#DATA`.
+/// One frame in candump's format (the trace's own line); a frame that is
+/// none is said as what it is.
 fn log_frame(log: &mut dyn Write, interface: &str, now: u64, frame: &canif_softdevice::CanFrame) {
-    let data: String = frame.data[..frame.len.min(64)]
-        .iter()
-        .map(|b| format!("{b:02X}"))
-        .collect();
-    let id = if frame.extended {
-        format!("{:08X}", frame.id)
-    } else {
-        format!("{:03X}", frame.id)
+    let line = match crate::device::iut::from_soft(frame) {
+        Ok(frame) => crate::trace::candump_line(now, interface, &frame),
+        Err(invalid) => format!("{interface}: an invalid frame: {invalid}"),
     };
-    let remote = if frame.remote { "R" } else { "" };
-    let _ = writeln!(
-        log,
-        "({}.{:06}) {interface} {id}#{remote}{data}",
-        now / 1_000_000_000,
-        now % 1_000_000_000 / 1_000
-    );
+    let _ = writeln!(log, "{line}");
 }
