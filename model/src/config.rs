@@ -6,6 +6,7 @@
 //! 003 (Distributed Clocks only in Fast CAN Queue mode), ruling R2 (1..=32 slots).
 
 use crate::filter::FilterRow;
+use crate::freedoms::Freedoms;
 use crate::info_data::BitTiming;
 use crate::Nanos;
 
@@ -120,6 +121,8 @@ pub struct Capabilities {
     /// Tx message (003's output delay; ruling R10: the device's constant, no
     /// document gives it): declared, or `None` and measured at the first batch.
     pub sync1_output_delay: Option<Nanos>,
+    /// What the device does where G3 and HS-RX-008/009 leave it free.
+    pub freedoms: Freedoms,
 }
 
 /// What counts against the local send queue's depth when the device decides
@@ -135,24 +138,23 @@ pub enum TxQueueAccounting {
     WireInQueue,
 }
 
-impl TxQueueAccounting {
-    pub const ALL: [TxQueueAccounting; 2] = [
+impl crate::freedoms::Named for TxQueueAccounting {
+    const ALL: &'static [Self] = &[
         TxQueueAccounting::WireOutsideQueue,
         TxQueueAccounting::WireInQueue,
     ];
+    const NAMES: &'static [&'static str] = &["wire-outside-queue", "wire-in-queue"];
 
     /// The choice's name, as declared (`--declare tx-queue-accounting=NAME`).
-    pub fn name(self) -> &'static str {
+    fn name(self) -> &'static str {
         match self {
             TxQueueAccounting::WireOutsideQueue => "wire-outside-queue",
             TxQueueAccounting::WireInQueue => "wire-in-queue",
         }
     }
+}
 
-    pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|a| a.name() == name)
-    }
-
+impl TxQueueAccounting {
     /// How many places the queue takes with `waiting` messages queued and,
     /// perhaps, one on the wire.
     pub fn taken(self, waiting: usize, on_wire: bool) -> usize {
@@ -195,6 +197,7 @@ impl Capabilities {
             tx_queue_depth: 64,
             tx_queue_accounting: TxQueueAccounting::default(),
             sync1_output_delay: None,
+            freedoms: Freedoms::default(),
         }
     }
 }

@@ -17,6 +17,7 @@ use crate::config::{
 };
 use crate::filter;
 use crate::frame::Frame;
+use crate::freedoms::{BadTxLength, RxIdleCount, StaleRxSlots};
 use crate::handshake;
 use crate::image::{ImageLayout, InputImage, MessageRepr, OutputImage, SizeError};
 use crate::info_data::{self, ControllerStatus};
@@ -158,8 +159,11 @@ impl Device {
         if !handshake::tx_batch_waiting(outputs.tx_counter(), inputs_tx) {
             return;
         }
-        // G3: never more than the slots the image has.
-        let count = usize::from(outputs.no_of_tx_messages()).min(self.layout.tx_slots);
+        // G3: never more than the slots the image has; how many is the device's choice.
+        let count = self.caps.freedoms.oversize_batch.sends(
+            usize::from(outputs.no_of_tx_messages()),
+            self.layout.tx_slots,
+        );
         // HS-TX-012: whether the frame on the wire still takes a place is the
         // device's declared choice (by default it has left the queue, 003).
         let waiting = self
@@ -173,15 +177,22 @@ impl Device {
             Synchronization::Sm2 => 0,
             Synchronization::DistributedClocks { sync1_shift } => now.saturating_add(sync1_shift),
         };
+        let queued_before = self.send_queue.len();
         for slot in 0..count {
             let Some(view) = outputs.tx_message(slot) else {
                 break;
             };
             let (message, _clamped) = MessageRepr::parse_clamped(&view);
+            if view.length_out_of_range()
+                && self.caps.freedoms.bad_tx_length == BadTxLength::DropsTheMessage
+            {
+                continue;
+            }
+            let first = self.send_queue.len() == queued_before;
             self.send_queue.push_back(Pending {
                 frame: message.frame,
                 transaction_number: message.transaction_number,
-                not_before: if slot == 0 { not_before } else { 0 },
+                not_before: if first { not_before } else { 0 },
             });
         }
         if let Ok(mut inputs) = InputImage::new_checked(&mut self.inputs[..], self.layout) {
@@ -199,9 +210,20 @@ impl Device {
                 handshake::rx_buffer_released(outputs_rx_counter, inputs.rx_counter())
             }
         };
-        if !may_deliver || self.rx_queue.is_empty() {
+        if !may_deliver {
             return;
         }
+        if self.rx_queue.is_empty() {
+            let buffered = self.config.queue != QueueMode::Fast;
+            if buffered && self.caps.freedoms.rx_idle_count == RxIdleCount::WritesZero {
+                inputs.set_no_of_rx_messages(0);
+            }
+            return;
+        }
+        let stale = match self.config.queue {
+            QueueMode::Fast => StaleRxSlots::Zeroed,
+            QueueMode::Standard | QueueMode::Optimized => self.caps.freedoms.stale_rx_slots,
+        };
         let count = self.rx_queue.len().min(self.layout.rx_slots);
         for slot in 0..self.layout.rx_slots {
             let Some(mut view) = inputs.rx_message_mut(slot) else {
@@ -217,7 +239,9 @@ impl Device {
                     // Frames were checked for this layout when they were received.
                     let _ = message.emit(&mut view);
                 }
-                // Slots past NoOfRxMessages are "don't care" (HS-RX-008); the reference zeroes them.
+                // Slots past NoOfRxMessages are "don't care" (HS-RX-008): the
+                // reference zeroes them, a device may declare it keeps them.
+                None if stale == StaleRxSlots::Kept => {}
                 None => view.clear(),
             }
         }

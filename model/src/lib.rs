@@ -19,6 +19,7 @@
 //! | Tx/Rx counter handshake | [`handshake`] | 000 §6, 003 |
 //! | the device cycle, queues | [`device`] | 003, 000 §4, §5 |
 //! | what a device offers / refuses | [`config`] | 000 §2, §3 |
+//! | what the documents leave free | [`freedoms`] | G3, 000 §5.1.1 |
 //! | filters | [`filter`] | 000 §7 |
 //! | CAN FD DLC and rounding | [`dlc`] | 000 §8.3.1 (R1) |
 //! | InfoData | [`info_data`] | 001 §8.3.3 |
@@ -58,6 +59,7 @@ pub mod dlc;
 pub mod exchange;
 pub mod filter;
 pub mod frame;
+pub mod freedoms;
 pub mod handshake;
 pub mod image;
 pub mod info_data;

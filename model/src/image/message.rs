@@ -190,6 +190,17 @@ impl<T: AsRef<[u8]>> MessageView<T> {
         }
     }
 
+    /// Whether the length as written is beyond its frame's: above 8 without
+    /// EDL, above 64 with it (G3).
+    pub fn length_out_of_range(&self) -> bool {
+        let most = if self.flags() & flag::EDL != 0 {
+            FD_MAX_LEN
+        } else {
+            CLASSIC_MAX_LEN
+        };
+        self.raw_length() > u16::from(most)
+    }
+
     /// The 11-bit COB ID word (meaningful for the 11-bit layouts only).
     pub fn cob_id_word(&self) -> CobIdWord {
         CobIdWord(read_u16(
