@@ -120,15 +120,30 @@ fn probe_finds_the_choice_and_run_takes_its_file() {
         file.to_str().unwrap(),
     ]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    // The served soft device declares nothing itself: every value is found
+    // by the probes (its accounting the other way round, the rest the reference's).
+    let found = [
+        "tx-queue-accounting=wire-in-queue",
+        "oversize-batch=sends-the-slots",
+        "bad-tx-length=clamps",
+        "rx-idle-count=keeps-the-last",
+        "stale-rx-slots=zeroed",
+    ];
     assert_eq!(
         String::from_utf8_lossy(&out.stdout).trim(),
-        "tx-queue-accounting=wire-in-queue"
+        found.join("\n")
     );
     let written: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
     assert_eq!(
         written,
-        serde_json::json!({"tx-queue-accounting": "wire-in-queue"})
+        serde_json::json!({
+            "tx-queue-accounting": "wire-in-queue",
+            "oversize-batch": "sends-the-slots",
+            "bad-tx-length": "clamps",
+            "rx-idle-count": "keeps-the-last",
+            "stale-rx-slots": "zeroed",
+        })
     );
     let at_file = format!("@{}", file.display());
     let (out, report_dir) = backpressure("probed", &counting_device(), &["--declare", &at_file]);
@@ -257,4 +272,70 @@ fn a_declared_send_queue_depth_is_the_one_judged() {
         "{}",
         stderr(&out)
     );
+}
+
+/// The freedoms of G3 and what a buffered delivery leaves: a device behind
+/// the protocol that takes the other value of each, declaring nothing, is
+/// found out by the probe, conforms declaring what it found, and fails
+/// declaring the reference's values, each on its own requirement.
+#[test]
+fn probe_finds_every_freedom_and_a_declaration_against_it_fails_on_its_requirement() {
+    let dir = scratch("probe-freedoms");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("choices.json");
+    let device = format!(
+        "exec:{BIN} device --stdio --choice clears-rx-count-when-idle --choice keeps-stale-rx-slots \
+         --choice refuses-oversize-batch --choice drops-message-with-bad-length"
+    );
+    let out = canif(&[
+        "probe",
+        "--profile",
+        "fc510x",
+        "--iut",
+        &device,
+        "--out",
+        file.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let written: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+    assert_eq!(
+        written,
+        serde_json::json!({
+            "tx-queue-accounting": "wire-outside-queue",
+            "oversize-batch": "drops-the-batch",
+            "bad-tx-length": "drops-the-message",
+            "rx-idle-count": "writes-zero",
+            "stale-rx-slots": "kept",
+        })
+    );
+    let run = |name: &str, declares: &[&str]| {
+        let report_dir = scratch(name);
+        let mut args = vec!["run", "--profile", "fc510x", "--iut", &device];
+        for line in declares {
+            args.extend(["--declare", line]);
+        }
+        let report = report_dir.to_str().unwrap().to_string();
+        args.extend(["--report", &report]);
+        let out = canif(&args);
+        (out, report_dir)
+    };
+    let at_file = format!("@{}", file.display());
+    let (out, _) = run("freedoms-found", &[&at_file]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    for (line, requirement) in [
+        ("oversize-batch=sends-the-slots", "HS-TX-010"),
+        ("bad-tx-length=clamps", "LAY-GEN-008"),
+        ("rx-idle-count=keeps-the-last", "HS-RX-009"),
+        ("stale-rx-slots=zeroed", "HS-RX-008"),
+    ] {
+        let (out, report_dir) = run(line, &[&at_file, line]);
+        assert_eq!(out.status.code(), Some(1), "{line}: {}", stderr(&out));
+        let verdicts = &report(&report_dir)["profiles"][0]["verdicts"];
+        assert_eq!(
+            verdicts[requirement]["verdict"], "fail",
+            "{line}: {requirement} is {}",
+            verdicts[requirement]
+        );
+    }
 }

@@ -64,12 +64,7 @@ pub fn run(profile: &Profile, scenario: &ScenarioInfo, under_test: &UnderTest) -
     let outcome = match under_test {
         UnderTest::Device(iut) => {
             // Judged by what the device declares where the documents leave a choice.
-            let declared = iut.declared();
-            let caps = canif_model::config::Capabilities {
-                tx_queue_accounting: declared.tx_queue_accounting.unwrap_or_default(),
-                sync1_output_delay: declared.sync1_output_delay,
-                ..caps
-            };
+            let caps = iut.declared().apply(&caps);
             run_scenario(
                 &scenario.file,
                 scenario.line,

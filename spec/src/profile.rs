@@ -74,6 +74,7 @@ impl Profile {
             tx_queue_depth: self.tx_queue_depth,
             // A device's choice, not the profile's: declared per run.
             tx_queue_accounting: Default::default(),
+            freedoms: Default::default(),
             sync1_output_delay: None,
         }
     }

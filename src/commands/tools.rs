@@ -137,64 +137,50 @@ pub(crate) fn frame_time(
     ExitCode::SUCCESS
 }
 
-/// `canif probe`: each profile's scenarios that tell the send queue's
-/// accountings apart, under each; the finding written to `out`.
+/// `canif probe`: each profile's scenarios that tell a choice's values
+/// apart, under each; the findings written to `out`.
 pub(crate) fn probe(
     kind: &canif_harness::device::IutKind,
     profiles: &[&canif_spec::Profile],
     out: &std::path::Path,
 ) -> ExitCode {
-    use canif_harness::device::probe::{finding, probe, Finding};
+    use canif_harness::device::choices::Choice;
+    use canif_harness::device::probe::{declaration, finding, probe, Finding};
     let options = canif_harness::device::Options::quick(1);
     let mut probes = Vec::new();
     for profile in profiles {
         for probed in probe(kind, profile, &options) {
-            let passes: Vec<&str> = probed.passes.iter().map(|a| a.name()).collect();
+            let passes = match probed.passes.as_slice() {
+                [] => "none".to_string(),
+                passes => passes.join(", "),
+            };
+            let errors: String = probed.errors.iter().map(|e| format!("; {e}")).collect();
             eprintln!(
-                "{:<16} {:<40} passes under: {}{}",
-                probed.profile,
-                probed.scenario,
-                if passes.is_empty() {
-                    "none".to_string()
-                } else {
-                    passes.join(", ")
-                },
-                probed
-                    .errors
-                    .iter()
-                    .map(|e| format!("; {e}"))
-                    .collect::<String>()
+                "{:<16} {:<22} {:<40} passes under: {passes}{errors}",
+                probed.profile, probed.choice, probed.scenario,
             );
             probes.push(probed);
         }
     }
-    use canif_harness::device::choices::{Declared, TX_QUEUE_ACCOUNTING as choice};
-    let (said, code, declared) = match finding(&probes) {
-        Finding::Takes(accounting) => (
-            format!("{choice}={}", accounting.name()),
-            ExitCode::SUCCESS,
-            Some(Declared {
-                tx_queue_accounting: Some(accounting),
-                ..Declared::default()
-            }),
-        ),
-        Finding::Undecided => (
-            format!("{choice}: no scenario told the choices apart; nothing to declare"),
-            ExitCode::SUCCESS,
-            Some(Declared::default()),
-        ),
-        Finding::Neither => (
-            format!("{choice}: a scenario passed under no documented choice (HS-TX-012 broken either way)"),
-            ExitCode::from(1),
-            None,
-        ),
-        Finding::Inconsistent => (
-            format!("{choice}: the scenarios disagree (one passed only under one choice, another only under the other)"),
-            ExitCode::from(1),
-            None,
-        ),
-    };
-    println!("{said}");
+    let mut code = ExitCode::SUCCESS;
+    for choice in Choice::ALL.into_iter().filter(|c| c.settled_by().is_some()) {
+        let said = match finding(&probes, choice) {
+            Finding::Takes(value) => format!("{choice}={value}"),
+            Finding::Undecided => {
+                format!("{choice}: no scenario told the values apart; nothing to declare")
+            }
+            Finding::Neither => {
+                code = ExitCode::from(1);
+                format!("{choice}: a scenario passed under no documented value (the device breaks it either way)")
+            }
+            Finding::Inconsistent => {
+                code = ExitCode::from(1);
+                format!("{choice}: the scenarios disagree (one passed only under one value, another only under another)")
+            }
+        };
+        println!("{said}");
+    }
+    let declared = (code == ExitCode::SUCCESS).then(|| declaration(&probes));
     if let Some(declared) = declared {
         let text = serde_json::to_string_pretty(&declared.entries()).expect("a JSON object") + "\n";
         if let Err(error) = std::fs::write(out, text) {

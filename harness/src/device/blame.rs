@@ -35,6 +35,10 @@ pub const RX_WITHHELD: &[ReqId] = req_ids![
     "FLT-006",
     "FLT-008",
 ];
+/// NoOfRxMessages with nothing new, against the device's declared rx-idle-count.
+pub const RX_IDLE_COUNT: &[ReqId] = req_ids!["HS-RX-009"];
+/// A slot past NoOfRxMessages, against the device's declared stale-rx-slots.
+pub const RX_STALE_SLOTS: &[ReqId] = req_ids!["HS-RX-008"];
 /// Both moved, to different values.
 pub const RX_COUNTING: &[ReqId] = req_ids!["HS-RX-005", "HS-RX-006"];
 pub const RX_SET: &[ReqId] = req_ids![

@@ -1,12 +1,15 @@
 //! The choices the documents leave, as a device declares them (issue 26).
 //! A declared choice is judged as declared. Where a device declares nothing,
-//! every documented choice is accepted: the first scenario that tells them
-//! apart shows which one the device takes, and the rest of the profile holds
-//! it to that one.
+//! every documented choice is accepted: the first scenario that tells the send
+//! queue's accountings apart shows which one the device takes, and the rest of
+//! the profile holds it to that one; the freedoms of G3 are judged by their
+//! bounds, and what Rx slots and an idle NoOfRxMessages hold is not judged.
 
 use std::fmt;
 
-use canif_model::config::TxQueueAccounting;
+use canif_model::config::{Capabilities, TxQueueAccounting};
+use canif_model::exchange::SYNC1_TX_JITTER;
+use canif_model::freedoms::{BadTxLength, Named, OversizeBatch, RxIdleCount, StaleRxSlots};
 use canif_model::Nanos;
 use canif_spec::{req_ids, ReqId};
 
@@ -16,35 +19,138 @@ use canif_spec::{req_ids, ReqId};
 pub struct Declared {
     /// HS-TX-012: whether the frame on the wire counts against the send queue.
     pub tx_queue_accounting: Option<TxQueueAccounting>,
+    /// HS-TX-008: how many messages the local send queue holds. No document
+    /// gives it; undeclared, the profile's assumed depth is judged.
+    pub tx_queue_depth: Option<usize>,
     /// PDX-004 (ruling R10): the time from SYNC1 to the start of the first Tx
     /// message, in ns. Undeclared, each scenario measures it and holds every
     /// batch to within the 500 ns jitter of the others.
     pub sync1_output_delay: Option<Nanos>,
-    /// HS-TX-008: how many messages the local send queue holds. No document
-    /// gives it; undeclared, the profile's assumed depth is judged.
-    pub tx_queue_depth: Option<usize>,
+    /// PDX-004: the most the start lies after SYNC1 + the output delay, in ns
+    /// (at most 003's 500); undeclared, 500.
+    pub sync1_jitter: Option<Nanos>,
+    /// HS-TX-010 (G3): what a batch beyond the slots sends.
+    pub oversize_batch: Option<OversizeBatch>,
+    /// LAY-GEN-008 (G3): what a message with its length out of range sends.
+    pub bad_tx_length: Option<BadTxLength>,
+    /// HS-RX-009: NoOfRxMessages once the PLC acknowledged and nothing new came.
+    pub rx_idle_count: Option<RxIdleCount>,
+    /// HS-RX-008: what a delivery leaves in the slots past its NoOfRxMessages.
+    pub stale_rx_slots: Option<StaleRxSlots>,
 }
 
-/// The choices a device can declare, by name.
-pub const CHOICES: &[(&str, &str)] = &[
-    (
-        TX_QUEUE_ACCOUNTING,
-        "whether the frame on the wire counts against the send queue's depth (HS-TX-012): wire-outside-queue | wire-in-queue",
-    ),
-    (
-        SYNC1_OUTPUT_DELAY,
-        "with Distributed Clocks, ns from SYNC1 to the start of the first Tx message (PDX-004, ruling R10)",
-    ),
-    (
-        TX_QUEUE_DEPTH,
-        "messages the local send queue holds (HS-TX-008; no document gives it, the profiles assume 64)",
-    ),
-];
+/// A choice the documents leave, by the name it is declared with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Choice {
+    TxQueueAccounting,
+    TxQueueDepth,
+    Sync1OutputDelay,
+    Sync1Jitter,
+    OversizeBatch,
+    BadTxLength,
+    RxIdleCount,
+    StaleRxSlots,
+}
+
+/// The values of a named choice, joined for a message.
+fn values<T: Named>() -> String {
+    T::NAMES.join(" or ")
+}
+
+fn named<T: Named>(value: &str) -> Option<T> {
+    T::from_name(value)
+}
+
+impl Choice {
+    pub const ALL: [Choice; 8] = [
+        Choice::TxQueueAccounting,
+        Choice::TxQueueDepth,
+        Choice::Sync1OutputDelay,
+        Choice::Sync1Jitter,
+        Choice::OversizeBatch,
+        Choice::BadTxLength,
+        Choice::RxIdleCount,
+        Choice::StaleRxSlots,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Choice::TxQueueAccounting => "tx-queue-accounting",
+            Choice::TxQueueDepth => "tx-queue-depth",
+            Choice::Sync1OutputDelay => "sync1-output-delay-ns",
+            Choice::Sync1Jitter => "sync1-jitter-ns",
+            Choice::OversizeBatch => "oversize-batch",
+            Choice::BadTxLength => "bad-tx-length",
+            Choice::RxIdleCount => "rx-idle-count",
+            Choice::StaleRxSlots => "stale-rx-slots",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<Choice> {
+        Choice::ALL.into_iter().find(|c| c.name() == name)
+    }
+
+    /// What the choice decides, and the requirement that leaves it.
+    pub fn description(self) -> &'static str {
+        match self {
+            Choice::TxQueueAccounting => "whether the frame on the wire counts against the send queue's depth (HS-TX-012)",
+            Choice::TxQueueDepth => "messages the local send queue holds (HS-TX-008; no document gives it, the profiles assume 64)",
+            Choice::Sync1OutputDelay => "with Distributed Clocks, ns from SYNC1 to the start of the first Tx message (PDX-004, ruling R10)",
+            Choice::Sync1Jitter => "with Distributed Clocks, the most ns the first Tx message starts after SYNC1 + the output delay (PDX-004; 003 allows 500)",
+            Choice::OversizeBatch => "what a batch whose NoOfTxMessages exceeds the slots sends (HS-TX-010, G3)",
+            Choice::BadTxLength => "what a Tx message whose length is out of range sends (LAY-GEN-008, G3)",
+            Choice::RxIdleCount => "NoOfRxMessages once the PLC has acknowledged and nothing new was entered (HS-RX-009)",
+            Choice::StaleRxSlots => "what a delivery leaves in the Rx slots past its NoOfRxMessages (HS-RX-008)",
+        }
+    }
+
+    /// What a value must be, in words.
+    pub fn expects(self) -> String {
+        match self {
+            Choice::TxQueueAccounting => values::<TxQueueAccounting>(),
+            Choice::TxQueueDepth => "a number of messages, at least 1".into(),
+            Choice::Sync1OutputDelay => "a number of nanoseconds".into(),
+            Choice::Sync1Jitter => format!("a number of nanoseconds, at most {SYNC1_TX_JITTER}"),
+            Choice::OversizeBatch => values::<OversizeBatch>(),
+            Choice::BadTxLength => values::<BadTxLength>(),
+            Choice::RxIdleCount => values::<RxIdleCount>(),
+            Choice::StaleRxSlots => values::<StaleRxSlots>(),
+        }
+    }
+
+    /// The values a probe tries, for the choices that have a few.
+    pub fn named_values(self) -> &'static [&'static str] {
+        match self {
+            Choice::TxQueueAccounting => TxQueueAccounting::NAMES,
+            Choice::OversizeBatch => OversizeBatch::NAMES,
+            Choice::BadTxLength => BadTxLength::NAMES,
+            Choice::RxIdleCount => RxIdleCount::NAMES,
+            Choice::StaleRxSlots => StaleRxSlots::NAMES,
+            Choice::TxQueueDepth | Choice::Sync1OutputDelay | Choice::Sync1Jitter => &[],
+        }
+    }
+
+    /// The requirement whose scenarios tell this choice's values apart.
+    pub fn settled_by(self) -> Option<ReqId> {
+        match self {
+            Choice::TxQueueAccounting => Some(TX_QUEUE_ACCOUNTING_SETTLED_BY),
+            Choice::OversizeBatch => Some(ReqId::new("HS-TX-010")),
+            Choice::BadTxLength => Some(ReqId::new("LAY-GEN-008")),
+            Choice::RxIdleCount => Some(ReqId::new("HS-RX-009")),
+            Choice::StaleRxSlots => Some(ReqId::new("HS-RX-008")),
+            Choice::TxQueueDepth | Choice::Sync1OutputDelay | Choice::Sync1Jitter => None,
+        }
+    }
+}
+
+impl fmt::Display for Choice {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
 
 /// The name the send queue's accounting is declared by.
 pub const TX_QUEUE_ACCOUNTING: &str = "tx-queue-accounting";
-const SYNC1_OUTPUT_DELAY: &str = "sync1-output-delay-ns";
-const TX_QUEUE_DEPTH: &str = "tx-queue-depth";
 
 /// The requirements the send queue's accounting decides: a failure blamed on
 /// one of them, while the device declared none, is tried under the other.
@@ -61,37 +167,28 @@ pub enum DeclareError {
     Form(String),
     UnknownChoice(String),
     UnknownValue {
-        choice: String,
+        choice: Choice,
         value: String,
     },
 }
 
 impl fmt::Display for DeclareError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let names: Vec<&str> = CHOICES.iter().map(|(name, _)| *name).collect();
         match self {
             DeclareError::Form(text) => write!(f, "`{text}` is not NAME=VALUE"),
-            DeclareError::UnknownChoice(name) => write!(
-                f,
-                "no choice is called `{name}`; the choices are {}",
-                names.join(", ")
-            ),
-            DeclareError::UnknownValue { choice, value } if choice == SYNC1_OUTPUT_DELAY => write!(
-                f,
-                "{choice} cannot be `{value}`; it is a number of nanoseconds"
-            ),
-            DeclareError::UnknownValue { choice, value } if choice == TX_QUEUE_DEPTH => write!(
-                f,
-                "{choice} cannot be `{value}`; it is a number of messages, at least 1"
-            ),
-            DeclareError::UnknownValue { choice, value } => {
-                let values: Vec<&str> = TxQueueAccounting::ALL.iter().map(|a| a.name()).collect();
+            DeclareError::UnknownChoice(name) => {
+                let names: Vec<&str> = Choice::ALL.iter().map(|c| c.name()).collect();
                 write!(
                     f,
-                    "{choice} cannot be `{value}`; it is {}",
-                    values.join(" or ")
+                    "no choice is called `{name}`; the choices are {}",
+                    names.join(", ")
                 )
             }
+            DeclareError::UnknownValue { choice, value } => write!(
+                f,
+                "{choice} cannot be `{value}`; it is {}",
+                choice.expects()
+            ),
         }
     }
 }
@@ -106,45 +203,100 @@ impl Declared {
             .split_once('=')
             .map(|(n, v)| (n.trim(), v.trim()))
             .ok_or_else(|| DeclareError::Form(text.to_string()))?;
-        match name {
-            TX_QUEUE_ACCOUNTING => {
-                let accounting = TxQueueAccounting::from_name(value).ok_or_else(|| {
-                    DeclareError::UnknownValue {
-                        choice: name.to_string(),
-                        value: value.to_string(),
-                    }
-                })?;
-                self.tx_queue_accounting = Some(accounting);
-                Ok(())
+        let choice =
+            Choice::from_name(name).ok_or_else(|| DeclareError::UnknownChoice(name.to_string()))?;
+        let unknown = || DeclareError::UnknownValue {
+            choice,
+            value: value.to_string(),
+        };
+        let number = || value.parse::<u64>().ok();
+        match choice {
+            Choice::TxQueueAccounting => {
+                self.tx_queue_accounting = Some(named(value).ok_or_else(unknown)?)
             }
-            SYNC1_OUTPUT_DELAY => {
-                let delay = value.parse().map_err(|_| DeclareError::UnknownValue {
-                    choice: name.to_string(),
-                    value: value.to_string(),
-                })?;
-                self.sync1_output_delay = Some(delay);
-                Ok(())
+            Choice::TxQueueDepth => {
+                let depth = number().filter(|d| *d > 0).ok_or_else(unknown)?;
+                self.tx_queue_depth = Some(usize::try_from(depth).map_err(|_| unknown())?);
             }
-            TX_QUEUE_DEPTH => {
-                let depth = value.parse().ok().filter(|d| *d > 0).ok_or_else(|| {
-                    DeclareError::UnknownValue {
-                        choice: name.to_string(),
-                        value: value.to_string(),
-                    }
-                })?;
-                self.tx_queue_depth = Some(depth);
-                Ok(())
+            Choice::Sync1OutputDelay => {
+                self.sync1_output_delay = Some(number().ok_or_else(unknown)?)
             }
-            other => Err(DeclareError::UnknownChoice(other.to_string())),
+            Choice::Sync1Jitter => {
+                let jitter = number().filter(|ns| *ns <= SYNC1_TX_JITTER);
+                self.sync1_jitter = Some(jitter.ok_or_else(unknown)?);
+            }
+            Choice::OversizeBatch => self.oversize_batch = Some(named(value).ok_or_else(unknown)?),
+            Choice::BadTxLength => self.bad_tx_length = Some(named(value).ok_or_else(unknown)?),
+            Choice::RxIdleCount => self.rx_idle_count = Some(named(value).ok_or_else(unknown)?),
+            Choice::StaleRxSlots => self.stale_rx_slots = Some(named(value).ok_or_else(unknown)?),
+        }
+        Ok(())
+    }
+
+    /// The declared value of `choice`, as it is written.
+    pub fn value(&self, choice: Choice) -> Option<String> {
+        let name = |v: Option<&'static str>| v.map(str::to_string);
+        match choice {
+            Choice::TxQueueAccounting => name(self.tx_queue_accounting.map(Named::name)),
+            Choice::TxQueueDepth => self.tx_queue_depth.map(|n| n.to_string()),
+            Choice::Sync1OutputDelay => self.sync1_output_delay.map(|ns| ns.to_string()),
+            Choice::Sync1Jitter => self.sync1_jitter.map(|ns| ns.to_string()),
+            Choice::OversizeBatch => name(self.oversize_batch.map(Named::name)),
+            Choice::BadTxLength => name(self.bad_tx_length.map(Named::name)),
+            Choice::RxIdleCount => name(self.rx_idle_count.map(Named::name)),
+            Choice::StaleRxSlots => name(self.stale_rx_slots.map(Named::name)),
+        }
+    }
+
+    /// Forgets what was declared of `choice`.
+    pub fn forget(&mut self, choice: Choice) {
+        match choice {
+            Choice::TxQueueAccounting => self.tx_queue_accounting = None,
+            Choice::TxQueueDepth => self.tx_queue_depth = None,
+            Choice::Sync1OutputDelay => self.sync1_output_delay = None,
+            Choice::Sync1Jitter => self.sync1_jitter = None,
+            Choice::OversizeBatch => self.oversize_batch = None,
+            Choice::BadTxLength => self.bad_tx_length = None,
+            Choice::RxIdleCount => self.rx_idle_count = None,
+            Choice::StaleRxSlots => self.stale_rx_slots = None,
         }
     }
 
     /// These declarations, and `fallback`'s where these say nothing.
     pub fn or(self, fallback: Declared) -> Declared {
-        Declared {
-            tx_queue_accounting: self.tx_queue_accounting.or(fallback.tx_queue_accounting),
-            sync1_output_delay: self.sync1_output_delay.or(fallback.sync1_output_delay),
-            tx_queue_depth: self.tx_queue_depth.or(fallback.tx_queue_depth),
+        let mut both = fallback;
+        for line in self.lines() {
+            let _ = both.declare(&line);
+        }
+        both
+    }
+
+    /// These declarations, less those `told` makes (what an IUT declared that
+    /// the command line did not overrule).
+    pub fn except(self, told: &Declared) -> Declared {
+        let mut left = self;
+        for choice in Choice::ALL {
+            if told.value(choice).is_some() {
+                left.forget(choice);
+            }
+        }
+        left
+    }
+
+    /// The capabilities the model judges by: `caps` with these choices.
+    pub fn apply(&self, caps: &Capabilities) -> Capabilities {
+        let freedoms = caps.freedoms;
+        Capabilities {
+            tx_queue_accounting: self.tx_queue_accounting.unwrap_or(caps.tx_queue_accounting),
+            tx_queue_depth: self.tx_queue_depth.unwrap_or(caps.tx_queue_depth),
+            sync1_output_delay: self.sync1_output_delay.or(caps.sync1_output_delay),
+            freedoms: canif_model::freedoms::Freedoms {
+                oversize_batch: self.oversize_batch.unwrap_or(freedoms.oversize_batch),
+                bad_tx_length: self.bad_tx_length.unwrap_or(freedoms.bad_tx_length),
+                rx_idle_count: self.rx_idle_count.unwrap_or(freedoms.rx_idle_count),
+                stale_rx_slots: self.stale_rx_slots.unwrap_or(freedoms.stale_rx_slots),
+            },
+            ..caps.clone()
         }
     }
 
@@ -161,23 +313,18 @@ impl Declared {
     /// Each declared choice by name, as a probe's file and the protocol's
     /// `declares` carry them.
     pub fn entries(&self) -> std::collections::BTreeMap<String, String> {
-        self.lines()
-            .iter()
-            .filter_map(|line| line.split_once('='))
-            .map(|(name, value)| (name.to_string(), value.to_string()))
+        Choice::ALL
+            .into_iter()
+            .filter_map(|c| Some((c.name().to_string(), self.value(c)?)))
             .collect()
     }
 
     /// Each declared choice as `NAME=VALUE`.
     pub fn lines(&self) -> Vec<String> {
-        let accounting = self
-            .tx_queue_accounting
-            .map(|a| format!("{TX_QUEUE_ACCOUNTING}={}", a.name()));
-        let delay = self
-            .sync1_output_delay
-            .map(|ns| format!("{SYNC1_OUTPUT_DELAY}={ns}"));
-        let depth = self.tx_queue_depth.map(|n| format!("{TX_QUEUE_DEPTH}={n}"));
-        accounting.into_iter().chain(delay).chain(depth).collect()
+        Choice::ALL
+            .into_iter()
+            .filter_map(|c| Some(format!("{}={}", c.name(), self.value(c)?)))
+            .collect()
     }
 }
 
@@ -247,12 +394,13 @@ mod tests {
         let wire_in = Declared {
             tx_queue_accounting: Some(TxQueueAccounting::WireInQueue),
             sync1_output_delay: Some(2_000),
-            tx_queue_depth: None,
+            ..Declared::default()
         };
         let outside = Declared {
             tx_queue_accounting: Some(TxQueueAccounting::WireOutsideQueue),
             sync1_output_delay: None,
             tx_queue_depth: Some(8),
+            ..Declared::default()
         };
         assert_eq!(wire_in.or(outside).tx_queue_depth, Some(8));
         assert_eq!(

@@ -100,6 +100,16 @@ pub struct InputCheck<'a> {
     pub was_on_bus: &'a dyn Fn(&Frame) -> bool,
     pub time_stamp_tolerance: Nanos,
     pub rx: RxState,
+    /// What the device declared of the freedoms the checks otherwise skip.
+    pub declared: DeclaredRx,
+}
+
+/// Which don't-care fields a device declared what it writes into (HS-RX-008,
+/// HS-RX-009): then they are judged against the model taking that choice.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct DeclaredRx {
+    pub idle_count: bool,
+    pub stale_slots: bool,
 }
 
 impl InputCheck<'_> {
@@ -179,6 +189,15 @@ impl InputCheck<'_> {
                 actual: a.rx_counter.to_string(),
             });
         }
+        if unread && self.declared.idle_count && e.no_of_rx_messages != a.no_of_rx_messages {
+            return Some(Difference {
+                frames: None,
+                candidates: blame::RX_IDLE_COUNT,
+                what: "Inputs.NoOfRxMessages with nothing new (rx-idle-count as declared)".into(),
+                expected: e.no_of_rx_messages.to_string(),
+                actual: a.no_of_rx_messages.to_string(),
+            });
+        }
         if !unread && e.no_of_rx_messages != a.no_of_rx_messages {
             return Some(Difference {
                 frames: None,
@@ -220,7 +239,25 @@ impl InputCheck<'_> {
                 actual: describe_slot(&as_),
             });
         }
-        None
+        // Past NoOfRxMessages only what the device declared is judged (and
+        // never in the Fast CAN Queue's 3-buffer mode, G5).
+        if !self.declared.stale_slots || self.rx.fast {
+            return None;
+        }
+        (in_use..self.layout.rx_slots).find_map(|slot| {
+            let (es, as_) = (e.rx_message(slot)?, a.rx_message(slot)?);
+            (es.as_bytes() != as_.as_bytes() && self.slot_difference(&es, &as_).is_some()).then(
+                || Difference {
+                    frames: None,
+                    candidates: blame::RX_STALE_SLOTS,
+                    what: format!(
+                        "Inputs.RxMessage[{slot}] past NoOfRxMessages (stale-rx-slots as declared)"
+                    ),
+                    expected: hex(es.as_bytes()),
+                    actual: hex(as_.as_bytes()),
+                },
+            )
+        })
     }
 
     /// The requirements of the first field in which two slots differ; `None`
@@ -392,6 +429,7 @@ mod tests {
                 fast: false,
                 no_of_tx_messages: 1,
             },
+            declared: DeclaredRx::default(),
         }
     }
 
@@ -408,6 +446,47 @@ mod tests {
             .compare(&expected, &expected[..expected.len() - 2])
             .unwrap();
         assert_eq!(difference.candidates, blame::INPUT_IMAGE_SIZE);
+    }
+
+    #[test]
+    fn the_idle_count_and_stale_slots_are_judged_only_where_declared() {
+        let layout = layout(FrameFormat::Base11);
+        let expected = image(layout, &[frame(0x123, &[1, 2])]);
+        // A delivery leaves old bytes in slot 1, past NoOfRxMessages.
+        let mut stale = expected.clone();
+        let old = image(layout, &[frame(0x1, &[9]), frame(0x2, &[8])]);
+        let slot = layout.rx_slot(1);
+        stale[slot.clone()].copy_from_slice(&old[slot]);
+        assert_eq!(check(&layout, 0).compare(&expected, &stale), None);
+        let declared = InputCheck {
+            declared: DeclaredRx {
+                stale_slots: true,
+                idle_count: true,
+            },
+            ..check(&layout, 0)
+        };
+        let difference = declared.compare(&expected, &stale).unwrap();
+        assert_eq!(difference.candidates, blame::RX_STALE_SLOTS);
+        assert!(
+            difference.what.contains("RxMessage[1]"),
+            "{}",
+            difference.what
+        );
+        // Nothing new (the PLC released RxCounter 1): a 0 where the count stayed.
+        let mut zero = expected.clone();
+        InputImage::new_checked(&mut zero[..], layout)
+            .unwrap()
+            .set_no_of_rx_messages(0);
+        assert_eq!(check(&layout, 1).compare(&expected, &zero), None);
+        let declared = InputCheck {
+            declared: DeclaredRx {
+                stale_slots: false,
+                idle_count: true,
+            },
+            ..check(&layout, 1)
+        };
+        let difference = declared.compare(&expected, &zero).unwrap();
+        assert_eq!(difference.candidates, blame::RX_IDLE_COUNT);
     }
 
     #[test]

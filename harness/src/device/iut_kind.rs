@@ -14,6 +14,7 @@ use crate::device::ethercat::EthercatLink;
 use crate::device::exec_iut::{Configured, ExecIut};
 use crate::device::iut::{soft_settings, BuildError, Iut, ModelIut, SoftDeviceIut};
 use crate::error::{IutCause, IutError};
+use canif_model::freedoms::{BadTxLength, OversizeBatch, RxIdleCount, StaleRxSlots};
 
 /// Which implementation to run.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -74,6 +75,7 @@ impl IutKind {
             IutKind::Model => {
                 let own = Capabilities {
                     tx_queue_accounting: TxQueueAccounting::default(),
+                    freedoms: Default::default(),
                     ..caps.clone()
                 };
                 Ok(Box::new(ModelIut(
@@ -177,15 +179,40 @@ impl IutKind {
     /// device and the model know their own (the soft device's `--choice`); a
     /// device elsewhere declares on the command line, or not at all.
     pub fn declared(&self) -> Declared {
-        let soft = |choices: &[Choice]| Declared {
-            tx_queue_accounting: Some(match choices.contains(&Choice::CountsFrameOnWire) {
-                true => TxQueueAccounting::WireInQueue,
-                false => TxQueueAccounting::WireOutsideQueue,
-            }),
-            // It starts at SYNC1 (`sync1-jitter`: within the 500 ns after).
-            sync1_output_delay: Some(0),
-            // Its send queue is the profile's (it is built from the same).
-            tx_queue_depth: None,
+        let soft = |choices: &[Choice]| {
+            let chose = |choice| choices.contains(&choice);
+            Declared {
+                tx_queue_accounting: Some(if chose(Choice::CountsFrameOnWire) {
+                    TxQueueAccounting::WireInQueue
+                } else {
+                    TxQueueAccounting::WireOutsideQueue
+                }),
+                // It starts at SYNC1 (`sync1-jitter`: within the 500 ns after).
+                sync1_output_delay: Some(0),
+                sync1_jitter: None,
+                // Its send queue is the profile's (it is built from the same).
+                tx_queue_depth: None,
+                oversize_batch: Some(if chose(Choice::RefusesOversizeBatch) {
+                    OversizeBatch::DropsTheBatch
+                } else {
+                    OversizeBatch::SendsTheSlots
+                }),
+                bad_tx_length: Some(if chose(Choice::DropsMessageWithBadLength) {
+                    BadTxLength::DropsTheMessage
+                } else {
+                    BadTxLength::Clamps
+                }),
+                rx_idle_count: Some(if chose(Choice::ClearsRxCountWhenIdle) {
+                    RxIdleCount::WritesZero
+                } else {
+                    RxIdleCount::KeepsTheLast
+                }),
+                stale_rx_slots: Some(if chose(Choice::KeepsStaleRxSlots) {
+                    StaleRxSlots::Kept
+                } else {
+                    StaleRxSlots::Zeroed
+                }),
+            }
         };
         match self {
             IutKind::Model => soft(&[]),

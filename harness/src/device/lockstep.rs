@@ -9,18 +9,19 @@ use canif_model::device::Device;
 use canif_model::exchange::ExchangeMode;
 use canif_model::image::{InputImage, OutputImage};
 use canif_model::Nanos;
+use canif_spec::ReqId;
 
 use crate::device::blame;
 use crate::device::bounds::Bounds;
 use crate::device::bus::Bus;
-use crate::device::choices::Declared;
-use crate::device::diff::{Difference, InputCheck, RxState};
+use crate::device::diff::{DeclaredRx, Difference, InputCheck, RxState};
 use crate::device::iut::BuildError;
 use crate::device::iut_kind::IutKind;
 use crate::device::pair::Pair;
 use crate::device::played_plc::{PlcSide, TaskReport, TaskStimulus};
 use crate::device::protocol_order::Ordered;
 use crate::device::scenario::{Judgement, Scenario, Step};
+use crate::device::sync1_window::Sync1Window;
 use crate::error::{HarnessError, IutCause, IutError, Refusal, RunError};
 use crate::outcome::{Outcome, ScenarioRun};
 use crate::trace::TraceWriter;
@@ -50,6 +51,8 @@ pub fn run_scenario(
         Ok(lockstep) => lockstep,
         Err(error) => return run(Outcome::Error(error), 0, (0, 0)),
     };
+    // A declared freedom is judged, so a pass is evidence for it too.
+    let judged_declared = lockstep.judged_declared(&scenario.covers);
     let result = lockstep.run(steps);
     let iut_declares = std::mem::take(&mut lockstep.iut_declares);
     let pair = &mut lockstep.pair;
@@ -62,8 +65,11 @@ pub fn run_scenario(
         Ok(cycles) => run(Outcome::Pass, cycles, (pair.frames, pair.tolerated)),
         Err((outcome, cycle)) => run(outcome, cycle, (pair.frames, pair.tolerated)),
     };
+    let mut covers = run.covers.clone();
+    covers.extend(judged_declared);
     ScenarioRun {
         iut_declares,
+        covers,
         ..run
     }
 }
@@ -78,6 +84,8 @@ pub struct Rules {
     pub check_confirmation_delay: bool,
     /// The cycle the scenario's offsets are written for.
     pub scenario_cycle_time: Nanos,
+    /// The don't-care fields the device declared what it writes into.
+    pub declared_rx: DeclaredRx,
 }
 
 /// One scenario in progress: the played PLC, the pair of model and IUT, and
@@ -125,41 +133,22 @@ impl<B: Bus + ?Sized> Lockstep<B> {
         // What the IUT declares itself counts where canif was told nothing.
         let own = iut.declared();
         let told = scenario.declared;
-        let caps = &Capabilities {
-            tx_queue_accounting: match (told.tx_queue_accounting, own.tx_queue_accounting) {
-                (None, Some(own)) => own,
-                _ => caps.tx_queue_accounting,
-            },
-            sync1_output_delay: told
-                .sync1_output_delay
-                .or(own.sync1_output_delay)
-                .or(caps.sync1_output_delay),
-            tx_queue_depth: told
-                .tx_queue_depth
-                .or(own.tx_queue_depth)
-                .unwrap_or(caps.tx_queue_depth),
-            ..caps.clone()
-        };
-        let iut_declares = Declared {
-            tx_queue_accounting: own
-                .tx_queue_accounting
-                .filter(|_| told.tx_queue_accounting.is_none()),
-            sync1_output_delay: own
-                .sync1_output_delay
-                .filter(|_| told.sync1_output_delay.is_none()),
-            tx_queue_depth: own.tx_queue_depth.filter(|_| told.tx_queue_depth.is_none()),
-        }
-        .lines();
+        let declared = told.or(own);
+        let caps = &declared.apply(caps);
+        let iut_declares = own.except(&told).lines();
         let model = Device::new(caps, scenario.interface.clone())
             .map_err(|e| RunError::Configuration(Refusal::Model(e)))?;
         let trace = scenario.trace.as_ref().and_then(|(dir, name, epoch)| {
             TraceWriter::create(dir, name, &bus.interface_name(), *epoch).ok()
         });
         let mut pair = Pair::new(iut, model, (&scenario.name, &scenario.covers), trace);
-        if scenario.judgement == Judgement::Bounds {
-            pair.bounds = Some(Bounds::default());
+        if let Judgement::Bounds { decided_by } = scenario.judgement {
+            // Decided by nothing a device declares: the bounds alone.
+            if decided_by.is_empty() || decided_by.iter().any(|c| declared.value(*c).is_none()) {
+                pair.bounds = Some(Bounds::default());
+            }
         }
-        pair.sync1_delay = caps.sync1_output_delay;
+        pair.sync1 = Sync1Window::new(caps.sync1_output_delay, declared.sync1_jitter);
         Ok(Lockstep {
             plc: PlcSide::new(pair.layout, scenario.exchange),
             rules: Rules {
@@ -168,6 +157,10 @@ impl<B: Bus + ?Sized> Lockstep<B> {
                 declared_lengths: scenario.declared_lengths.clone(),
                 check_confirmation_delay: scenario.check_confirmation_delay,
                 scenario_cycle_time: scenario.cycle_time,
+                declared_rx: DeclaredRx {
+                    idle_count: declared.rx_idle_count.is_some(),
+                    stale_slots: declared.stale_rx_slots.is_some(),
+                },
             },
             // On a real-time bus the cycle is real time, and the scenario's offsets scale with it.
             cycle_time: bus.cycle_time().unwrap_or(scenario.cycle_time),
@@ -316,6 +309,7 @@ impl<B: Bus + ?Sized> Lockstep<B> {
                     was_on_bus: &|f| history.received_lately(f),
                     time_stamp_tolerance: self.time_stamp_tolerance,
                     rx,
+                    declared: self.rules.declared_rx,
                 }
                 .compare(expected, &actual)
             }
@@ -333,6 +327,27 @@ impl<B: Bus + ?Sized> Lockstep<B> {
             report,
             inputs: actual,
         })
+    }
+}
+
+impl<B: Bus + ?Sized> Lockstep<B> {
+    /// The requirements of the don't-care fields this scenario judges
+    /// because the device declared what it writes there: those of a
+    /// buffered Rx queue, in scenarios that deliver (those `covers` says).
+    pub fn judged_declared(&self, covers: &[ReqId]) -> Vec<ReqId> {
+        let delivers = covers.iter().any(|id| blame::RX_SET.contains(id));
+        if self.rules.fast_queue || !delivers {
+            return Vec::new();
+        }
+        let declared = self.rules.declared_rx;
+        [
+            (declared.idle_count, blame::RX_IDLE_COUNT),
+            (declared.stale_slots, blame::RX_STALE_SLOTS),
+        ]
+        .into_iter()
+        .filter(|(judged, _)| *judged)
+        .flat_map(|(_, ids)| ids.iter().copied())
+        .collect()
     }
 }
 

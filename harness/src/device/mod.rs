@@ -5,7 +5,7 @@
 //! requirements of the field that differs ([`diff`], [`blame`], [`bounds`]).
 //!
 //! The arrows run one way: `suite` → `cases`, `refusals`, `lockstep` →
-//! `played_plc`, `pair`, `bus` (`crate::bus::sim`, `kernel_bus`) → `diff`,
+//! `played_plc`, `pair` (`sync1_window`), `bus` (`crate::bus::sim`, `kernel_bus`) → `diff`,
 //! `blame`, `history`; `iut_kind` → `iut`, `exec_iut` (`crate::adapter`),
 //! `lib_iut`. `server` (and `server_bus`) serve an in-process device over the
 //! adapter protocol; `quick_start` drives the CANopen quick start through an
@@ -37,6 +37,7 @@ pub mod server;
 #[cfg(feature = "socketcan")]
 pub mod server_bus;
 pub mod suite;
+pub(crate) mod sync1_window;
 
 pub use iut::{BuildError, Iut};
 pub use iut_kind::IutKind;

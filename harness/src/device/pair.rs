@@ -4,7 +4,6 @@
 //! directly.
 
 use canif_model::device::Device;
-use canif_model::exchange::SYNC1_TX_JITTER;
 use canif_model::frame::Frame;
 use canif_model::image::{ImageLayout, LengthField, OutputImage};
 use canif_model::Nanos;
@@ -16,6 +15,7 @@ use crate::device::bounds::Bounds;
 use crate::device::diff::{frame_difference, read_with_another_structure, Difference};
 use crate::device::history::History;
 use crate::device::iut::{InvalidFrame, Iut};
+use crate::device::sync1_window::{Held, Moment, Sync1Window};
 use crate::outcome::{Failure, FrameDiff, Outcome};
 use crate::run::Ring;
 use crate::trace::TraceWriter;
@@ -41,11 +41,8 @@ pub struct Pair {
     /// Bounds judging (G3) instead of the model's frames and images, when
     /// the scenario asks for it.
     pub bounds: Option<Bounds>,
-    /// With Distributed Clocks, the IUT's declared output delay from SYNC1
-    /// to its first Tx message (R10); `None`: undeclared, measured.
-    pub sync1_delay: Option<Nanos>,
-    /// The earliest and latest output delay measured so far (undeclared).
-    sync1_band: Option<(Nanos, Nanos)>,
+    /// With Distributed Clocks, where the IUT's first Tx message may start.
+    pub sync1: Sync1Window,
     /// When the IUT's last frame ended: a controller busy at SYNC1 starts later.
     own_frame_ended: Nanos,
     /// Scenario time.
@@ -82,8 +79,7 @@ impl Pair {
             iut_pending: None,
             iut_busy: false,
             bounds: None,
-            sync1_delay: None,
-            sync1_band: None,
+            sync1: Sync1Window::default(),
             own_frame_ended: 0,
             now: 0,
             cycle: 0,
@@ -179,53 +175,21 @@ impl Pair {
     }
 
     /// What the model hands its controller of a batch held for SYNC1 at
-    /// `due`, now that the IUT has `sent` its first frame or not. The start
-    /// lies in [SYNC1 + delay, SYNC1 + delay + 500 ns] (R10): the declared
-    /// delay, or one no document gives, measured: then every start the
-    /// controller was free for lies within 500 ns of every other.
+    /// `due`, now that the IUT has `sent` its first frame or not
+    /// ([`Sync1Window`]).
     fn held_for_sync1(&mut self, due: Nanos, sent: bool) -> Result<Option<Frame>, Difference> {
-        let now = self.now;
-        let jitter = SYNC1_TX_JITTER;
-        match (sent, self.sync1_delay) {
-            (false, Some(delay)) if now < due + delay + jitter => Ok(None),
-            // Undeclared: the IUT's own due time says it still holds the batch.
-            (false, None) if now < due + jitter || self.iut.poll_timeout().is_some() => Ok(None),
-            // Missing past the deadline: late (blamed in `at_sync1`).
-            (false, _) => Ok(self.model.poll_transmit(now)),
-            // Before SYNC1, or before its declared delay: early (`at_sync1`).
-            (true, _) if now < due => Ok(None),
-            (true, Some(delay)) if now < due + delay => Ok(None),
-            (true, Some(delay)) => {
-                self.tolerated += u64::from(now != due + delay);
-                Ok(self.model.poll_transmit(now))
-            }
-            (true, None) => {
-                // A controller still busy at SYNC1 could not start then: its
-                // start says nothing of the delay.
-                if self.own_frame_ended <= due {
-                    let offset = now - due;
-                    let (lo, hi) = self.sync1_band.map_or((offset, offset), |(lo, hi)| {
-                        (lo.min(offset), hi.max(offset))
-                    });
-                    if hi - lo > jitter {
-                        let (lo, hi) = self.sync1_band.unwrap_or((offset, offset));
-                        return Err(Difference {
-                            frames: None,
-                            candidates: blame::SYNC1_LATE,
-                            what: "output delay of the batch's first frame (one delay, 500 ns jitter: R10)"
-                                .into(),
-                            expected: format!(
-                                "{}..={} ns after SYNC1, as the batches before",
-                                hi.saturating_sub(jitter),
-                                lo + jitter
-                            ),
-                            actual: format!("{offset} ns after SYNC1"),
-                        });
-                    }
-                    self.tolerated += u64::from(hi != lo);
-                    self.sync1_band = Some((lo, hi));
-                }
-                Ok(self.model.poll_transmit(now))
+        let moment = Moment {
+            now: self.now,
+            due,
+            sent,
+            iut_holds: self.iut.poll_timeout().is_some(),
+            controller_was_free: self.own_frame_ended <= due,
+        };
+        match self.sync1.decide(moment)? {
+            Held::Wait => Ok(None),
+            Held::Release { exact } => {
+                self.tolerated += u64::from(!exact);
+                Ok(self.model.poll_transmit(self.now))
             }
         }
     }
@@ -233,7 +197,7 @@ impl Pair {
     /// The output delay the IUT is judged by: declared, or the shortest
     /// measured so far (R10); `None` before any batch was held for SYNC1.
     pub fn sync1_output_delay(&self) -> Option<Nanos> {
-        self.sync1_delay.or(self.sync1_band.map(|(lo, _)| lo))
+        self.sync1.output_delay()
     }
 
     /// The frame both devices agree to send (or none), or how they differ.
@@ -338,10 +302,7 @@ impl Pair {
     pub fn due(&self) -> Option<Nanos> {
         let deadline = match self.bounds {
             Some(_) => None,
-            None => self
-                .model
-                .poll_timeout()
-                .map(|t| t + self.sync1_delay.unwrap_or(0) + SYNC1_TX_JITTER),
+            None => self.model.poll_timeout().map(|t| self.sync1.deadline(t)),
         };
         [self.iut.poll_timeout(), deadline]
             .into_iter()
@@ -592,7 +553,7 @@ mod tests {
         pair.now = 4 * sync1 + 50_000;
         assert!(pair.held_for_sync1(4 * sync1, true).is_ok());
         // Declared: before the delay is early, the frame not expected yet.
-        pair.sync1_delay = Some(10_000);
+        pair.sync1.delay = Some(10_000);
         pair.own_frame_ended = 0;
         pair.now = 5 * sync1 + 1_000;
         assert_eq!(pair.held_for_sync1(5 * sync1, true), Ok(None));

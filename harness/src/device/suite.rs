@@ -5,15 +5,18 @@
 use std::sync::{Arc, Mutex};
 
 use canif_model::config::{Capabilities, TxQueueAccounting};
+use canif_model::freedoms::Named;
 use canif_model::Nanos;
 use canif_spec::{Profile, ReqId, Scope, Side as SideName, Suite};
 
 use super::cases::scenarios;
-use super::choices::{Declared, Observed, TX_QUEUE_ACCOUNTING_IDS, TX_QUEUE_ACCOUNTING_SETTLED_BY};
+use super::choices::{
+    Choice, Declared, Observed, TX_QUEUE_ACCOUNTING_IDS, TX_QUEUE_ACCOUNTING_SETTLED_BY,
+};
 use super::iut_kind::IutKind;
 use super::lockstep::run_scenario;
 use super::refusals::{check_refusals, refused, REFUSALS, REFUSAL_IDS};
-use super::scenario::Scenario;
+use super::scenario::{Judgement, Scenario};
 use crate::device::bus::BusChoice;
 use crate::error::{Refusal, RunError};
 use crate::outcome::{Outcome, ScenarioRun};
@@ -130,6 +133,7 @@ impl Options {
             .or_else(|| self.observed_on(profile));
         caps.tx_queue_accounting = settled.unwrap_or_default();
         let run = run_scenario(kind, &caps, scenario, scenario.steps());
+        let run = self.judged_as_declared(kind, &caps, scenario, run);
         if !run.iut_declares.is_empty() {
             let mut said = self.iut_declared.lock().unwrap_or_else(|e| e.into_inner());
             said.extend(run.iut_declares.iter().cloned());
@@ -149,7 +153,11 @@ impl Options {
                     .any(|id| TX_QUEUE_ACCOUNTING_IDS.contains(id)) =>
             {
                 let tried = caps.tx_queue_accounting;
-                for other in TxQueueAccounting::ALL.into_iter().filter(|a| *a != tried) {
+                for other in TxQueueAccounting::ALL
+                    .iter()
+                    .copied()
+                    .filter(|a| *a != tried)
+                {
                     caps.tx_queue_accounting = other;
                     let again = run_scenario(kind, &caps, scenario, scenario.steps());
                     if matches!(again.outcome, Outcome::Pass) {
@@ -165,6 +173,68 @@ impl Options {
             }
             _ => run,
         }
+    }
+}
+
+impl Options {
+    /// A scenario of G3's freedoms judged exactly, as the device declared
+    /// them, that failed: if it passes under another value of one of them,
+    /// the device does the other thing and broke that declaration (the
+    /// failure is that choice's requirement); if it fails under every value,
+    /// the difference is no freedom of G3 and the scenario is judged by its
+    /// bounds alone, as for an undeclared device (the scenarios written for
+    /// that difference blame it on its own requirement).
+    fn judged_as_declared(
+        &self,
+        kind: &IutKind,
+        caps: &Capabilities,
+        scenario: &Scenario,
+        mut run: ScenarioRun,
+    ) -> ScenarioRun {
+        let Judgement::Bounds { decided_by } = scenario.judgement else {
+            return run;
+        };
+        let declared = scenario
+            .declared
+            .or(Declared::from_lines(&run.iut_declares));
+        let exact = decided_by.iter().all(|c| declared.value(*c).is_some());
+        if !exact || !matches!(run.outcome, Outcome::Fail(_)) {
+            return run;
+        }
+        let passes_under = |choice: Choice, value: &str| {
+            let mut otherwise = scenario.clone();
+            otherwise.declared = declared;
+            let line = format!("{choice}={value}");
+            otherwise
+                .declared
+                .declare(&line)
+                .expect("a choice's own value");
+            let again = run_scenario(kind, caps, &otherwise, otherwise.steps());
+            matches!(again.outcome, Outcome::Pass)
+        };
+        let broken: Vec<ReqId> = decided_by
+            .iter()
+            .filter(|choice| {
+                let current = declared.value(**choice);
+                choice
+                    .named_values()
+                    .iter()
+                    .filter(|v| Some(v.to_string()) != current)
+                    .any(|other| passes_under(**choice, other))
+            })
+            .filter_map(|choice| choice.settled_by())
+            .collect();
+        if broken.is_empty() {
+            let bounds = Scenario {
+                judgement: Judgement::Bounds { decided_by: &[] },
+                ..scenario.clone()
+            };
+            return run_scenario(kind, caps, &bounds, bounds.steps());
+        }
+        if let Outcome::Fail(failure) = &mut run.outcome {
+            failure.requirements = broken;
+        }
+        run
     }
 }
 

@@ -113,6 +113,8 @@ struct CapsFields {
     tx_queue_accounting: canif_model::config::TxQueueAccounting,
     #[serde(skip)]
     sync1_output_delay: Option<canif_model::Nanos>,
+    #[serde(skip)]
+    freedoms: canif_model::freedoms::Freedoms,
 }
 
 /// `configure.bus`: a SocketCAN interface an external IUT opens itself; its

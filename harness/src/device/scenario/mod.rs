@@ -52,7 +52,11 @@ pub enum Judgement {
     /// to the implementer: never more frames on the bus than the slots of the
     /// batches it acknowledged (HS-TX-010), no invalid frame (LAY-GEN-008),
     /// the image's size kept, and the interface still cycling afterwards.
-    Bounds,
+    /// Where the device declared each of `decided_by` (and there is one),
+    /// the model judges it taking those choices, exactly.
+    Bounds {
+        decided_by: &'static [crate::device::choices::Choice],
+    },
 }
 
 /// A small deterministic generator (xorshift64*), so a seed gives the same run byte for byte.

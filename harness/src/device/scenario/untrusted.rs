@@ -10,6 +10,8 @@ use canif_model::frame::{CanId, Frame};
 use canif_model::image::{flag, ImageLayout, MessageRepr};
 use canif_spec::ReqId;
 
+use crate::device::choices::Choice;
+
 use super::generated::random_frame;
 use super::scripted::{idle, message, std};
 use super::{exercisable, scenario, Judgement, OutputEdit, Rng, Scenario, Step, Steps};
@@ -49,11 +51,11 @@ fn edited(send: Vec<MessageRepr>, edits: Vec<OutputEdit>) -> Step {
 fn bounded(
     name: &str,
     config: &InterfaceConfig,
-    covers: &[&'static str],
+    (covers, decided_by): (&[&'static str], &'static [Choice]),
     steps: Vec<Step>,
 ) -> Scenario {
     let mut scenario = scenario(name, config, &[], Steps::Scripted(steps));
-    scenario.judgement = Judgement::Bounds;
+    scenario.judgement = Judgement::Bounds { decided_by };
     scenario.covers = covers
         .iter()
         .filter(|id| exercisable(id, config))
@@ -104,7 +106,13 @@ pub fn tx_batch_beyond_the_slots(config: &InterfaceConfig) -> Scenario {
         steps.extend(idle(10));
     }
     drain(&mut steps, &mut rng, config, &mut tn);
-    bounded("tx-batch-beyond-the-slots", config, &["HS-TX-010"], steps)
+    let decided_by = &[Choice::OversizeBatch];
+    bounded(
+        "tx-batch-beyond-the-slots",
+        config,
+        (&["HS-TX-010"], decided_by),
+        steps,
+    )
 }
 
 /// Length fields out of range: classic above 8 (up to 15 in the COB ID word,
@@ -136,7 +144,13 @@ pub fn tx_length_out_of_range(config: &InterfaceConfig) -> Scenario {
     }
     drain(&mut steps, &mut rng, config, &mut tn);
     let covers = ["LAY-GEN-008", "FD-LEN-006", "LAY-FD-003", "HS-TX-010"];
-    bounded("tx-length-out-of-range", config, &covers, steps)
+    let decided_by = &[Choice::BadTxLength];
+    bounded(
+        "tx-length-out-of-range",
+        config,
+        (&covers, decided_by),
+        steps,
+    )
 }
 
 /// Random output images, every byte, for many cycles: the bounds of G3 hold
@@ -157,7 +171,8 @@ pub fn random_output_images(config: &InterfaceConfig, seed: u64) -> Scenario {
         .collect();
     drain(&mut steps, &mut rng, config, &mut tn);
     let covers = ["HS-TX-010", "LAY-GEN-008", "FD-LEN-006", "LAY-FD-003"];
-    bounded("random-output-images", config, &covers, steps)
+    let decided_by = &[Choice::OversizeBatch, Choice::BadTxLength];
+    bounded("random-output-images", config, (&covers, decided_by), steps)
 }
 
 /// 29-bit COB IDs with bit 31 = 0 and bits 11-28 set: only bits 0-10 are the
