@@ -83,6 +83,11 @@ impl Esc {
         u32::from_le_bytes(self.memory[at..at + 4].try_into().expect("4 bytes"))
     }
 
+    pub fn get64(&self, at: u16) -> u64 {
+        let at = usize::from(at);
+        u64::from_le_bytes(self.memory[at..at + 8].try_into().expect("8 bytes"))
+    }
+
     pub fn set64(&mut self, at: u16, value: u64) {
         let at = usize::from(at);
         self.memory[at..at + 8].copy_from_slice(&value.to_le_bytes());
@@ -111,9 +116,17 @@ impl Esc {
 
     /// The system time the ESC shows: its local time plus the offset the master wrote.
     fn system_time(&self) -> u64 {
-        let at = usize::from(register::DC_SYSTEM_TIME_OFFSET);
-        let offset = u64::from_le_bytes(self.memory[at..at + 8].try_into().expect("8 bytes"));
-        self.local_time.wrapping_add(offset)
+        self.system_time_at(self.local_time)
+    }
+
+    /// The system time at local time `local`.
+    pub fn system_time_at(&self, local: u64) -> u64 {
+        local.wrapping_add(self.get64(register::DC_SYSTEM_TIME_OFFSET))
+    }
+
+    /// The local time at system time `system`.
+    pub fn local_time_at(&self, system: u64) -> u64 {
+        system.wrapping_sub(self.get64(register::DC_SYSTEM_TIME_OFFSET))
     }
 
     /// Whether a master may change this byte (read-only registers and the

@@ -11,6 +11,7 @@ pub mod register;
 pub mod sdo;
 pub mod sii;
 pub mod subdevice;
+pub mod sync0;
 pub mod wire;
 
 pub use sdo::{Entry, ObjectDictionary};

@@ -27,6 +27,8 @@ pub const DC_SYSTEM_TIME: u16 = 0x0910;
 pub const DC_RECEIVE_TIME_ECAT: u16 = 0x0918;
 pub const DC_SYSTEM_TIME_OFFSET: u16 = 0x0920;
 pub const DC_SYNC_ACTIVATION: u16 = 0x0981;
+/// Start time of cyclic operation: the first SYNC0 event, in system time.
+pub const DC_START_TIME: u16 = 0x0990;
 pub const DC_SYNC0_CYCLE: u16 = 0x09A0;
 pub const DC_SYNC1_CYCLE: u16 = 0x09A4;
 /// Where process RAM starts; below are registers.

@@ -7,6 +7,7 @@ use crate::mailbox::SdoRequest;
 use crate::register::{self, sii};
 use crate::sdo::{ObjectDictionary, SdoServer};
 use crate::sii::{Identity, Layout};
+use crate::sync0::Sync0Schedule;
 use crate::wire::Frame;
 
 /// The AL states (AL control / AL status bits 0–3).
@@ -87,6 +88,15 @@ pub struct SubDevice<A> {
     /// The logical telegrams that reached it: how a master exchanged the
     /// process data (003: LRW, or LWR then LRD for separate input update).
     pub telegrams: Telegrams,
+    /// With Distributed Clocks, the SYNC0 events that start the cycle.
+    sync0: Option<Sync0Schedule>,
+    /// The outputs' SyncManager in 3-buffer mode: the last buffer the master
+    /// wrote to its end, which is all the application ever reads (a write
+    /// that stops short of the end is not handed over, ETG.1000.4 §8.2.3).
+    outputs_buffer: Vec<u8>,
+    /// A firmware fault for canif's own tests: the cycle runs on the
+    /// SyncManager 2 event also with Distributed Clocks (PDX-005 broken).
+    pub cycles_on_frames: bool,
 }
 
 /// Counts of the logical commands a SubDevice processed.
@@ -115,6 +125,9 @@ impl<A: Application> SubDevice<A> {
             sdo: SdoServer::default(),
             cycles: 0,
             telegrams: Telegrams::default(),
+            sync0: None,
+            outputs_buffer: Vec::new(),
+            cycles_on_frames: false,
         };
         device.set_status(AlState::Init, None);
         device
@@ -128,6 +141,9 @@ impl<A: Application> SubDevice<A> {
     /// no EtherCAT frame (an ESC drops it).
     pub fn process(&mut self, bytes: &[u8], now: u64) -> Option<Vec<u8>> {
         let mut frame = Frame::parse(bytes).ok()?;
+        // A SYNC0 event before the frame runs first; one at its very time
+        // comes just after it (the master sends its frame ahead of SYNC0).
+        self.run_sync0(now, false);
         self.esc.local_time = now;
         let mut touched = Touched::default();
         for datagram in &mut frame.datagrams {
@@ -143,6 +159,37 @@ impl<A: Application> SubDevice<A> {
         // The frame returns through port 0 with the locally administered bit set.
         frame.source[0] |= 0x02;
         Some(frame.emit())
+    }
+
+    /// With Distributed Clocks, when the next SYNC0 event comes (local time),
+    /// for a host that waits between frames.
+    pub fn poll_timeout(&self) -> Option<u64> {
+        let schedule = self.sync0.as_ref()?;
+        Some(self.esc.local_time_at(schedule.next()))
+    }
+
+    /// Runs the cycles of the SYNC0 events due by local time `now`.
+    pub fn handle_timeout(&mut self, now: u64) {
+        self.run_sync0(now, true);
+    }
+
+    /// SYNC0 events that came while nobody asked (a stalled host).
+    pub fn missed_sync0(&self) -> u64 {
+        self.sync0.map_or(0, |s| s.missed)
+    }
+
+    fn run_sync0(&mut self, now: u64, inclusive: bool) {
+        if !matches!(self.state, AlState::SafeOp | AlState::Op) {
+            return;
+        }
+        let system = self.esc.system_time_at(now);
+        let Some(schedule) = self.sync0.as_mut() else {
+            return;
+        };
+        if let Some(event) = schedule.take_due(system, inclusive) {
+            let at = self.esc.local_time_at(event);
+            self.sync_manager_event(at);
+        }
     }
 
     /// What the ESC and its firmware do once a frame has passed.
@@ -170,7 +217,13 @@ impl<A: Application> SubDevice<A> {
             && outputs.enabled()
             && touched.completed(&outputs.range())
         {
-            self.sync_manager_event(&outputs, now);
+            self.outputs_buffer.clear();
+            self.outputs_buffer
+                .extend_from_slice(&self.esc.memory[outputs.range()]);
+            // With Distributed Clocks the buffer waits for SYNC0 (003).
+            if self.sync0.is_none() || self.cycles_on_frames {
+                self.sync_manager_event(now);
+            }
         }
     }
 
@@ -222,11 +275,13 @@ impl<A: Application> SubDevice<A> {
             (_, Bootstrap) => Err(al_status::BOOTSTRAP_NOT_SUPPORTED),
             (from, to) if from == to => Ok(()),
             (_, Init) => {
+                self.sync0 = None;
                 self.application.stop();
                 Ok(())
             }
             (Init, PreOp) => self.check_mailbox(),
             (SafeOp | Op, PreOp) => {
+                self.sync0 = None;
                 self.application.stop();
                 Ok(())
             }
@@ -286,7 +341,18 @@ impl<A: Application> SubDevice<A> {
             outputs,
             inputs,
             synchronization,
-        })
+        })?;
+        self.outputs_buffer.clear();
+        if let Synchronization::DistributedClocks { sync0_cycle, .. } = synchronization {
+            let now = self.esc.system_time_at(self.esc.local_time);
+            let start = self.esc.get64(register::DC_START_TIME);
+            self.sync0 = Sync0Schedule::new(start, sync0_cycle, now);
+            if self.sync0.is_none() {
+                self.application.stop();
+                return Err(al_status::INVALID_SYNC_CONFIGURATION);
+            }
+        }
+        Ok(())
     }
 
     fn mailbox(&mut self, mailbox_out: &register::SyncManager) {
@@ -311,9 +377,12 @@ impl<A: Application> SubDevice<A> {
         }
     }
 
-    fn sync_manager_event(&mut self, outputs: &register::SyncManager, now: u64) {
-        let image = self.esc.memory[outputs.range()].to_vec();
-        let inputs = self.application.cycle(&image, now);
+    /// The application's cycle on the last complete outputs buffer (zeros
+    /// before the master wrote one).
+    fn sync_manager_event(&mut self, now: u64) {
+        let length = self.esc.sync_manager(OUTPUTS).range().len();
+        self.outputs_buffer.resize(length, 0);
+        let inputs = self.application.cycle(&self.outputs_buffer, now);
         let range = self.esc.sync_manager(INPUTS).range();
         let n = inputs.len().min(range.len());
         self.esc.memory[range.start..range.start + n].copy_from_slice(&inputs[..n]);

@@ -180,3 +180,44 @@ fn a_survey_names_the_terminal_and_counts_a_soak() {
     );
     assert!(facts.worst_cycle_ns >= facts.mean_cycle_ns);
 }
+
+/// With Distributed Clocks SYNC0 starts the terminal's cycle (003, PDX-005):
+/// a terminal whose firmware still runs it on every process-data telegram
+/// runs it on the master's half-cycle telegram too, and fails PDX-005 there,
+/// never an error; the same terminal conforms where SYNC0 is not in use.
+#[test]
+fn a_terminal_that_cycles_on_telegrams_under_distributed_clocks_fails_pdx_005() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("el6751-mdp").unwrap();
+    let with_dc = run(profile, vec![], Some(LinkFault::CyclesOnFrames));
+    assert!(
+        errors(&with_dc).is_empty(),
+        "{:?}",
+        errors(&with_dc).first()
+    );
+    assert!(
+        !with_dc.failures.is_empty(),
+        "a cycle on the telegram went unnoticed"
+    );
+    for failure in &with_dc.failures {
+        assert_eq!(
+            failure
+                .requirements
+                .iter()
+                .map(|id| id.as_str())
+                .collect::<Vec<_>>(),
+            ["PDX-005"],
+            "{}: {}",
+            failure.scenario,
+            failure.what
+        );
+        assert!(failure.scenario.contains("DC"), "{}", failure.scenario);
+    }
+    let legacy = catalogue.profile("el6751-legacy").unwrap();
+    let without_dc = run(legacy, vec![], Some(LinkFault::CyclesOnFrames));
+    assert!(
+        without_dc.failures.is_empty(),
+        "{:?}",
+        without_dc.failures.first()
+    );
+}

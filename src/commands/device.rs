@@ -121,8 +121,8 @@ pub(crate) fn ethercat_terminal(
     ) {
         Ok(served) => {
             eprintln!(
-                "canif device: {} EtherCAT frames answered, {} cycles, {} CAN frames sent",
-                served.frames, served.cycles, served.can_frames
+                "canif device: {} EtherCAT frames answered, {} cycles ({} SYNC0 events missed), {} CAN frames sent",
+                served.frames, served.cycles, served.missed_sync0, served.can_frames
             );
             ExitCode::SUCCESS
         }

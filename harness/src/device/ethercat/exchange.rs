@@ -5,13 +5,22 @@
 //! **separate input update**, an LWR of the outputs (the event) and an LRD of
 //! the inputs it produced (confirmed one task cycle later). The played PLC
 //! names the mode (`Iut::exchange_with`).
+//!
+//! With Distributed Clocks SYNC0, not the telegram, starts the terminal's
+//! cycle (003, PDX-005), and the master plays the two patterns that tell the
+//! difference: a task at half the CAN cycle (an LWR of the outputs half a
+//! cycle before SYNC0, after which the inputs must not have moved, then the
+//! cycle's own telegram just before SYNC0) and overruns (every second cycle
+//! whose outputs did not change sends no process-data telegram at all: the
+//! terminal's cycle must run on SYNC0 regardless). The cycle's inputs are
+//! read just after SYNC0.
 
 use canif_ethercat::register::{Fmmu, FMMU_BASE, FMMU_LEN};
 use canif_model::exchange::ExchangeMode;
 use ethercrab::{Command, Reads};
 
 use super::start_up::master_error;
-use super::{EthercatIut, LRW_WORKING_COUNTER, SM3};
+use super::{EthercatIut, LRW_WORKING_COUNTER, SM3, SYNC0_CYCLE_NS};
 use crate::device::blame;
 use crate::device::iut::Deviation;
 use crate::error::{IutCause, IutError};
@@ -57,19 +66,93 @@ impl EthercatIut {
         }
     }
 
-    /// One cycle's telegrams in `mode`: the inputs this cycle's SyncManager 2 event produced.
+    /// One cycle's telegrams in `mode` at `now`: the inputs this cycle's
+    /// SyncManager 2 event produced (or, with Distributed Clocks, its SYNC0
+    /// event at `now`: they are read just after it).
     pub(super) fn exchange(
         &mut self,
         mode: ExchangeMode,
         outputs: &[u8],
+        now: u64,
     ) -> Result<Vec<u8>, IutError> {
         match mode {
-            ExchangeMode::Lrw => self.lrw(outputs),
-            ExchangeMode::SeparateInputUpdate => self.lwr_lrd(outputs),
+            ExchangeMode::Lrw => self.lrw(outputs, now),
+            ExchangeMode::SeparateInputUpdate => self.lwr_lrd(outputs, now),
         }
     }
 
-    fn lrw(&mut self, outputs: &[u8]) -> Result<Vec<u8>, IutError> {
+    /// With Distributed Clocks: the half-cycle LWR and its check, or an
+    /// overrun, then the cycle's telegrams around the SYNC0 event at `now`.
+    pub(super) fn exchange_around_sync0(
+        &mut self,
+        outputs: &[u8],
+        now: u64,
+    ) -> Result<Vec<u8>, IutError> {
+        let dc = self.dc.as_mut().expect("a DC master");
+        let unchanged = dc.last_outputs.as_deref() == Some(outputs);
+        dc.unchanged = if unchanged { dc.unchanged + 1 } else { 0 };
+        dc.last_outputs = Some(outputs.to_vec());
+        if dc.unchanged % 2 == 1 {
+            // An overrun: no telegram; the terminal's SYNC0 cycle runs on
+            // the outputs it has. canif reads what it produced.
+            dc.overruns += 1;
+            self.set_clock(now + 1);
+            let inputs = self.read_input_sync_manager()?;
+            self.previous_inputs = Some(inputs.clone());
+            return Ok(inputs);
+        }
+        dc.half_cycles += 1;
+        self.set_clock(now.saturating_sub(u64::from(SYNC0_CYCLE_NS) / 2));
+        let windows = self.windows_once()?;
+        let md = self.master.maindevice();
+        self.master
+            .drive(Command::lwr(windows.outputs).send_receive_slice(md, outputs))
+            .map_err(|e| master_error(e, "LWR (half cycle)"))?;
+        let between = self.read_input_sync_manager()?;
+        if let Some(previous) = self.previous_inputs.as_ref().filter(|p| **p != between) {
+            let head = |bytes: &[u8]| format!("{:02X?}", &bytes[..bytes.len().min(8)]);
+            self.deviation = Some(Deviation {
+                candidates: blame::SYNC0_STARTS_THE_CYCLE,
+                what: "the inputs half a cycle before SYNC0, after the outputs' telegram (Distributed Clocks: SYNC0 starts the cycle, not the SyncManager 2 event)".into(),
+                expected: head(previous),
+                actual: head(&between),
+            });
+        }
+        self.set_clock(now);
+        self.exchange(self.telegrams, outputs, now)
+    }
+
+    /// The input SyncManager's bytes, read by its registers (FPRD).
+    fn read_input_sync_manager(&mut self) -> Result<Vec<u8>, IutError> {
+        let (md, station) = (self.master.maindevice(), self.station);
+        let fresh = self.master.drive(async {
+            let sm = Command::fprd(station, SM3).receive_slice(md, 8).await?;
+            let sm = canif_ethercat::register::SyncManager::parse(&sm);
+            Command::fprd(station, sm.start)
+                .receive_slice(md, sm.length)
+                .await
+                .map(|inputs| inputs.to_vec())
+        });
+        fresh.map_err(|e| master_error(e, "reading the input SyncManager"))
+    }
+
+    /// The logical windows, read from the terminal the first time.
+    fn windows_once(&mut self) -> Result<Windows, IutError> {
+        if let Some(windows) = self.windows {
+            return Ok(windows);
+        }
+        let windows = self.windows()?;
+        self.windows = Some(windows);
+        Ok(windows)
+    }
+
+    /// The time the cycle's inputs are read: just after SYNC0 with
+    /// Distributed Clocks (an event at the telegram's own time comes after it).
+    fn read_after(&self, now: u64) -> u64 {
+        now + u64::from(self.dc.is_some())
+    }
+
+    fn lrw(&mut self, outputs: &[u8], now: u64) -> Result<Vec<u8>, IutError> {
         let md = self.master.maindevice();
         let sub = self
             .group
@@ -105,30 +188,15 @@ impl EthercatIut {
                 });
             }
         }
-        let station = self.station;
-        let fresh = self.master.drive(async {
-            let sm = Command::fprd(station, SM3).receive_slice(md, 8).await?;
-            let sm = canif_ethercat::register::SyncManager::parse(&sm);
-            Command::fprd(station, sm.start)
-                .receive_slice(md, sm.length)
-                .await
-                .map(|inputs| inputs.to_vec())
-        });
-        let fresh = fresh.map_err(|e| master_error(e, "reading the input SyncManager"))?;
+        self.set_clock(self.read_after(now));
+        let fresh = self.read_input_sync_manager()?;
         self.previous_inputs = Some(fresh.clone());
         Ok(fresh)
     }
 
     /// LWR, then LRD: each with working counter 1 (the one terminal).
-    fn lwr_lrd(&mut self, outputs: &[u8]) -> Result<Vec<u8>, IutError> {
-        let windows = match self.windows {
-            Some(windows) => windows,
-            None => {
-                let windows = self.windows()?;
-                self.windows = Some(windows);
-                windows
-            }
-        };
+    fn lwr_lrd(&mut self, outputs: &[u8], now: u64) -> Result<Vec<u8>, IutError> {
+        let windows = self.windows_once()?;
         let md = self.master.maindevice();
         let input_len = self
             .group
@@ -139,6 +207,7 @@ impl EthercatIut {
         self.master
             .drive(Command::lwr(windows.outputs).send_receive_slice(md, outputs))
             .map_err(|e| master_error(e, "LWR"))?;
+        self.set_clock(self.read_after(now));
         let inputs = self
             .master
             .drive(async {
@@ -155,6 +224,17 @@ impl EthercatIut {
         self.previous_inputs = Some(inputs.clone());
         Ok(inputs)
     }
+}
+
+/// What a master with Distributed Clocks did around the SYNC0 events.
+#[derive(Debug, Clone, Default)]
+pub(super) struct DcMaster {
+    last_outputs: Option<Vec<u8>>,
+    /// Cycles in a row whose outputs did not change.
+    unchanged: u64,
+    /// Cycles with the half-cycle LWR, and cycles with no telegram.
+    pub(super) half_cycles: u64,
+    pub(super) overruns: u64,
 }
 
 #[cfg(test)]
@@ -205,5 +285,68 @@ mod tests {
             (after.lwr, after.lrd, 1)
         );
         assert_eq!(inputs[0], 2, "read back after the LRW's event");
+    }
+
+    /// With Distributed Clocks the master sends half a cycle early and skips
+    /// a telegram where the outputs stand still, and the terminal runs one
+    /// cycle per SYNC0 event whatever the telegrams: its acknowledge comes
+    /// with the SYNC0 after the outputs, also when no telegram carried them
+    /// that cycle.
+    #[test]
+    fn with_distributed_clocks_sync0_not_the_telegram_runs_the_cycle() {
+        use canif_model::config::{QueueMode, Synchronization};
+        let catalogue = Catalogue::embedded().unwrap();
+        let profile = catalogue.profile("el6751-mdp").unwrap();
+        let caps = profile.model_capabilities();
+        let mut config = InterfaceConfig::new(FrameFormat::Base11, 4);
+        config.queue = QueueMode::Fast;
+        config.synchronization = Synchronization::DistributedClocks {
+            sync1_shift: 100_000,
+        };
+        let link = EthercatLink::parse("emulated").unwrap();
+        let mut iut = build(&caps, &config, &profile.ethercat.unwrap(), &link).unwrap();
+        let layout = ImageLayout::new(&config, caps.info_data);
+        let mut outputs = vec![0; layout.output_size()];
+        let cycles = |iut: &super::EthercatIut| lock(iut.terminal.as_ref().unwrap()).cycles;
+        let telegrams = |iut: &super::EthercatIut| lock(iut.terminal.as_ref().unwrap()).telegrams;
+        outputs[0] = 1;
+        for k in 0..4u64 {
+            let inputs = iut.cycle(&outputs, k * 1_000_000).unwrap();
+            assert_eq!(inputs[0], 1, "cycle {k}: acknowledged at the first SYNC0");
+            assert_eq!(cycles(&iut), k + 1, "one cycle per SYNC0 event");
+            assert!(iut.take_deviation().is_none());
+        }
+        let dc = iut.dc.as_ref().unwrap();
+        // Cycles 1 and 3 repeat their outputs: the first of each such run is
+        // an overrun (no telegram), the next is sent.
+        assert_eq!((dc.half_cycles, dc.overruns), (2, 2));
+        let seen = telegrams(&iut);
+        assert_eq!(
+            (seen.lwr, seen.lrw),
+            (2, 2),
+            "a half-cycle LWR and an LRW per sent cycle"
+        );
+        // 3-buffer mode: a write that stops short of the SyncManager's end
+        // (TxCounter 2, nothing after it) is never handed to the cycle.
+        let windows = iut.windows_once().unwrap();
+        iut.set_clock(4_500_000);
+        let md = iut.master.maindevice();
+        iut.master
+            .drive(ethercrab::Command::lwr(windows.outputs).send_receive_slice(md, &[2, 0]))
+            .unwrap();
+        iut.set_clock(5_000_001);
+        let inputs = iut.read_input_sync_manager().unwrap();
+        assert_eq!(
+            cycles(&iut),
+            6,
+            "the SYNC0 events of 4 and 5 ms ran their cycles"
+        );
+        assert_eq!(
+            inputs[0], 1,
+            "on the last complete buffer, not the half-written one"
+        );
+        outputs[0] = 2;
+        let inputs = iut.cycle(&outputs, 6_000_000).unwrap();
+        assert_eq!(inputs[0], 2, "the complete buffer is acknowledged");
     }
 }

@@ -32,6 +32,9 @@ pub enum LinkFault {
     /// The terminal's firmware refuses SAFEOP with this AL status code (an
     /// AL error that is no refusal of the configuration, e.g. 0x0011).
     AlError(u16),
+    /// With Distributed Clocks the terminal's firmware still runs its cycle
+    /// on every SyncManager 2 event, not on SYNC0 (a failure of PDX-005).
+    CyclesOnFrames,
     /// An LRW reads zeros instead of what the last SyncManager 2 event left
     /// (a well-formed telegram with the wrong inputs: a failure of the
     /// exchange, PDX-001).
@@ -75,7 +78,7 @@ impl Peer {
         self.frames.set(n);
         let mut answer = lock(&self.terminal).process(frame, now())?;
         match self.fault {
-            None | Some(LinkFault::AlError(_)) => {}
+            None | Some(LinkFault::AlError(_) | LinkFault::CyclesOnFrames) => {}
             Some(LinkFault::SilentAfter(after)) if n > after => return None,
             Some(LinkFault::SilentAfter(_)) => {}
             Some(LinkFault::Truncated) => answer.truncate(20),

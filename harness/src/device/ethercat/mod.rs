@@ -37,7 +37,7 @@ use crate::error::{IutCause, IutError};
 use coe::Mailboxes;
 pub use link::LinkFault;
 use link::{lock, InterfaceMaster, MemoryMaster, Peer, SharedTerminal};
-use start_up::{configure, master_error, request_safe_op};
+use start_up::{configure, master_error, request_safe_op, Sync0Clock, SYNC0_CYCLE_NS};
 
 const MAX_SUBDEVICES: usize = 16;
 const MAX_PDI: usize = 4096;
@@ -271,6 +271,8 @@ pub struct EthercatIut {
     deviation: Option<crate::device::iut::Deviation>,
     /// Where the logical image maps the terminal (read once, for LWR and LRD).
     windows: Option<exchange::Windows>,
+    /// With Distributed Clocks: the master's telegrams around each SYNC0.
+    dc: Option<exchange::DcMaster>,
     pub facts: TerminalFacts,
 }
 
@@ -302,7 +304,7 @@ pub fn emulated_terminal(
     if let Some(LinkFault::AlError(code)) = emulated.link_fault {
         terminal.refuse_start_with(code);
     }
-    SubDevice::new(
+    let mut subdevice = SubDevice::new(
         &Identity {
             vendor_id: identity.vendor_id,
             product_code: identity.product_code,
@@ -311,7 +313,9 @@ pub fn emulated_terminal(
             name: "EL6751".into(),
         },
         terminal,
-    )
+    );
+    subdevice.cycles_on_frames = emulated.link_fault == Some(LinkFault::CyclesOnFrames);
+    subdevice
 }
 
 /// Brings up the terminal `link` names and configures it as `config`.
@@ -321,6 +325,9 @@ pub fn build(
     identity: &EthercatIdentity,
     link: &EthercatLink,
 ) -> Result<EthercatIut, BuildError> {
+    // Each terminal starts its virtual clock at 0, where the first cycle
+    // (and, with Distributed Clocks, the first SYNC0) is.
+    link::set_now(0);
     #[cfg(feature = "socketcan")]
     let mut serving = None;
     let (master, terminal, position) = match link {
@@ -402,7 +409,14 @@ pub fn build(
         }
         (sub.configured_address(), facts)
     };
-    master.drive(configure(md, station, caps, config))?;
+    let clock = match &terminal {
+        Some(_) => Sync0Clock::Virtual {
+            now: link::now(),
+            first_sync0: 0,
+        },
+        None => Sync0Clock::Real,
+    };
+    master.drive(configure(md, station, (caps, config), clock))?;
     let group = master
         .drive(group.into_pre_op_pdi(md))
         .map_err(|e| BuildError::Failed(master_error(e, "configuring SyncManagers and FMMUs")))?;
@@ -422,6 +436,11 @@ pub fn build(
         telegrams: ExchangeMode::Lrw,
         deviation: None,
         windows: None,
+        dc: matches!(
+            config.synchronization,
+            canif_model::config::Synchronization::DistributedClocks { .. }
+        )
+        .then(exchange::DcMaster::default),
         facts,
     })
 }
@@ -454,6 +473,17 @@ impl EthercatIut {
             .map_or(0, |sub| sub.outputs_raw().len())
     }
 
+    /// The terminal's virtual clock (in memory, or the veth terminal's).
+    fn set_clock(&self, now: Nanos) {
+        link::set_now(now);
+        #[cfg(feature = "socketcan")]
+        if let Some(serving) = &self.serving {
+            serving
+                .clock
+                .store(now, std::sync::atomic::Ordering::SeqCst);
+        }
+    }
+
     /// Reads `0x1C32:05` for the report.
     pub fn read_local_cycle(&mut self) {
         let md = self.master.maindevice();
@@ -474,13 +504,7 @@ impl EthercatIut {
 
 impl Iut for EthercatIut {
     fn cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError> {
-        link::set_now(now);
-        #[cfg(feature = "socketcan")]
-        if let Some(serving) = &self.serving {
-            serving
-                .clock
-                .store(now, std::sync::atomic::Ordering::SeqCst);
-        }
+        self.set_clock(now);
         let mapped = self.output_len();
         if mapped != outputs.len() {
             return Err(IutError::new(
@@ -491,7 +515,10 @@ impl Iut for EthercatIut {
                 ),
             ));
         }
-        self.exchange(self.telegrams, outputs)
+        match self.dc.is_some() {
+            true => self.exchange_around_sync0(outputs, now),
+            false => self.exchange(self.telegrams, outputs, now),
+        }
     }
 
     fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) -> Result<(), IutError> {

@@ -18,12 +18,9 @@ use crate::device::iut::SoftDeviceIut;
 use crate::device::server_bus::DeviceBus;
 use crate::error::BusError;
 
-/// How long one wait for a frame lasts before `stop` is asked again.
-const POLL: Duration = Duration::from_millis(50);
-
-/// How long one wait lasts when a CAN bus is to be served between frames:
-/// a batch's next frame goes out once the kernel confirms the one before,
-/// whenever the master sends.
+/// How long one wait for a frame lasts: a batch's next CAN frame goes out
+/// once the kernel confirms the one before, and a SYNC0 event comes, whenever
+/// the master sends (also how often `stop` is asked).
 const CAN_POLL: Duration = Duration::from_micros(200);
 
 /// What a served terminal saw.
@@ -33,6 +30,8 @@ pub struct Served {
     pub not_ethercat: u64,
     pub cycles: u64,
     pub can_frames: u64,
+    /// SYNC0 events the terminal was too late for (ran its cycle once for several).
+    pub missed_sync0: u64,
 }
 
 /// Answers EtherCAT frames on `interface` with `answer` until `stop` says so;
@@ -121,7 +120,9 @@ pub fn serve(
     let bus_failed = std::cell::RefCell::new(None);
     let socket = PacketSocket::open(interface, canif_ethercat::wire::ETHERTYPE)
         .map_err(ServeError::Ethercat)?;
-    let wait = if bus.is_some() { CAN_POLL } else { POLL };
+    // Short waits: a CAN bus to serve between frames, and with Distributed
+    // Clocks the SYNC0 events, which come whether a frame does or not.
+    let wait = CAN_POLL;
     ready();
     let mut served = answer_frames(
         interface,
@@ -129,6 +130,7 @@ pub fn serve(
         &mut |frame| terminal.borrow_mut().process(frame, now()),
         &mut || {
             let mut terminal = terminal.borrow_mut();
+            terminal.handle_timeout(now());
             let Some(device) = terminal.application.device_mut() else {
                 return;
             };
@@ -155,6 +157,7 @@ pub fn serve(
         return Err(ServeError::Can(error));
     }
     served.cycles = terminal.borrow().cycles;
+    served.missed_sync0 = terminal.borrow().missed_sync0();
     served.can_frames = can_frames.get();
     Ok(served)
 }

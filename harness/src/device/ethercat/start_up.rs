@@ -107,6 +107,23 @@ pub(super) async fn request_safe_op(
     }
 }
 
+/// The SYNC0 cycle: the harness's cycle (every scenario runs at 1 ms).
+pub(super) const SYNC0_CYCLE_NS: u32 = 1_000_000;
+
+/// How far ahead of the system time read the first SYNC0 of a real terminal lies.
+const SYNC0_LEAD_NS: u64 = 10 * SYNC0_CYCLE_NS as u64;
+
+/// Whose clock the terminal's local time is, for placing the first SYNC0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Sync0Clock {
+    /// The harness's virtual time (in memory, or the veth terminal): local
+    /// time `now` at start-up, and the first SYNC0 at local `first_sync0`,
+    /// the first cycle's start.
+    Virtual { now: u64, first_sync0: u64 },
+    /// A real terminal's own clock.
+    Real,
+}
+
 /// How long a terminal may take to reach SAFEOP.
 const SAFE_OP_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(5);
 
@@ -115,8 +132,8 @@ const SAFE_OP_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(5);
 pub(super) async fn configure(
     md: &ethercrab::MainDevice<'_>,
     station: u16,
-    caps: &Capabilities,
-    config: &InterfaceConfig,
+    (caps, config): (&Capabilities, &InterfaceConfig),
+    clock: Sync0Clock,
 ) -> Result<(), BuildError> {
     let mut mailboxes = Mailboxes::of(md, station)
         .await
@@ -128,17 +145,33 @@ pub(super) async fn configure(
             .map_err(|e| coe_error(e, &format!("{} ({:#06x})", download.name, download.index)))?;
     }
     if let Synchronization::DistributedClocks { sync1_shift } = config.synchronization {
-        use canif_ethercat::register::{DC_SYNC0_CYCLE, DC_SYNC1_CYCLE, DC_SYNC_ACTIVATION};
+        use canif_ethercat::register::{
+            DC_START_TIME, DC_SYNC0_CYCLE, DC_SYNC1_CYCLE, DC_SYNC_ACTIVATION, DC_SYSTEM_TIME,
+        };
         let shift = u32::try_from(sync1_shift).map_err(|_| {
             BuildError::Refused(format!("SYNC1 shift {sync1_shift} ns exceeds the register"))
         })?;
         let failed = |e| BuildError::Failed(master_error(e, "writing the DC registers"));
         Command::fpwr(station, DC_SYNC0_CYCLE)
-            .send(md, 1_000_000u32)
+            .send(md, SYNC0_CYCLE_NS)
             .await
             .map_err(failed)?;
         Command::fpwr(station, DC_SYNC1_CYCLE)
             .send(md, shift)
+            .await
+            .map_err(failed)?;
+        // The first SYNC0 in the terminal's system time: read its clock,
+        // then count on from it (ETG.1000.4 §9.3: the start time must lie ahead).
+        let system = Command::fprd(station, DC_SYSTEM_TIME)
+            .receive::<u64>(md)
+            .await
+            .map_err(failed)?;
+        let start = match clock {
+            Sync0Clock::Virtual { now, first_sync0 } => system - now + first_sync0,
+            Sync0Clock::Real => system + SYNC0_LEAD_NS,
+        };
+        Command::fpwr(station, DC_START_TIME)
+            .send(md, start)
             .await
             .map_err(failed)?;
         // Cyclic operation, SYNC0 and SYNC1 on.
