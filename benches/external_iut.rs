@@ -9,6 +9,7 @@
 
 use std::time::Instant;
 
+use canif_harness::device::iut_kind::LibHost;
 use canif_harness::device::scenario;
 use canif_harness::device::{run_scenario, IutKind};
 use canif_harness::Outcome;
@@ -40,9 +41,20 @@ fn main() {
             },
         ),
         (
-            "examples/c over lib: (C ABI)",
+            "examples/c over lib:, in process",
             IutKind::Lib {
                 path: library.clone(),
+                host: None,
+            },
+        ),
+        (
+            "examples/c over lib:, canif lib-host",
+            IutKind::Lib {
+                path: library.clone(),
+                host: Some(LibHost {
+                    canif: device.into(),
+                    timeout_ms: 10_000,
+                }),
             },
         ),
         (
@@ -70,9 +82,9 @@ fn main() {
             },
         ),
     ];
-    // CANIF_BENCH_ONLY=2: only the in-process device and protocol 2 (for profiling).
+    // CANIF_BENCH_ONLY=2: leave out protocol 1 (for profiling).
     let only_v2 = std::env::var("CANIF_BENCH_ONLY").is_ok_and(|v| v == "2");
-    let iuts = &iuts[..if only_v2 { 4 } else { 5 }];
+    let iuts = &iuts[..if only_v2 { 5 } else { 6 }];
     let mut rates = Vec::new();
     for (label, kind) in iuts {
         // A fresh thread each: a same-CPU IUT pins the thread that starts it.

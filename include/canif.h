@@ -1,7 +1,10 @@
 /*
  * canif C ABI, version 1: a CAN interface device (an EL6751-like process
- * image and CAN controller) in a shared library, driven in process by
- * `canif run --iut lib:path/to/libdevice.so`.
+ * image and CAN controller) in a shared library, driven by
+ * `canif run --iut lib:path/to/libdevice.so`. canif loads the library into a
+ * process of its own (`canif lib-host`), whose images end at a guard page:
+ * an access past one is reported with its offset and judged, and a crash
+ * ends that process, not the run (`--lib-in-process` loads it into canif).
  *
  * The calls are those of the adapter protocol (docs/adapter-protocol.md),
  * version 1, as functions: canif calls them from one thread, one at a time.
@@ -12,7 +15,7 @@
  * To run the device under AddressSanitizer, build it with
  * -fsanitize=address and start canif with the sanitizer's runtime preloaded:
  *   LD_PRELOAD=$(cc -print-file-name=libasan.so) ASAN_OPTIONS=detect_leaks=0 \
- *       canif run --iut lib:./libdevice.so
+ *       canif run --lib-in-process --iut lib:./libdevice.so
  * (tests/c_abi.rs shows an overflow of the input image caught that way).
  */
 #ifndef CANIF_H

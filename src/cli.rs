@@ -114,6 +114,11 @@ pub(crate) struct IutOptions {
     /// How long an external IUT may take to answer one request, in ms.
     #[arg(long, default_value_t = 5000, value_parser = clap::value_parser!(u64).range(1..=600_000))]
     pub timeout_ms: u64,
+    /// Run a lib:PATH IUT in canif's own process instead of a `canif lib-host`
+    /// of its own: faster, but a library that crashes or reads far past its
+    /// image then ends the run with it.
+    #[arg(long)]
+    pub lib_in_process: bool,
     /// Switch on a soft-device fault, or with --side plc a soft-client fault
     /// (repeatable; see `canif faults`).
     #[arg(long)]
@@ -200,6 +205,13 @@ pub(crate) fn side_conflicts(
         )),
         None => Ok(()),
     }
+}
+
+/// The role of a hosted library.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum LibRole {
+    Device,
+    Client,
 }
 
 #[derive(Subcommand)]
@@ -321,6 +333,17 @@ pub(crate) enum Command {
     },
     /// The soft device's deliberate faults.
     Faults,
+    /// Run a shared library of the C ABI in this process, served over the
+    /// adapter protocol on stdin/stdout, its images behind guard pages: what
+    /// `--iut lib:PATH` starts, so a library that crashes or reads past its
+    /// image ends here and not in the run.
+    LibHost {
+        /// The role the library plays.
+        #[arg(long, value_enum)]
+        role: LibRole,
+        /// The library (.so).
+        path: PathBuf,
+    },
     /// A simulated Beckhoff CANopen coupler for tools by others: behind
     /// socketcand's protocol on 127.0.0.1 (python-can's `socketcand` interface),
     /// or as a node on a SocketCAN interface.

@@ -73,7 +73,10 @@ fn the_c_example_is_certified_in_process() {
     let profile = catalogue.profile("fc510x-before-fw2.14").unwrap();
     let run = run_profile(
         profile,
-        &IutKind::Lib { path: library },
+        &IutKind::Lib {
+            path: library,
+            host: None,
+        },
         &Options::quick(3),
         |_| {},
     );
@@ -187,7 +190,12 @@ fn a_library_of_another_version_or_without_a_function_is_an_error() {
         (v2, "speaks canif ABI version 2"),
         (no_destroy, "has no `canif_destroy`"),
     ] {
-        match (IutKind::Lib { path: library }).build(&caps, &config) {
+        match (IutKind::Lib {
+            path: library,
+            host: None,
+        })
+        .build(&caps, &config)
+        {
             Err(canif_harness::device::BuildError::Failed(broke)) => {
                 assert_eq!(broke.cause, canif_harness::error::IutCause::NotStarted);
                 assert!(broke.what.contains(words), "{broke}")
@@ -234,18 +242,65 @@ fn address_sanitizer_catches_a_device_writing_past_the_input_image() {
         "",
         &["-fsanitize=address", "-g", "-Wno-error"],
     );
-    let output = run_tx_batches(
-        &library,
-        &dir.join("overflow-report"),
-        &[
-            ("LD_PRELOAD", asan.as_ref()),
-            ("ASAN_OPTIONS", "detect_leaks=0".as_ref()),
-        ],
-    );
+    // In canif's own process, where AddressSanitizer reports on canif's
+    // stderr (hosted, the host dies of it and canif reports the error).
+    let output = Command::new(env!("CARGO_BIN_EXE_canif"))
+        .args([
+            "run",
+            "--profile",
+            "fc510x-before-fw2.14",
+            "--scenario",
+            "tx-batches",
+            "--lib-in-process",
+        ])
+        .arg(format!("--iut=lib:{}", library.display()))
+        .arg("--report")
+        .arg(dir.join("overflow-report"))
+        .env("LD_PRELOAD", &asan)
+        .env("ASAN_OPTIONS", "detect_leaks=0")
+        .output()
+        .expect("canif runs");
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(!output.status.success());
     assert!(
         stderr.contains("AddressSanitizer") && stderr.contains("overflow"),
         "{stderr}"
+    );
+}
+
+/// A device in a library that trusts NoOfTxMessages reads past its output
+/// image. `canif run` hosts it in a process of its own whose images end at a
+/// guard page: the read stops there, a FAIL of the robustness rule (G3:
+/// HS-TX-010, LAY-GEN-008) naming the image and the offset, not a crash of
+/// canif, and every report is written.
+#[test]
+fn a_library_device_that_reads_past_its_outputs_fails_g3_with_every_report() {
+    let library = build_with(
+        "trusts-no-of-tx",
+        &example(),
+        "",
+        &["-DCANIF_FAULT_TRUSTS_NO_OF_TX"],
+    );
+    let report = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi-trusts-report");
+    let _ = std::fs::remove_dir_all(&report);
+    let output = Command::new(env!("CARGO_BIN_EXE_canif"))
+        .args(["run", "--profile", "fc510x-before-fw2.14", "--report"])
+        .arg(&report)
+        .arg(format!("--iut=lib:{}", library.display()))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    for file in ["report.json", "summary.md", "junit.xml", "report.html"] {
+        assert!(report.join(file).is_file(), "{file} written");
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report.join("report.json")).unwrap())
+            .unwrap();
+    let verdict = &json["profiles"][0]["verdicts"]["HS-TX-010"];
+    assert_eq!(verdict["verdict"], "fail", "{verdict}");
+    assert!(
+        verdict.to_string().contains("output image at offset"),
+        "the failure names where: {verdict}"
     );
 }

@@ -45,6 +45,7 @@ fn the_c_example_client_conforms_in_process() {
     let catalogue = Catalogue::embedded().unwrap();
     let kind = ClientKind::Lib {
         path: build("minimal_client", &[]),
+        host: None,
     };
     for profile in ["fc532x", "el6751-mdp"] {
         let profile = catalogue.profile(profile).unwrap();
@@ -77,6 +78,7 @@ fn a_c_client_that_tells_nothing_sent_is_not_judged_on_it() {
     let catalogue = Catalogue::embedded().unwrap();
     let kind = ClientKind::Lib {
         path: build("without_sent", &["-DCANIF_WITHOUT_SENT"]),
+        host: None,
     };
     let profile = catalogue.profile("fc532x").unwrap();
     let run = run_profile(profile, &kind, &options(), |_| {});
@@ -130,6 +132,7 @@ fn a_c_client_that_reads_past_its_image_is_caught() {
     let catalogue = Catalogue::embedded().unwrap();
     let kind = ClientKind::Lib {
         path: build("no_bound", &["-DCANIF_FAULT_NO_BOUND"]),
+        host: None,
     };
     let profile = catalogue.profile("fc510x").unwrap();
     let run = run_profile(profile, &kind, &options(), |_| {});
@@ -158,7 +161,10 @@ fn a_library_without_the_client_role_is_an_error_naming_the_symbol() {
     let catalogue = Catalogue::embedded().unwrap();
     let run = run_profile(
         catalogue.profile("fc510x").unwrap(),
-        &ClientKind::Lib { path: device },
+        &ClientKind::Lib {
+            path: device,
+            host: None,
+        },
         &options(),
         |_| {},
     );
@@ -166,4 +172,77 @@ fn a_library_without_the_client_role_is_an_error_naming_the_symbol() {
         panic!("{:?}", run.runs[0].outcome)
     };
     assert!(error.to_string().contains("canif_client_start"), "{error}");
+}
+
+/// The crash of issue 27: a client that reads every slot NoOfRxMessages names
+/// reads far past its input image. `canif run` hosts a library in a process
+/// of its own (`canif lib-host`) whose images end at a guard page, so the
+/// read stops there: a FAIL of CL-IMG-001 naming the image and the offset,
+/// every report written, canif's own exit 1, no process left.
+/// Covers: CL-IMG-001
+#[test]
+fn a_library_client_that_reads_far_past_its_image_fails_cl_img_001_with_every_report() {
+    let library = build("trusts_count", &["-DCANIF_FAULT_TRUSTS_COUNT"]);
+    let report =
+        PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi-client/trusts-count-report");
+    let _ = std::fs::remove_dir_all(&report);
+    let out = Command::new(env!("CARGO_BIN_EXE_canif"))
+        .args([
+            "run",
+            "--side",
+            "plc",
+            "--profile",
+            "fc510x",
+            "--master",
+            "lrw",
+            "--iut",
+        ])
+        .arg(format!("lib:{}", library.display()))
+        .arg("--report")
+        .arg(&report)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    for file in ["report.json", "summary.md", "junit.xml", "report.html"] {
+        assert!(report.join(file).is_file(), "{file} written");
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report.join("report.json")).unwrap())
+            .unwrap();
+    let verdicts = &json["profiles"][0]["verdicts"];
+    assert_eq!(
+        verdicts["CL-IMG-001"]["verdict"], "fail",
+        "{}",
+        verdicts["CL-IMG-001"]
+    );
+    let text = verdicts["CL-IMG-001"].to_string();
+    assert!(
+        text.contains("input image at offset"),
+        "the failure names where: {text}"
+    );
+    // Only that: the host passes every other task on as the library answered it.
+    assert_eq!(json["totals"]["error"], 0, "{}", json["totals"]);
+    assert_eq!(json["totals"]["fail"], 1, "{}", json["totals"]);
+}
+
+/// The C example, hosted as `canif run` hosts it, conforms exactly as in
+/// process: the host adds nothing and hides nothing.
+#[test]
+fn the_c_example_client_conforms_in_its_host_as_in_process() {
+    let library = build("example_hosted", &[]);
+    let report = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi-client/hosted-report");
+    let out = Command::new(env!("CARGO_BIN_EXE_canif"))
+        .args(["run", "--side", "plc", "--profile", "fc510x", "--iut"])
+        .arg(format!("lib:{}", library.display()))
+        .arg("--report")
+        .arg(&report)
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }

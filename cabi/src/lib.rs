@@ -6,6 +6,7 @@
 //! library's business (run it under AddressSanitizer to check).
 
 mod client;
+pub mod guard;
 
 use std::ffi::{c_char, c_int, c_void, CStr};
 use std::path::Path;
@@ -267,6 +268,24 @@ impl Device {
     /// One cycle; the new input image, or `Err` when the device said it broke.
     pub fn cycle(&mut self, now: u64, outputs: &[u8]) -> Result<Vec<u8>, String> {
         let mut inputs = vec![0u8; self.input_size];
+        self.cycle_into(now, outputs, &mut inputs)?;
+        Ok(inputs)
+    }
+
+    /// One cycle into `inputs` (the input image's size: [`Device::input_size`]).
+    pub fn cycle_into(
+        &mut self,
+        now: u64,
+        outputs: &[u8],
+        inputs: &mut [u8],
+    ) -> Result<(), String> {
+        if inputs.len() != self.input_size {
+            return Err(format!(
+                "an input buffer of {} bytes for an image of {}",
+                inputs.len(),
+                self.input_size
+            ));
+        }
         // SAFETY: both buffers have the lengths passed; the handle is live.
         let result = unsafe {
             (self.functions.cycle)(
@@ -279,10 +298,14 @@ impl Device {
             )
         };
         if result == 0 {
-            Ok(inputs)
+            Ok(())
         } else {
             Err(format!("canif_cycle returned {result}"))
         }
+    }
+
+    pub fn input_size(&self) -> usize {
+        self.input_size
     }
 
     pub fn receive(&mut self, frame: &CFrame, end_ns: u64) {

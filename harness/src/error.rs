@@ -30,6 +30,10 @@ pub enum IutCause {
     Panicked,
     /// The harness broke the protocol with it (a bug in canif, found at the boundary).
     HarnessBug,
+    /// A library in `canif lib-host` read or wrote past one of its images and
+    /// was stopped there: well-formed evidence of what it did (CL-IMG-001,
+    /// G3), judged as a failure, not an error.
+    OutsideImage,
 }
 
 /// Something went wrong with the IUT itself: it could not start, broke the

@@ -408,3 +408,24 @@ fn coupler_fault(
         }),
     }
 }
+
+/// `canif lib-host --role ROLE PATH`: the library in this process, served
+/// over the adapter protocol (what `--iut lib:PATH` starts).
+pub(crate) fn lib_host(role: crate::cli::LibRole, path: &std::path::Path) -> ExitCode {
+    let (input, output) = (std::io::stdin().lock(), std::io::stdout().lock());
+    let served = match role {
+        crate::cli::LibRole::Device => {
+            canif_harness::device::server::serve_library(path, input, output)
+        }
+        crate::cli::LibRole::Client => {
+            canif_harness::client::server::serve_library(path, input, output)
+        }
+    };
+    match served {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("canif lib-host {}: {error}", path.display());
+            ExitCode::from(2)
+        }
+    }
+}

@@ -69,7 +69,10 @@ pub(crate) fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
         }
         IutArg::Lib(path) => {
             only_soft(&chosen)?;
-            IutKind::Lib { path: path.clone() }
+            IutKind::Lib {
+                path: path.clone(),
+                host: lib_host(iut),
+            }
         }
         IutArg::SoftDevice => IutKind::SoftDevice {
             faults: chosen,
@@ -134,7 +137,10 @@ pub(crate) fn resolve_client(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
             command: command.clone(),
             timeout_ms: iut.timeout_ms,
         }),
-        (Some(IutArg::Lib(path)), None) => Ok(ClientKind::Lib { path: path.clone() }),
+        (Some(IutArg::Lib(path)), None) => Ok(ClientKind::Lib {
+            path: path.clone(),
+            host: lib_host(iut),
+        }),
         (Some(IutArg::Exec(_) | IutArg::Lib(_)), Some(_)) => {
             eprintln!("--fault applies to the soft client (pass it to the client's own command)");
             Err(ExitCode::from(2))
@@ -184,4 +190,23 @@ pub(crate) fn declared_choices(
         }
     }
     Ok(declared)
+}
+
+/// Where a lib:PATH IUT runs: a `canif lib-host` of this executable, unless
+/// `--lib-in-process` (or this executable cannot be found: then in process,
+/// said on stderr).
+fn lib_host(iut: &crate::cli::IutOptions) -> Option<canif_harness::device::iut_kind::LibHost> {
+    if iut.lib_in_process {
+        return None;
+    }
+    match std::env::current_exe() {
+        Ok(canif) => Some(canif_harness::device::iut_kind::LibHost {
+            canif,
+            timeout_ms: iut.timeout_ms,
+        }),
+        Err(error) => {
+            eprintln!("canif: cannot find its own executable ({error}); the library runs in canif's process");
+            None
+        }
+    }
 }

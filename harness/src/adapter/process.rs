@@ -291,11 +291,27 @@ impl AdapterProcess {
     }
 
     /// What broke, with the last lines of its stderr; every later call reports it too.
+    /// A `canif lib-host` that died of an access past an image said where on
+    /// its stderr: that is what the library did, not a broken exchange.
     pub(crate) fn fail(&mut self, cause: IutCause, what: String) -> IutError {
-        let error = IutError {
-            cause,
-            what: format!("IUT `{}`: {what}", self.command),
-            log: Some(self.stderr_tail()),
+        let log = self.stderr_tail();
+        let outside = (cause == IutCause::Gone)
+            .then(|| log.lines().find_map(canif_cabi::guard::OutsideImage::parse))
+            .flatten();
+        let error = match outside {
+            Some(outside) => IutError {
+                cause: IutCause::OutsideImage,
+                what: format!(
+                    "accessed its {} image at offset {} (the image has {} bytes; stopped there, {what})",
+                    outside.image, outside.offset, outside.size
+                ),
+                log: Some(log),
+            },
+            None => IutError {
+                cause,
+                what: format!("IUT `{}`: {what}", self.command),
+                log: Some(log),
+            },
         };
         self.failed.get_or_insert(error).clone()
     }

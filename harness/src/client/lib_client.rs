@@ -6,6 +6,7 @@
 
 use std::path::Path;
 
+use canif_cabi::guard::GuardedImage;
 use canif_cabi::{CMessage, ClientLibrary, ClientProgram};
 use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_model::image::{ImageLayout, MessageRepr};
@@ -14,14 +15,18 @@ use super::{Client, IutError, TaskAnswer, TaskIo};
 use crate::device::lib_iut::{c_config, from_c, to_c};
 use crate::error::IutCause;
 
-pub(super) struct LibClient {
+pub(crate) struct LibClient {
     program: ClientProgram,
     layout: ImageLayout,
     path: String,
+    /// In a host process of its own (`canif lib-host`): the images with a
+    /// guard page behind each, so an access past one stops there and is
+    /// reported (CL-IMG-001) instead of reading the host's memory.
+    guarded: Option<(GuardedImage, GuardedImage)>,
 }
 
 impl LibClient {
-    pub(super) fn start(
+    pub(crate) fn start(
         path: &Path,
         config: &InterfaceConfig,
         layout: ImageLayout,
@@ -39,12 +44,35 @@ impl LibClient {
             program,
             layout,
             path: path.display().to_string(),
+            guarded: None,
         })
+    }
+
+    /// The same, its images behind guard pages (see [`canif_cabi::guard`]).
+    pub(crate) fn guarded(mut self) -> Result<Self, IutError> {
+        let image = |len| {
+            GuardedImage::new(len)
+                .ok_or_else(|| IutError::new(IutCause::NotStarted, "cannot map a guarded image"))
+        };
+        let inputs = image(self.layout.input_size())?;
+        let outputs = image(self.layout.output_size())?;
+        canif_cabi::guard::watch(&inputs, &outputs);
+        self.guarded = Some((inputs, outputs));
+        Ok(self)
     }
 }
 
-impl Client for LibClient {
-    fn task(&mut self, io: TaskIo<'_>) -> Result<TaskAnswer, IutError> {
+/// What one task of a library answered, its messages as the C ABI gave them.
+pub(crate) struct RawTask {
+    pub(crate) delivered: Vec<CMessage>,
+    pub(crate) refused: Vec<usize>,
+    pub(crate) sent: Vec<u16>,
+}
+
+impl LibClient {
+    /// One task, the delivered messages undecoded (the host passes them on
+    /// as they are, for canif to judge).
+    pub(crate) fn task_raw(&mut self, io: TaskIo<'_>) -> Result<RawTask, IutError> {
         let requests: Vec<CMessage> = io
             .requests
             .iter()
@@ -57,21 +85,49 @@ impl Client for LibClient {
         // Room for more than the slots: a client that reads past them is
         // judged (CL-IMG-001) rather than overflowing the harness's array.
         let capacity = 2 * self.layout.rx_slots + 16;
-        let result = self
-            .program
-            .task(
-                (io.inputs, self.layout.input_size()),
-                (io.outputs, self.layout.output_size()),
+        let (input_size, output_size) = (self.layout.input_size(), self.layout.output_size());
+        let result = match self.guarded.as_mut() {
+            None => self.program.task(
+                (io.inputs, input_size),
+                (io.outputs, output_size),
                 &requests,
                 capacity,
-            )
-            .map_err(|e| IutError::new(IutCause::Reported, format!("{}: {e}", self.path)))?;
-        let mut answer = TaskAnswer {
+            ),
+            Some((inputs, outputs)) => {
+                inputs
+                    .as_mut_slice()
+                    .copy_from_slice(&io.inputs[..input_size]);
+                outputs
+                    .as_mut_slice()
+                    .copy_from_slice(&io.outputs[..output_size]);
+                let result = self.program.task(
+                    (inputs.as_slice(), input_size),
+                    (outputs.as_mut_slice(), output_size),
+                    &requests,
+                    capacity,
+                );
+                io.outputs[..output_size].copy_from_slice(outputs.as_slice());
+                result
+            }
+        }
+        .map_err(|e| IutError::new(IutCause::Reported, format!("{}: {e}", self.path)))?;
+        Ok(RawTask {
+            delivered: result.delivered,
             refused: result.refused,
             sent: result.sent,
+        })
+    }
+}
+
+impl Client for LibClient {
+    fn task(&mut self, io: TaskIo<'_>) -> Result<TaskAnswer, IutError> {
+        let raw = self.task_raw(io)?;
+        let mut answer = TaskAnswer {
+            refused: raw.refused,
+            sent: raw.sent,
             ..TaskAnswer::default()
         };
-        for m in &result.delivered {
+        for m in &raw.delivered {
             match from_c(&m.frame) {
                 Ok(frame) if answer.not_frames.is_empty() => answer.delivered.push(MessageRepr {
                     transaction_number: m.transaction_number,

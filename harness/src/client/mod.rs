@@ -18,6 +18,7 @@ mod lib_client;
 pub mod master;
 pub mod played_device;
 pub mod rig;
+pub mod server;
 pub mod suite;
 
 use canif_model::client::PlcClient;

@@ -13,7 +13,7 @@ use canif_model::timing::BitRates;
 use canif_model::Nanos;
 
 use super::application::{ClientScenario, Event};
-use super::judge::{Breach, Judge, TaskSeen, SENT_REPORTS};
+use super::judge::{self, Breach, Judge, TaskSeen, SENT_REPORTS};
 use super::master::{Master, MasterRun};
 use super::{Client, IutError, TaskIo};
 use crate::client::played_device::{DeviceSide, PlayedDevice};
@@ -358,7 +358,11 @@ fn drive(
                 })
             }))
             .unwrap_or_else(|panic| Err(IutError::new(IutCause::Panicked, panic_message(&panic))))
-            .map_err(|e| Stop::Error(RunError::Iut(e)))?;
+            .map_err(|e| match e.cause {
+                // Stopped at an image's end by its host: what it did, judged.
+                IutCause::OutsideImage => Stop::Breach(judge::outside_image(&e.what)),
+                _ => Stop::Error(RunError::Iut(e)),
+            })?;
             let accepted: Vec<MessageRepr> = asked
                 .iter()
                 .enumerate()

@@ -32,8 +32,12 @@ pub enum ClientKind {
     Faulty(Option<ClientFault>),
     /// A process speaking the adapter protocol's client role.
     Exec { command: String, timeout_ms: u64 },
-    /// A shared library of the C ABI's client role.
-    Lib { path: std::path::PathBuf },
+    /// A shared library of the C ABI's client role: in canif's process, or
+    /// with `host` in a `canif lib-host` of its own.
+    Lib {
+        path: std::path::PathBuf,
+        host: Option<crate::device::iut_kind::LibHost>,
+    },
 }
 
 impl ClientKind {
@@ -43,7 +47,7 @@ impl ClientKind {
             ClientKind::Faulty(None) => "soft client".into(),
             ClientKind::Faulty(Some(fault)) => format!("soft client with fault {fault}"),
             ClientKind::Exec { command, .. } => format!("exec:{command}"),
-            ClientKind::Lib { path } => format!("lib:{}", path.display()),
+            ClientKind::Lib { path, .. } => format!("lib:{}", path.display()),
         }
     }
 
@@ -56,9 +60,21 @@ impl ClientKind {
         Ok(match self {
             ClientKind::Reference => Box::new(ReferenceClient::new(layout)),
             ClientKind::Faulty(fault) => Box::new(FaultyClient::new(layout, config.queue, *fault)),
-            ClientKind::Lib { path } => {
+            ClientKind::Lib { path, host: None } => {
                 Box::new(LibClient::start(path, config, layout).map_err(BuildError::Failed)?)
             }
+            ClientKind::Lib {
+                path,
+                host: Some(host),
+            } => Box::new(
+                ExecClient::start(
+                    &host.command("client", path),
+                    Duration::from_millis(host.timeout_ms),
+                    config,
+                    layout,
+                )
+                .map_err(BuildError::Failed)?,
+            ),
             ClientKind::Exec {
                 command,
                 timeout_ms,

@@ -102,6 +102,9 @@ pub const TX_DATA: &[ReqId] = req_ids!["HS-TX-006", "LAY-GEN-003"];
 pub const TX_STRIDE: &[ReqId] = req_ids!["LAY-GEN-006"];
 pub const TX_INVALID: &[ReqId] = req_ids!["FD-LEN-003", "FD-LEN-004", "ERR-R1", "LAY-GEN-008"];
 pub const CONFIRMATION: &[ReqId] = req_ids!["PDX-001", "PDX-002"];
+/// A device that read or wrote past its images (G3: nothing is read outside
+/// the image, whatever NoOfTxMessages or a length field says).
+pub const OUTSIDE_IMAGE: &[ReqId] = req_ids!["HS-TX-010", "LAY-GEN-008"];
 /// With Distributed Clocks the cycle ran on a telegram, not on SYNC0.
 pub const SYNC0_STARTS_THE_CYCLE: &[ReqId] = req_ids!["PDX-005"];
 /// A batch of nothing was not acknowledged.

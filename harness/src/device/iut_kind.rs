@@ -34,9 +34,12 @@ pub enum IutKind {
         /// CPU on a virtual machine (measured in benches/external_iut.rs).
         same_cpu: bool,
     },
-    /// A shared library built against include/canif.h (the C ABI), in process.
+    /// A shared library built against include/canif.h (the C ABI): in
+    /// canif's process, or with `host` in a `canif lib-host` of its own,
+    /// where a crash or an access past its images ends that process only.
     Lib {
         path: std::path::PathBuf,
+        host: Option<LibHost>,
     },
     /// A terminal over EtherCAT: canif's master (ethercrab) and, in memory,
     /// the soft device behind an emulated ESC (`ethercat:emulated`).
@@ -45,6 +48,27 @@ pub enum IutKind {
         identity: Option<canif_spec::EthercatIdentity>,
         link: crate::device::ethercat::EthercatLink,
     },
+}
+
+/// The canif executable that hosts a library (`canif lib-host`), and how
+/// long the host may take to answer.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LibHost {
+    pub canif: std::path::PathBuf,
+    pub timeout_ms: u64,
+}
+
+impl LibHost {
+    /// The host of the library at `path` in `role`, as a command for `sh`.
+    pub fn command(&self, role: &str, path: &std::path::Path) -> String {
+        let quoted =
+            |p: &std::path::Path| format!("'{}'", p.display().to_string().replace('\'', "'\\''"));
+        format!(
+            "exec {} lib-host --role {role} {}",
+            quoted(&self.canif),
+            quoted(path)
+        )
+    }
 }
 
 /// Asks an IUT, configuration after configuration, whether it accepts.
@@ -82,8 +106,12 @@ impl IutKind {
                     Device::new(&own, config.clone()).map_err(|e| refused(&e))?,
                 )))
             }
-            IutKind::Lib { path } => {
+            IutKind::Lib { path, host: None } => {
                 Ok(Box::new(crate::device::lib_iut::build(path, caps, config)?))
+            }
+            // The harness drives the host's CAN side through the protocol.
+            IutKind::Lib { host: Some(_), .. } => {
+                self.hosted().expect("a host").build_on(caps, config, None)
             }
             IutKind::SoftDevice { faults, choices } => {
                 let mut device =
@@ -129,6 +157,9 @@ impl IutKind {
     /// Something that answers configuration after configuration; for an
     /// external process, one process answers them all.
     pub fn configurer(&self) -> Configurer {
+        if let Some(hosted) = self.hosted() {
+            return hosted.configurer();
+        }
         match self {
             IutKind::Exec {
                 command,
@@ -160,6 +191,22 @@ impl IutKind {
                 Box::new(move |caps, config| kind.build(caps, config).map(|_| ()))
             }
         }
+    }
+
+    /// A hosted library as the process it runs in.
+    fn hosted(&self) -> Option<IutKind> {
+        let IutKind::Lib {
+            path,
+            host: Some(host),
+        } = self
+        else {
+            return None;
+        };
+        Some(IutKind::Exec {
+            command: host.command("device", path),
+            timeout_ms: host.timeout_ms,
+            same_cpu: true,
+        })
     }
 
     /// Whether the IUT's CAN controller is out of the harness's reach: it opens
@@ -250,7 +297,7 @@ impl IutKind {
                 .collect::<Vec<_>>()
                 .join("+"),
             IutKind::Exec { command, .. } => format!("exec:{command}"),
-            IutKind::Lib { path } => format!("lib:{}", path.display()),
+            IutKind::Lib { path, .. } => format!("lib:{}", path.display()),
             IutKind::Ethercat { link, .. } => link.name(),
         }
     }

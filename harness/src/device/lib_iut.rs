@@ -12,6 +12,8 @@ use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 
 use crate::device::choices::Declared;
+use canif_cabi::guard::GuardedImage;
+
 use crate::device::iut::{BuildError, InvalidFrame, Iut, Transmit};
 use crate::error::{IutCause, IutError};
 
@@ -21,6 +23,27 @@ pub(crate) struct LibIut {
     next: Option<Nanos>,
     /// What it declared through the optional `canif_declares`.
     declared: Declared,
+    /// In a host process of its own: the output and input images behind
+    /// guard pages (see [`canif_cabi::guard`]).
+    guarded: Option<(GuardedImage, GuardedImage)>,
+}
+
+impl LibIut {
+    /// The same, its images behind guard pages.
+    pub(crate) fn guarded(mut self, output_size: usize) -> Result<Self, BuildError> {
+        let image = |len| {
+            GuardedImage::new(len).ok_or_else(|| {
+                BuildError::Failed(IutError::new(
+                    IutCause::NotStarted,
+                    "cannot map a guarded image",
+                ))
+            })
+        };
+        let (outputs, inputs) = (image(output_size)?, image(self.device.input_size())?);
+        canif_cabi::guard::watch(&inputs, &outputs);
+        self.guarded = Some((outputs, inputs));
+        Ok(self)
+    }
 }
 
 /// Loads the library and makes its device for a configuration.
@@ -64,6 +87,7 @@ pub(crate) fn build(
         device,
         next: None,
         declared,
+        guarded: None,
     })
 }
 
@@ -164,9 +188,21 @@ impl Iut for LibIut {
     }
 
     fn cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError> {
+        let reported = |e| IutError::new(IutCause::Reported, e);
+        let Some((guarded_outputs, inputs)) = self.guarded.as_mut() else {
+            return self.device.cycle(now, outputs).map_err(reported);
+        };
+        if guarded_outputs.as_slice().len() != outputs.len() {
+            return Err(IutError::new(
+                IutCause::HarnessBug,
+                "an output image of another size than configured",
+            ));
+        }
+        guarded_outputs.as_mut_slice().copy_from_slice(outputs);
         self.device
-            .cycle(now, outputs)
-            .map_err(|e| IutError::new(IutCause::Reported, e))
+            .cycle_into(now, guarded_outputs.as_slice(), inputs.as_mut_slice())
+            .map_err(reported)?;
+        Ok(inputs.as_slice().to_vec())
     }
     fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) -> Result<(), IutError> {
         self.device.receive(&to_c(frame), end_of_reception);

@@ -279,11 +279,20 @@ impl<B: Bus + ?Sized> Lockstep<B> {
                 ))))
             }
         };
-        let actual = self
-            .pair
-            .iut
-            .cycle(outputs, t)
-            .map_err(|e| Outcome::Error(e.into()))?;
+        let actual = match self.pair.iut.cycle(outputs, t) {
+            Ok(actual) => actual,
+            // Stopped at an image's end by its host: what it did, judged (G3).
+            Err(e) if e.cause == IutCause::OutsideImage => {
+                return Err(self.pair.fail(Difference {
+                    frames: None,
+                    candidates: blame::OUTSIDE_IMAGE,
+                    what: "an access of the process image".into(),
+                    expected: "within the image".into(),
+                    actual: e.what,
+                }))
+            }
+            Err(e) => return Err(Outcome::Error(e.into())),
+        };
         if let Some(deviation) = self.pair.iut.take_deviation() {
             return Err(self.pair.fail(Difference {
                 frames: None,

@@ -154,22 +154,31 @@ impl<'a> Server<'a> {
     fn configure(&mut self, caps: &Capabilities, config: &InterfaceConfig) -> Answer {
         match (self.build)(caps, config) {
             Ok(built) => {
+                // What the device declares itself, and what the server was told to add.
+                let mut declares = built.declared().entries();
+                declares.extend(self.declares.clone());
                 self.iut = Some(built);
                 Answer::Configured {
                     protocol: self.version,
                     accepted: true,
                     reason: None,
-                    declares: self.declares.clone(),
+                    declares,
                 }
             }
-            Err(error) => {
+            Err(BuildError::Refused(reason)) => {
                 self.iut = None;
                 Answer::Configured {
                     protocol: self.version,
                     accepted: false,
-                    reason: Some(error.to_string()),
+                    reason: Some(reason),
                     declares: Default::default(),
                 }
+            }
+            // Not a refusal: the device could not be made (a library that
+            // broke its own ABI, say). The harness reports it as an error.
+            Err(BuildError::Failed(error)) => {
+                self.iut = None;
+                Answer::error(error.to_string())
             }
         }
     }
@@ -274,4 +283,23 @@ pub fn serve(
         };
         write_answer(&mut output, &answer)?;
     }
+}
+
+/// Serves the device of the library at `path` (what `canif lib-host --role
+/// device` runs): each `configure` creates one, its images behind guard
+/// pages, so what the library does wrong ends in this process.
+pub fn serve_library(
+    path: &std::path::Path,
+    input: impl BufRead,
+    output: impl Write,
+) -> std::io::Result<()> {
+    let build = |caps: &Capabilities, config: &InterfaceConfig| {
+        let output_size =
+            canif_model::image::ImageLayout::new(config, caps.info_data).output_size();
+        crate::device::lib_iut::build(path, caps, config)?
+            .guarded(output_size)
+            .map(|iut| Box::new(iut) as Box<dyn Iut>)
+    };
+    // A library cannot tell its transmit plan (the C ABI polls): protocol 1.
+    serve(Server::new(&build, true).at_most(1), input, output)
 }

@@ -44,6 +44,16 @@ pub(super) struct Breach {
     pub actual: String,
 }
 
+/// A client its host stopped at an image's end (`canif lib-host`'s guard page).
+pub(super) fn outside_image(what: &str) -> Breach {
+    Breach {
+        requirements: IMAGE_BOUNDS,
+        what: "an access of the process image".into(),
+        expected: "within the image".into(),
+        actual: what.into(),
+    }
+}
+
 fn breach(
     requirements: &'static [ReqId],
     what: impl Into<String>,
