@@ -71,8 +71,9 @@ fn the_c_example_client_conforms_in_process() {
     }
 }
 
-/// canif_client_sent is optional: without it CL-TN-002 is not run, and the
-/// verdict says why instead of passing on nothing.
+/// canif_client_sent is optional: a library without it declares that it
+/// tells its application nothing of what was sent, so CL-TN-002 and
+/// CL-TN-001 are not applicable to it, and the verdicts say why.
 #[test]
 fn a_c_client_that_tells_nothing_sent_is_not_judged_on_it() {
     let catalogue = Catalogue::embedded().unwrap();
@@ -83,13 +84,52 @@ fn a_c_client_that_tells_nothing_sent_is_not_judged_on_it() {
     let profile = catalogue.profile("fc532x").unwrap();
     let run = run_profile(profile, &kind, &options(), |_| {});
     assert!(run.failed_requirements(&catalogue, profile).is_empty());
-    let verdict = &run.verdicts(&catalogue, profile)["CL-TN-002"];
-    assert_eq!(verdict.kind(), VerdictKind::NotRun);
+    for id in ["CL-TN-001", "CL-TN-002"] {
+        let verdict = &run.verdicts(&catalogue, profile)[id];
+        assert_eq!(verdict.kind(), VerdictKind::NotApplicable, "{id}");
+        assert!(
+            verdict
+                .reason()
+                .is_some_and(|r| r.contains("declares it tells its application nothing")),
+            "{verdict:?}"
+        );
+    }
+}
+
+/// 000 §5.2 lets a client enter any transaction number. One that leaves
+/// every number at 0 and tells its application nothing of what was sent
+/// conforms; the same numbers in a client that does tell (it exports
+/// canif_client_sent) leave it unable to, and fail CL-TN-001.
+#[test]
+fn zero_transaction_numbers_are_a_fault_only_of_a_client_that_tells_what_was_sent() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("el6751-mdp").unwrap();
+    let silent = ClientKind::Lib {
+        path: build(
+            "zero_numbers_silent",
+            &["-DCANIF_ZERO_NUMBERS", "-DCANIF_WITHOUT_SENT"],
+        ),
+        host: None,
+    };
+    let run = run_profile(profile, &silent, &options(), |_| {});
+    assert_eq!(
+        run.failed_requirements(&catalogue, profile),
+        Vec::<String>::new()
+    );
+    assert_eq!(
+        run.verdicts(&catalogue, profile)["CL-TN-001"].kind(),
+        VerdictKind::NotApplicable
+    );
+    let telling = ClientKind::Lib {
+        path: build("zero_numbers_telling", &["-DCANIF_ZERO_NUMBERS"]),
+        host: None,
+    };
+    let run = run_profile(profile, &telling, &options(), |_| {});
     assert!(
-        verdict
-            .reason()
-            .is_some_and(|r| r.contains("told its application of no Tx message sent")),
-        "{verdict:?}"
+        run.failed_requirements(&catalogue, profile)
+            .contains(&"CL-TN-001".to_string()),
+        "{:?}",
+        run.failed_requirements(&catalogue, profile)
     );
 }
 
@@ -117,11 +157,11 @@ fn the_reason_a_client_is_not_judged_on_sent_messages_reaches_report_json() {
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
     let verdict = &report["profiles"][0]["verdicts"]["CL-TN-002"];
-    assert_eq!(verdict["verdict"], "not run", "{verdict}");
+    assert_eq!(verdict["verdict"], "not applicable", "{verdict}");
     assert!(
         verdict["reason"]
             .as_str()
-            .is_some_and(|r| r.contains("told its application of no Tx message sent")),
+            .is_some_and(|r| r.contains("declares it tells its application nothing")),
         "{verdict}"
     );
 }

@@ -103,6 +103,12 @@ pub struct ClientProgram {
 }
 
 impl ClientProgram {
+    /// Whether the library tells its application which Tx messages were
+    /// sent: it exports the optional `canif_client_sent`.
+    pub fn tells_sent(&self) -> bool {
+        self.functions.sent.is_some()
+    }
+
     /// One task. `inputs` and `outputs` run on past the images (the master's
     /// neighbour bytes): the library is given the image sizes, and the
     /// pointers into the larger buffers, as a master would.

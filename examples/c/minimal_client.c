@@ -88,13 +88,19 @@ static int fits(const client *c, const canif_frame *f) {
     return 1;
 }
 
+#ifdef CANIF_ZERO_NUMBERS /* tests/c_abi_client.rs: every transaction number 0 (000 §5.2 allows any) */
+#define NUMBER(m) 0u
+#else
+#define NUMBER(m) (m)->transaction_number
+#endif
+
 static void encode(client *c, uint8_t *at, const canif_message *m) {
     const canif_frame *f = &m->frame;
     size_t len = f->rtr ? 0 : f->len;
     memset(at, 0, c->tx_size);
     if (c->config.format == 0) {
         if (c->config.transaction_number) {
-            put(at, m->transaction_number, 2);
+            put(at, NUMBER(m), 2);
             at += 2;
         }
         put(at, (f->id << 5) | (f->rtr ? 0x10u : 0u) | f->len, 2);
@@ -104,7 +110,7 @@ static void encode(client *c, uint8_t *at, const canif_message *m) {
     uint32_t cob = f->id | (f->extended ? 0x80000000u : 0u) | (f->rtr ? 0x40000000u : 0u);
     if (c->config.format == 1) {
         if (c->config.transaction_number) {
-            put(at, m->transaction_number, 2);
+            put(at, NUMBER(m), 2);
             at += 2;
         }
         put(at, f->len, 2);
@@ -112,7 +118,7 @@ static void encode(client *c, uint8_t *at, const canif_message *m) {
         memcpy(at + 6, f->data, len);
         return;
     }
-    put(at, m->transaction_number, 2);
+    put(at, NUMBER(m), 2);
     at[2] = f->len;
     at[3] = (uint8_t)((f->fd ? 1 : 0) | (f->brs ? 2 : 0) | (f->esi ? 4 : 0));
     put(at + 4, cob, 4);

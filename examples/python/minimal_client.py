@@ -160,7 +160,7 @@ def main():
             return
         if kind == "start":
             client = Client(request["config"])
-            answer = {"type": "started", "protocol": 1}
+            answer = {"type": "started", "protocol": 1, "tells_sent": True}
         elif kind == "task" and client is not None:
             answer = client.task(bytes.fromhex(request["inputs"]), request["requests"])
         else:

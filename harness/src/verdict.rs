@@ -256,6 +256,9 @@ pub struct Reach {
     pub here: BTreeSet<String>,
     /// Requirements whose checks ran and had nothing to judge, with why.
     pub unobserved: BTreeMap<String, NotRunReason>,
+    /// Requirements the implementation declares it does not take up (a
+    /// client that tells its application nothing of what was sent), with why.
+    pub not_applicable: BTreeMap<String, String>,
     /// Why this run left out what it could have run (the selection, an error, a signal).
     pub left_out: NotRunReason,
 }
@@ -269,6 +272,7 @@ impl Default for Reach {
             },
             here: BTreeSet::new(),
             unobserved: BTreeMap::new(),
+            not_applicable: BTreeMap::new(),
             left_out: NotRunReason::NotSelected,
         }
     }
@@ -348,6 +352,8 @@ pub fn judge(
         let missing = profile.lacks(&requirement.capabilities);
         let verdict = if !missing.is_empty() {
             Verdict::NotApplicable(format!("{} lacks {}", profile.name, missing.join(", ")))
+        } else if let Some(why) = reach.not_applicable.get(id) {
+            Verdict::NotApplicable(why.clone())
         } else if let Some(found) = failed.remove(id) {
             Verdict::Fail(found)
         } else if let Some(errors) = broke.remove(id) {

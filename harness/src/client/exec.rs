@@ -19,6 +19,8 @@ pub(super) const CLIENT_PROTOCOL: u64 = 1;
 pub(super) struct ExecClient {
     process: AdapterProcess,
     layout: ImageLayout,
+    /// What its `started` answer said of telling what was sent.
+    tells_sent: Option<bool>,
 }
 
 impl ExecClient {
@@ -34,7 +36,7 @@ impl ExecClient {
             protocol: CLIENT_PROTOCOL,
             config: Config::new(config, &layout),
         };
-        let protocol = process.exchange(&request, Answer::STARTED)?;
+        let (protocol, tells_sent) = process.exchange(&request, Answer::STARTED)?;
         if protocol != CLIENT_PROTOCOL {
             return Err(process.fail(
                 IutCause::Protocol,
@@ -43,11 +45,19 @@ impl ExecClient {
             ),
             ));
         }
-        Ok(ExecClient { process, layout })
+        Ok(ExecClient {
+            process,
+            layout,
+            tells_sent,
+        })
     }
 }
 
 impl Client for ExecClient {
+    fn tells_sent(&self) -> Option<bool> {
+        self.tells_sent
+    }
+
     fn task(&mut self, io: TaskIo<'_>) -> Result<TaskAnswer, IutError> {
         let size = self.layout.output_size();
         let request = Request::Task {

@@ -68,7 +68,19 @@ pub struct TaskAnswer {
 pub trait Client {
     /// One PLC task.
     fn task(&mut self, io: TaskIo<'_>) -> Result<TaskAnswer, IutError>;
+
+    /// Whether the client tells its application which Tx messages were sent
+    /// (CL-TN-002), as it declares: only then do its transaction numbers
+    /// have to tell the messages apart (CL-TN-001; 000 §5.2 lets any number
+    /// be entered). `None`: it declares nothing, and is held to both.
+    fn tells_sent(&self) -> Option<bool> {
+        None
+    }
 }
+
+/// How a client declares, in a run's `iut_declares`, that it tells its
+/// application nothing of what was sent.
+pub const TELLS_NOTHING_SENT: &str = "tells-sent=no";
 
 /// The reference client of 001 §6 (ruling R5) as a client under test: it
 /// keeps its own output image and writes the whole of it every task, so it
@@ -118,5 +130,9 @@ impl Client for ReferenceClient {
             not_frames: Vec::new(),
             sent: self.client.take_sent(),
         })
+    }
+
+    fn tells_sent(&self) -> Option<bool> {
+        Some(true)
     }
 }

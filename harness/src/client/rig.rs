@@ -13,7 +13,7 @@ use canif_model::timing::BitRates;
 use canif_model::Nanos;
 
 use super::application::{ClientScenario, Event};
-use super::judge::{self, Breach, Judge, TaskSeen, SENT_REPORTS};
+use super::judge::{self, Breach, Judge, TaskSeen, SENT_REPORTS, TRANSACTION_NUMBERS};
 use super::master::{Master, MasterRun};
 use super::{Client, IutError, TaskIo};
 use crate::client::played_device::{DeviceSide, PlayedDevice};
@@ -173,6 +173,8 @@ pub struct Record {
     pub delivered: Vec<MessageRepr>,
     /// The transaction numbers the client told its application were sent.
     pub told_sent: Vec<u16>,
+    /// The client declared it tells its application nothing of what was sent.
+    pub tells_nothing_sent: bool,
     /// Keep `sent` and `delivered` (a counter wrap is 65,600 of each, and
     /// only the Gherkin steps read them).
     keep_frames: bool,
@@ -247,14 +249,20 @@ fn run_with(
     };
     // A client that tells its application nothing of what was sent gives
     // CL-TN-002 nothing to judge: no evidence of a pass.
+    // A client that declares it tells nothing is judged on neither.
     let covers = scenario
         .covers
         .iter()
         .filter(|id| !record.told_sent.is_empty() || !SENT_REPORTS.contains(id))
+        .filter(|id| !record.tells_nothing_sent || !TRANSACTION_NUMBERS.contains(id))
         .cloned()
         .collect();
+    let iut_declares = match record.tells_nothing_sent {
+        true => vec![super::TELLS_NOTHING_SENT.to_string()],
+        false => Vec::new(),
+    };
     let run = ScenarioRun {
-        iut_declares: Vec::new(),
+        iut_declares,
         scenario: name,
         covers,
         outcome,
@@ -296,6 +304,10 @@ fn drive(
     let mut client = built(layout)?;
     let mut exchange = MasterRun::new(master, layout);
     let mut judge = Judge::new(layout, config.queue);
+    if client.tells_sent() == Some(false) {
+        judge.numbers_are_free();
+        record.tells_nothing_sent = true;
+    }
     let per_cycle = master.tasks_per_cycle();
     let period = CYCLE / per_cycle;
     let deadline = 2 * per_cycle + 2 * master.confirmation_tasks();

@@ -53,8 +53,12 @@ pub fn serve_library(
                 None => Answer::error("the image sizes fit no layout of this configuration"),
                 Some(layout) => match start(&config.interface(), layout) {
                     Ok(started) => {
+                        let tells_sent = Some(started.program_tells_sent());
                         client = Some((started, layout));
-                        Answer::Started { protocol: PROTOCOL }
+                        Answer::Started {
+                            protocol: PROTOCOL,
+                            tells_sent,
+                        }
                     }
                     Err(error) => Answer::error(error.to_string()),
                 },

@@ -256,7 +256,17 @@ impl RunSide for ClientOptions {
 
     fn reach(&self, profile: &Profile, runs: &[ScenarioRun]) -> Reach {
         let mut reach = reach(&profile.model_capabilities(), self);
-        if told_nothing_sent(runs) {
+        let declared_nothing = runs.iter().any(|r| {
+            r.iut_declares
+                .iter()
+                .any(|d| d == super::TELLS_NOTHING_SENT)
+        });
+        if declared_nothing {
+            let why = "the client declares it tells its application nothing of which Tx messages were sent: its transaction numbers may be anything (000 §5.2, \"z. B. eine fortlaufende Nummer\")";
+            for id in judge::TRANSACTION_NUMBERS.iter().chain(judge::SENT_REPORTS) {
+                reach.not_applicable.insert(id.to_string(), why.to_string());
+            }
+        } else if told_nothing_sent(runs) {
             for told in judge::SENT_REPORTS {
                 reach.unobserved.insert(
                     told.to_string(),

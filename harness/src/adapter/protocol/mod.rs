@@ -138,9 +138,12 @@ pub enum Answer {
         inputs: Hex,
         plan: Vec<PlannedFrame>,
     },
-    /// Client role: the program runs, speaking this version.
+    /// Client role: the program runs, speaking this version; it may say
+    /// whether it tells its application which Tx messages were sent.
     Started {
         protocol: u64,
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        tells_sent: Option<bool>,
     },
     /// Client role: the output image the task left, the messages it
     /// delivered to its application, the requests (by index) it cannot send,
@@ -228,11 +231,15 @@ impl Answer {
             other => Err(other),
         },
     };
-    /// `started`: the client role's version the program speaks.
-    pub const STARTED: Expected<u64> = Expected {
+    /// `started`: the client role's version the program speaks, and
+    /// whether it says it tells its application what was sent.
+    pub const STARTED: Expected<(u64, Option<bool>)> = Expected {
         name: "started",
         take: |answer| match answer {
-            Answer::Started { protocol } => Ok(protocol),
+            Answer::Started {
+                protocol,
+                tells_sent,
+            } => Ok((protocol, tells_sent)),
             other => Err(other),
         },
     };

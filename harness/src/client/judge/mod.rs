@@ -135,11 +135,21 @@ pub(super) struct Judge {
     after_plc_restart: bool,
     /// Requests (by index) the device may never see (P3, CL-RST-001).
     may_lose: std::collections::BTreeSet<usize>,
+    /// The client declares it tells its application nothing of what was
+    /// sent: its transaction numbers are free (000 §5.2), CL-TN-001 is not judged.
+    numbers_free: bool,
 }
 
 impl Judge {
+    /// A client that declares it tells its application nothing of what was
+    /// sent may enter any transaction number (000 §5.2).
+    pub(super) fn numbers_are_free(&mut self) {
+        self.numbers_free = true;
+    }
+
     pub(super) fn new(layout: ImageLayout, queue: QueueMode) -> Self {
         Judge {
+            numbers_free: false,
             layout,
             queue,
             requests: Vec::new(),

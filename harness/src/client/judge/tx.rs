@@ -120,7 +120,7 @@ impl Judge {
                 }
             }
         }
-        if self.layout.transaction_number {
+        if self.layout.transaction_number && !self.numbers_free {
             self.judge_numbers(&numbers)?;
         }
         self.on_bus.resize(self.on_bus.len() + numbers.len(), false);
