@@ -79,9 +79,11 @@ const KILL_TABLE: &[(ClientFault, &[&str])] = &[
         &["CL-FQ-001", "CL-RX-001", "CL-RX-002", "CL-RX-003"],
     ),
     (ClientFault::OwnRxCounter, &["CL-FQ-001", "CL-RX-001"]),
+    // Also CL-TX-001 since the triple-buffered separate input update hands
+    // it an old image to count on from.
     (
         ClientFault::TxCounterPlusOne,
-        &["CL-FQ-001", "CL-RX-002", "CL-TX-002"],
+        &["CL-FQ-001", "CL-RX-002", "CL-TX-001", "CL-TX-002"],
     ),
     (
         ClientFault::WritesBeforeAcknowledge,

@@ -21,8 +21,12 @@ pub enum Event {
     Send(MessageRepr),
     /// Another node sends this frame on the bus.
     Arrive(Frame),
-    /// The PLC restarts: the client's program starts again from zero.
+    /// The PLC restarts: the client's program starts again from zero, and
+    /// so do the master's output buffers.
     PlcRestart,
+    /// The client's program restarts inside a running master (a module
+    /// reloaded): it starts from zero, the master's buffers keep their images.
+    ModuleRestart,
     /// The device goes INIT → OP: its counters and queues back to 0.
     DeviceRestart,
     /// The next time the device enters a batch, the image says NoOfRxMessages
@@ -223,6 +227,22 @@ pub fn plc_restart(config: &InterfaceConfig, seed: u64) -> ClientScenario {
     )
 }
 
+/// The client's program restarts twice inside a running master that keeps
+/// its output buffers: the new program is first handed what the old one wrote.
+pub fn module_restart(config: &InterfaceConfig, seed: u64) -> ClientScenario {
+    let mut traffic = Traffic::new(seed ^ 0x40D1, config.format);
+    let mut events = Vec::new();
+    traffic.steady(0, 120, &mut events);
+    events.extend([(41, Event::ModuleRestart), (83, Event::ModuleRestart)]);
+    scenario(
+        "module restart, the master's buffers kept",
+        config,
+        req_ids!["CL-RST-001"],
+        120,
+        events,
+    )
+}
+
 /// The device goes through INIT to OP under a running client.
 pub fn device_restart(config: &InterfaceConfig, seed: u64) -> ClientScenario {
     let mut traffic = Traffic::new(seed ^ 0xDE71, config.format);
@@ -307,6 +327,7 @@ pub fn scenarios(
         steady_traffic(config, seed),
         bursts(config, seed),
         plc_restart(config, seed),
+        module_restart(config, seed),
         device_restart(config, seed),
         overstated_rx_count(config, seed),
     ];

@@ -68,7 +68,7 @@ impl Master {
     }
 
     /// Every master model a run uses, the plain LRW first.
-    pub const ALL: [Master; 7] = [
+    pub const ALL: [Master; 8] = [
         Master::new("lrw", Exchange::Lrw),
         Master::new("separate-input-update", Exchange::SeparateInputUpdate),
         Master::new("half-cycle", Exchange::HalfCycle),
@@ -83,6 +83,13 @@ impl Master {
         Master {
             overrun_every: Some(5),
             ..Master::new("lrw-overruns", Exchange::Lrw)
+        },
+        Master {
+            buffer: OutputBuffer::Rotating(3),
+            ..Master::new(
+                "separate-input-update-triple-buffered",
+                Exchange::SeparateInputUpdate,
+            )
         },
         Master {
             distributed_clocks: true,

@@ -328,6 +328,16 @@ fn drive(
                     judge.plc_restarted(device_saw);
                     tracker.note(Note::Restart { task, what: "PLC" });
                 }
+                // The master runs on: its buffers keep what the old program
+                // wrote, and the new one's first tasks are handed those.
+                Event::ModuleRestart => {
+                    client = built(layout)?;
+                    judge.plc_restarted(device_saw);
+                    tracker.note(Note::Restart {
+                        task,
+                        what: "client module",
+                    });
+                }
                 Event::DeviceRestart => {
                     device.restart().map_err(configuration)?;
                     exchange.device_restarted();
