@@ -176,7 +176,12 @@ fn a_c_client_that_reads_past_its_image_is_caught() {
     };
     let profile = catalogue.profile("fc510x").unwrap();
     let run = run_profile(profile, &kind, &options(), |_| {});
-    assert_eq!(run.failed_requirements(&catalogue, profile), ["CL-IMG-001"]);
+    // What it reads past the slots it delivers: messages the device never
+    // entered and no frames, seen since the judge goes on after a breach.
+    assert_eq!(
+        run.failed_requirements(&catalogue, profile),
+        ["CL-IMG-001", "CL-RX-002", "CL-RX-003"]
+    );
     assert!(run
         .runs
         .iter()
@@ -285,4 +290,42 @@ fn the_c_example_client_conforms_in_its_host_as_in_process() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+/// One defect no longer hides the next (issue 27): a client with two, one on
+/// each side of the interface, shows both in the one scenario that meets
+/// them, each with the task it first showed in.
+#[test]
+fn a_client_with_two_defects_in_one_scenario_shows_both() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("el6751-mdp").unwrap();
+    let kind = ClientKind::Lib {
+        path: build(
+            "two_defects",
+            &["-DCANIF_FAULT_SKIPS_LAST_RX", "-DCANIF_ZERO_NUMBERS"],
+        ),
+        host: None,
+    };
+    let run = run_profile(profile, &kind, &options(), |_| {});
+    let both = run.runs.iter().find_map(|r| match &r.outcome {
+        Outcome::Fail(failure) => {
+            let breaches = failure.breaches();
+            let blamed: Vec<String> = breaches
+                .iter()
+                .flat_map(|b| b.requirements.iter().map(|id| id.to_string()))
+                .collect();
+            (blamed.iter().any(|id| id.starts_with("CL-RX-"))
+                && blamed.contains(&"CL-TN-001".to_string()))
+            .then_some((r.scenario.clone(), breaches))
+        }
+        _ => None,
+    });
+    let (scenario, breaches) = both.expect("a scenario that shows both defects");
+    assert!(breaches.len() >= 2, "{scenario}");
+    let failed = run.failed_requirements(&catalogue, profile);
+    assert!(
+        failed.iter().any(|id| id.starts_with("CL-RX-")),
+        "{failed:?}"
+    );
+    assert!(failed.contains(&"CL-TN-001".to_string()), "{failed:?}");
 }

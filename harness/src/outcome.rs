@@ -25,6 +25,9 @@ pub struct Failure {
     pub frames: Option<FrameDiff>,
     /// What the failure says of the rest of what the scenario covers.
     pub rest: crate::verdict::Rest,
+    /// Later breaches of the same scenario, each of requirements not blamed
+    /// before, at its first cycle (the PLC side judges on after a breach).
+    pub further: Vec<Failure>,
 }
 
 /// The frame the model expected and the one the IUT gave (`None`: no frame).
@@ -35,6 +38,17 @@ pub struct FrameDiff {
 }
 
 impl Failure {
+    /// This breach and the later ones of the same scenario, each alone.
+    pub fn breaches(&self) -> Vec<Failure> {
+        let first = Failure {
+            further: Vec::new(),
+            ..self.clone()
+        };
+        std::iter::once(first)
+            .chain(self.further.iter().cloned())
+            .collect()
+    }
+
     /// Where and what, and the requirements it breaks.
     pub fn headline(&self) -> String {
         format!(

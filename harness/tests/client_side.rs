@@ -94,11 +94,18 @@ const KILL_TABLE: &[(ClientFault, &[&str])] = &[
         ClientFault::IgnoresWrap,
         &["CL-FQ-001", "CL-RST-002", "CL-TX-003"],
     ),
+    // Its last Tx message lands behind the slots: seen since the judge goes
+    // on after the first breach (issue 27).
     (
         ClientFault::OneBasedSlots,
-        &["CL-RX-002", "CL-RX-003", "CL-TX-004"],
+        &["CL-IMG-001", "CL-RX-002", "CL-RX-003", "CL-TX-004"],
     ),
-    (ClientFault::NoBoundOnNoOfRxMessages, &["CL-IMG-001"]),
+    // What it reads past the slots it delivers: messages the device never
+    // entered (CL-RX-002), and no frames (CL-RX-003).
+    (
+        ClientFault::NoBoundOnNoOfRxMessages,
+        &["CL-IMG-001", "CL-RX-002", "CL-RX-003"],
+    ),
     (
         ClientFault::AcknowledgesAfterFirstMessage,
         &["CL-FQ-001", "CL-RX-001"],

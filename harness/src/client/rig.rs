@@ -101,9 +101,30 @@ struct Tracker {
     timeline: Ring<(CycleView, Vec<Ended>)>,
     /// Frames that ended since the last task.
     frames: Vec<Ended>,
+    /// The scenario's name, for its failures.
+    scenario: String,
+    /// Each distinct breach so far, at its first task: judging goes on after
+    /// one, so one defect does not hide the next.
+    breaches: Vec<Failure>,
 }
 
 impl Tracker {
+    /// Records a breach the first time its requirements are breached.
+    fn breached(&mut self, judged: Result<(), Breach>) {
+        let Err(breach) = judged else {
+            return;
+        };
+        if self
+            .breaches
+            .iter()
+            .any(|f| f.requirements == breach.requirements)
+        {
+            return;
+        }
+        let failure = self.failure(&self.scenario, breach);
+        self.breaches.push(failure);
+    }
+
     fn failure(&self, scenario: &str, breach: Breach) -> Failure {
         let bus_frame = |e: &Ended| BusFrame {
             end: e.end,
@@ -129,6 +150,7 @@ impl Tracker {
                 .collect(),
             frames: None,
             rest: crate::verdict::Rest::Stopped,
+            further: Vec::new(),
         }
     }
 
@@ -233,6 +255,8 @@ fn run_with(
         context: Ring::context(),
         timeline: Ring::context(),
         frames: Vec::new(),
+        scenario: name.clone(),
+        breaches: Vec::new(),
     };
     let result = drive(
         caps,
@@ -242,10 +266,24 @@ fn run_with(
         &mut tracker,
         &mut record,
     );
-    let outcome = match result {
-        Ok(()) => Outcome::Pass,
-        Err(Stop::Breach(breach)) => Outcome::Fail(Box::new(tracker.failure(&name, breach))),
-        Err(Stop::Error(error)) => Outcome::Error(error),
+    let error = match result {
+        Ok(()) => None,
+        // A breach that stopped the run (its client is gone) comes last.
+        Err(Stop::Breach(breach)) => {
+            let failure = tracker.failure(&name, breach);
+            tracker.breaches.push(failure);
+            None
+        }
+        Err(Stop::Error(error)) => Some(error),
+    };
+    let mut breaches = std::mem::take(&mut tracker.breaches).into_iter();
+    let outcome = match (error, breaches.next()) {
+        (Some(error), _) => Outcome::Error(error),
+        (None, None) => Outcome::Pass,
+        (None, Some(first)) => Outcome::Fail(Box::new(Failure {
+            further: breaches.collect(),
+            ..first
+        })),
     };
     // A client that tells its application nothing of what was sent gives
     // CL-TN-002 nothing to judge: no evidence of a pass.
@@ -364,7 +402,7 @@ fn drive(
                 if record.keep_frames {
                     record.sent.push(ended.frame);
                 }
-                judge.device_sent(&ended.frame)?;
+                tracker.breached(judge.device_sent(&ended.frame));
                 record.frames_checked += 1;
             }
         }
@@ -392,7 +430,7 @@ fn drive(
                 .map(|(_, m)| *m)
                 .collect();
             tracker.task_ran(layout, &inputs, &buffer, answer.delivered.len());
-            judge.task(
+            let breaches = judge.task(
                 task,
                 TaskSeen {
                     inputs: exchange.task_input_image(),
@@ -404,7 +442,10 @@ fn drive(
                     sent: &answer.sent,
                 },
                 deadline,
-            )?;
+            );
+            for breach in breaches {
+                tracker.breached(Err(breach));
+            }
             record.frames_checked += answer.delivered.len() as u64;
             if record.keep_frames {
                 record.delivered.extend_from_slice(&answer.delivered);
@@ -428,7 +469,11 @@ fn drive(
         })?;
         record.tasks += 1;
     }
-    judge.finish(device.queued_rx())?;
+    // What never arrived is the consequence of any breach before: judged
+    // only in a run that had none.
+    if tracker.breaches.is_empty() {
+        tracker.breached(judge.finish(device.queued_rx()));
+    }
     Ok(())
 }
 

@@ -133,10 +133,19 @@ impl Pair {
             what: difference.what,
             expected: difference.expected,
             actual: difference.actual,
-            context: self.history.context(),
+            context: {
+                // The PLC side judges on after a breach; a device cannot be.
+                let mut context = self.history.context();
+                context.push(
+                    "(the scenario stops here: the model's state has left the IUT's, so what the IUT does next cannot be judged against it)"
+                        .into(),
+                );
+                context
+            },
             timeline: self.history.timeline(),
             frames: difference.frames.map(|f| *f),
             rest: crate::verdict::Rest::Stopped,
+            further: Vec::new(),
         }))
     }
 

@@ -55,6 +55,7 @@ pub fn refused(scenario: &str, config: &InterfaceConfig, reason: String) -> Fail
         timeline: Vec::new(),
         frames: None,
         rest: Rest::NotRun(NotRunReason::Refused { interface, reason }),
+        further: Vec::new(),
     }
 }
 
@@ -231,5 +232,6 @@ fn mismatch(
         timeline: Vec::new(),
         frames: None,
         rest: Rest::Stopped,
+        further: Vec::new(),
     }
 }

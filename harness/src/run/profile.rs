@@ -53,12 +53,14 @@ pub struct ProfileRun {
 
 impl ProfileRun {
     pub fn new(profile: &str, runs: Vec<ScenarioRun>, reach: Reach) -> Self {
+        // Each breach a failure of its own (drawn and listed), in run order.
         let failures = runs
             .iter()
             .filter_map(|run| match &run.outcome {
-                Outcome::Fail(failure) => Some(failure.as_ref().clone()),
+                Outcome::Fail(failure) => Some(failure.breaches()),
                 _ => None,
             })
+            .flatten()
             .collect();
         ProfileRun {
             profile: profile.to_string(),
@@ -88,35 +90,49 @@ impl ProfileRun {
             .collect()
     }
 
-    /// The scenario runs as checks for [`verdict::judge`].
+    /// The scenario runs as checks for [`verdict::judge`]: a run that broke
+    /// several requirements one after the other is one check per breach, the
+    /// later ones covering only what they blame.
     pub fn checks(&self) -> Vec<Check> {
         let mut failures = 0;
-        self.runs
-            .iter()
-            .map(|run| Check {
+        let mut checks = Vec::new();
+        for run in &self.runs {
+            let check = |covers: Vec<String>, result| Check {
                 evidence: Evidence::Scenario(run.scenario.clone()),
-                covers: run.covers.iter().map(|id| id.to_string()).collect(),
-                result: match &run.outcome {
-                    Outcome::Pass => CheckResult::Pass,
-                    Outcome::Fail(failure) => {
-                        failures += 1;
-                        CheckResult::Fail(Finding {
-                            requirements: failure
+                covers,
+                result,
+                elapsed: run.elapsed,
+            };
+            let covers: Vec<String> = run.covers.iter().map(|id| id.to_string()).collect();
+            match &run.outcome {
+                Outcome::Pass => checks.push(check(covers, CheckResult::Pass)),
+                Outcome::Error(error) => {
+                    checks.push(check(covers, CheckResult::Error(error.to_string())))
+                }
+                Outcome::Fail(failure) => {
+                    for (n, breach) in failure.breaches().into_iter().enumerate() {
+                        let finding = Finding {
+                            requirements: breach
                                 .requirements
                                 .iter()
                                 .map(|id| id.to_string())
                                 .collect(),
-                            cause: failure.cause(),
-                            details: failure.details(),
-                            failure: Some(failures - 1),
-                            rest: failure.rest.clone(),
-                        })
+                            cause: breach.cause(),
+                            details: breach.details(),
+                            failure: Some(failures),
+                            rest: breach.rest.clone(),
+                        };
+                        failures += 1;
+                        let covers = match n {
+                            0 => covers.clone(),
+                            _ => finding.requirements.clone(),
+                        };
+                        checks.push(check(covers, CheckResult::Fail(finding)));
                     }
-                    Outcome::Error(error) => CheckResult::Error(error.to_string()),
-                },
-                elapsed: run.elapsed,
-            })
-            .collect()
+                }
+            }
+        }
+        checks
     }
 
     pub fn frames_checked(&self) -> u64 {

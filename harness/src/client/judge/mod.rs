@@ -138,6 +138,12 @@ pub(super) struct Judge {
     /// The client declares it tells its application nothing of what was
     /// sent: its transaction numbers are free (000 §5.2), CL-TN-001 is not judged.
     numbers_free: bool,
+    /// A part of the judge that found a breach stops judging: its state has
+    /// left the client's, and what it would say next follows from the
+    /// breach (the Tx part: batches, frames on the bus, what was told sent,
+    /// the device restart; the Rx part: deliveries). The other part goes on.
+    tx_broken: bool,
+    rx_broken: bool,
 }
 
 impl Judge {
@@ -150,6 +156,8 @@ impl Judge {
     pub(super) fn new(layout: ImageLayout, queue: QueueMode) -> Self {
         Judge {
             numbers_free: false,
+            tx_broken: false,
+            rx_broken: false,
             layout,
             queue,
             requests: Vec::new(),
@@ -211,6 +219,15 @@ impl Judge {
     }
 
     pub(super) fn device_sent(&mut self, frame: &Frame) -> Result<(), Breach> {
+        if self.tx_broken {
+            return Ok(());
+        }
+        let judged = self.judge_device_sent(frame);
+        self.tx_broken |= judged.is_err();
+        judged
+    }
+
+    fn judge_device_sent(&mut self, frame: &Frame) -> Result<(), Breach> {
         while self.may_lose.contains(&self.sent)
             && self.requests.get(self.sent).map(|r| &r.frame) != Some(frame)
         {
@@ -239,9 +256,11 @@ impl Judge {
             Some(next) => format!("request #{} {}", self.sent, next.frame),
             None => "no frame (every request was sent)".into(),
         };
-        let what = if self.requests[..self.sent].iter().any(|r| r.frame == *frame) {
+        // After an earlier breach the count may run past the requests.
+        let (before, after) = self.requests.split_at(self.sent.min(self.requests.len()));
+        let what = if before.iter().any(|r| r.frame == *frame) {
             "a frame sent twice"
-        } else if self.requests[self.sent..].iter().any(|r| r.frame == *frame) {
+        } else if after.iter().any(|r| r.frame == *frame) {
             "a frame sent out of order"
         } else {
             "a frame the application never asked for"
@@ -305,42 +324,56 @@ impl Judge {
     }
 
     /// One task the client ran.
-    pub(super) fn task(
-        &mut self,
-        task: u64,
-        seen: TaskSeen<'_>,
-        deadline: u64,
-    ) -> Result<(), Breach> {
+    pub(super) fn task(&mut self, task: u64, seen: TaskSeen<'_>, deadline: u64) -> Vec<Breach> {
         let layout = self.layout;
         let size = layout.output_size();
+        let mut breaches = Vec::new();
+        // Each part judges on after the other part's breach, so one defect
+        // does not hide the next; a part stops at its own first breach.
         if seen.after[size..].iter().any(|b| *b != NEIGHBOUR_PATTERN) {
-            return breach(
-                IMAGE_BOUNDS,
-                "the bytes behind the output image",
-                format!("untouched ({NEIGHBOUR_PATTERN:02X} …)"),
-                "written",
+            breaches.extend(
+                breach(
+                    IMAGE_BOUNDS,
+                    "the bytes behind the output image",
+                    format!("untouched ({NEIGHBOUR_PATTERN:02X} …)"),
+                    "written",
+                )
+                .err(),
             );
         }
         let read = seen.delivered.len() + seen.not_frames.len();
         if read > layout.rx_slots {
-            return breach(
-                IMAGE_BOUNDS,
-                "messages read in one task",
-                format!("at most the {} Rx slots", layout.rx_slots),
-                read.to_string(),
+            breaches.extend(
+                breach(
+                    IMAGE_BOUNDS,
+                    "messages read in one task",
+                    format!("at most the {} Rx slots", layout.rx_slots),
+                    read.to_string(),
+                )
+                .err(),
             );
         }
         if let Some(what) = seen.not_frames.first() {
-            return breach(
-                RX_DECODING,
-                format!("delivered message {}", seen.delivered.len()),
-                "a frame, decoded per the message structure",
-                format!("no frame: {what}"),
+            breaches.extend(
+                breach(
+                    RX_DECODING,
+                    format!("delivered message {}", seen.delivered.len()),
+                    "a frame, decoded per the message structure",
+                    format!("no frame: {what}"),
+                )
+                .err(),
             );
         }
-        let inputs = InputImage::new_checked(seen.inputs, layout).map_err(size_breach)?;
-        let before = OutputImage::new_checked(seen.before, layout).map_err(size_breach)?;
-        let after = OutputImage::new_checked(&seen.after[..size], layout).map_err(size_breach)?;
+        let images = InputImage::new_checked(seen.inputs, layout)
+            .and_then(|i| Ok((i, OutputImage::new_checked(seen.before, layout)?)))
+            .and_then(|(i, b)| Ok((i, b, OutputImage::new_checked(&seen.after[..size], layout)?)));
+        let (inputs, before, after) = match images {
+            Ok(images) => images,
+            Err(error) => {
+                breaches.push(size_breach(error));
+                return breaches;
+            }
+        };
         self.requests.extend_from_slice(seen.accepted);
         if self
             .last_device_restart
@@ -350,23 +383,42 @@ impl Judge {
             // not read by now is gone with its memory (inherent, CL-RST-002).
             self.rx.retain(|b| !b.before_device_restart);
         }
-        self.judge_rx(&inputs, &before, &after, seen.delivered)?;
-        self.judge_sent(seen.sent)?;
-        self.judge_tx(&inputs, &before, &after)?;
+        if !self.rx_broken {
+            let judged = self.judge_rx(&inputs, &before, &after, seen.delivered);
+            self.rx_broken |= judged.is_err();
+            breaches.extend(judged.err());
+        }
+        if self.tx_broken {
+            self.restarted = false;
+            return breaches;
+        }
+        let judged = self
+            .judge_sent(seen.sent)
+            .and_then(|()| self.judge_tx(&inputs, &before, &after));
+        self.tx_broken |= judged.is_err();
+        breaches.extend(judged.err());
+        if self.tx_broken {
+            self.restarted = false;
+            return breaches;
+        }
         if let Some(restart) = self.device_restart {
             if self.pending.is_some() || self.waiting() == 0 {
                 self.device_restart = None;
             } else if task > restart + deadline {
-                return breach(
-                    DEVICE_RESTART,
-                    "a new batch after the device restart",
-                    format!("within {deadline} tasks of task {restart}"),
-                    format!("none by task {task}, {} requests waiting", self.waiting()),
+                self.tx_broken = true;
+                breaches.extend(
+                    breach(
+                        DEVICE_RESTART,
+                        "a new batch after the device restart",
+                        format!("within {deadline} tasks of task {restart}"),
+                        format!("none by task {task}, {} requests waiting", self.waiting()),
+                    )
+                    .err(),
                 );
             }
         }
         self.restarted = false;
-        Ok(())
+        breaches
     }
 
     /// After the last task: what never arrived. `device_queued_rx`: messages
@@ -434,145 +486,4 @@ fn size_breach(error: canif_model::image::SizeError) -> Breach {
 }
 
 #[cfg(test)]
-mod tests {
-    use canif_model::config::{FrameFormat, InterfaceConfig};
-    use canif_model::frame::CanId;
-
-    use super::*;
-    use crate::client::master::NEIGHBOUR_PATTERN;
-
-    fn layout() -> ImageLayout {
-        ImageLayout::new(&InterfaceConfig::new(FrameFormat::Base11, 2), false)
-    }
-
-    fn request(id: u16) -> MessageRepr {
-        MessageRepr {
-            transaction_number: 0,
-            frame: Frame::classic(CanId::Standard(id), &[id as u8]).unwrap(),
-            time_stamp: 0,
-        }
-    }
-
-    /// An output buffer with `batch` written under TxCounter `counter`, the
-    /// neighbour's pattern behind it.
-    fn outputs(counter: u16, batch: &[MessageRepr]) -> Vec<u8> {
-        let layout = layout();
-        let mut bytes = vec![0; layout.output_size()];
-        let mut image = OutputImage::new_checked(&mut bytes[..], layout).unwrap();
-        image.set_tx_counter(counter);
-        image.set_no_of_tx_messages(batch.len() as u16);
-        for (slot, message) in batch.iter().enumerate() {
-            message
-                .emit(&mut image.tx_message_mut(slot).unwrap())
-                .unwrap();
-        }
-        bytes.extend([NEIGHBOUR_PATTERN; 8]);
-        bytes
-    }
-
-    fn task<'a>(inputs: &'a [u8], before: &'a [u8], after: &'a [u8]) -> TaskSeen<'a> {
-        TaskSeen {
-            inputs,
-            before,
-            after,
-            accepted: &[],
-            delivered: &[],
-            not_frames: &[],
-            sent: &[],
-        }
-    }
-
-    #[test]
-    fn a_batch_of_what_the_application_asked_passes_and_a_second_before_the_acknowledge_does_not() {
-        let layout = layout();
-        let mut judge = Judge::new(layout, QueueMode::Standard);
-        let inputs = vec![0; layout.input_size()];
-        let idle = outputs(0, &[]);
-        let first = outputs(1, &[request(0x101)]);
-        let asked = [request(0x101)];
-        let seen = TaskSeen {
-            accepted: &asked,
-            ..task(&inputs, &idle[..layout.output_size()], &first)
-        };
-        assert_eq!(judge.task(1, seen, 100), Ok(()));
-        // Inputs.TxCounter is still 0: the batch is not acknowledged.
-        let second = outputs(2, &[request(0x101)]);
-        let breach = judge
-            .task(
-                2,
-                task(&inputs, &first[..layout.output_size()], &second),
-                100,
-            )
-            .unwrap_err();
-        assert_eq!(breach.requirements, TX_UNTOUCHED);
-    }
-
-    #[test]
-    fn more_messages_than_requests_or_another_frame_than_asked_is_a_breach() {
-        let layout = layout();
-        let inputs = vec![0; layout.input_size()];
-        let idle = outputs(0, &[]);
-        let invented = outputs(1, &[request(0x7FF)]);
-        let breach = Judge::new(layout, QueueMode::Standard)
-            .task(
-                1,
-                task(&inputs, &idle[..layout.output_size()], &invented),
-                100,
-            )
-            .unwrap_err();
-        assert_eq!(breach.requirements, TX_COUNT, "{breach:?}");
-        let asked = [request(0x101)];
-        let seen = TaskSeen {
-            accepted: &asked,
-            ..task(&inputs, &idle[..layout.output_size()], &invented)
-        };
-        let breach = Judge::new(layout, QueueMode::Standard)
-            .task(1, seen, 100)
-            .unwrap_err();
-        assert_eq!(breach.requirements, TX_ENCODING, "{breach:?}");
-    }
-
-    #[test]
-    fn writing_behind_the_image_or_reading_past_the_slots_breaks_its_bounds() {
-        let layout = layout();
-        let inputs = vec![0; layout.input_size()];
-        let idle = outputs(0, &[]);
-        let mut scribbled = idle.clone();
-        *scribbled.last_mut().unwrap() = 0;
-        let mut judge = Judge::new(layout, QueueMode::Standard);
-        let breach = judge
-            .task(
-                1,
-                task(&inputs, &idle[..layout.output_size()], &scribbled),
-                100,
-            )
-            .unwrap_err();
-        assert_eq!(breach.requirements, IMAGE_BOUNDS);
-        let three = [request(1), request(2), request(3)];
-        let seen = TaskSeen {
-            delivered: &three,
-            ..task(&inputs, &idle[..layout.output_size()], &idle)
-        };
-        let breach = Judge::new(layout, QueueMode::Standard)
-            .task(1, seen, 100)
-            .unwrap_err();
-        assert_eq!(breach.requirements, IMAGE_BOUNDS);
-        assert_eq!(breach.actual, "3");
-    }
-
-    #[test]
-    fn a_delivered_message_that_is_no_frame_is_a_decoding_breach() {
-        let layout = layout();
-        let inputs = vec![0; layout.input_size()];
-        let idle = outputs(0, &[]);
-        let not_frames = ["29-bit identifier without the flag".to_string()];
-        let seen = TaskSeen {
-            not_frames: &not_frames,
-            ..task(&inputs, &idle[..layout.output_size()], &idle)
-        };
-        let breach = Judge::new(layout, QueueMode::Standard)
-            .task(1, seen, 100)
-            .unwrap_err();
-        assert_eq!(breach.requirements, RX_DECODING);
-    }
-}
+mod tests;

@@ -1,0 +1,154 @@
+//! The judge on single tasks: what it lets pass and what it blames.
+
+use canif_model::config::{FrameFormat, InterfaceConfig};
+use canif_model::frame::CanId;
+
+use super::*;
+use crate::client::master::NEIGHBOUR_PATTERN;
+
+fn layout() -> ImageLayout {
+    ImageLayout::new(&InterfaceConfig::new(FrameFormat::Base11, 2), false)
+}
+
+fn request(id: u16) -> MessageRepr {
+    MessageRepr {
+        transaction_number: 0,
+        frame: Frame::classic(CanId::Standard(id), &[id as u8]).unwrap(),
+        time_stamp: 0,
+    }
+}
+
+/// An output buffer with `batch` written under TxCounter `counter`, the
+/// neighbour's pattern behind it.
+fn outputs(counter: u16, batch: &[MessageRepr]) -> Vec<u8> {
+    let layout = layout();
+    let mut bytes = vec![0; layout.output_size()];
+    let mut image = OutputImage::new_checked(&mut bytes[..], layout).unwrap();
+    image.set_tx_counter(counter);
+    image.set_no_of_tx_messages(batch.len() as u16);
+    for (slot, message) in batch.iter().enumerate() {
+        message
+            .emit(&mut image.tx_message_mut(slot).unwrap())
+            .unwrap();
+    }
+    bytes.extend([NEIGHBOUR_PATTERN; 8]);
+    bytes
+}
+
+fn task<'a>(inputs: &'a [u8], before: &'a [u8], after: &'a [u8]) -> TaskSeen<'a> {
+    TaskSeen {
+        inputs,
+        before,
+        after,
+        accepted: &[],
+        delivered: &[],
+        not_frames: &[],
+        sent: &[],
+    }
+}
+
+#[test]
+fn a_batch_of_what_the_application_asked_passes_and_a_second_before_the_acknowledge_does_not() {
+    let layout = layout();
+    let mut judge = Judge::new(layout, QueueMode::Standard);
+    let inputs = vec![0; layout.input_size()];
+    let idle = outputs(0, &[]);
+    let first = outputs(1, &[request(0x101)]);
+    let asked = [request(0x101)];
+    let seen = TaskSeen {
+        accepted: &asked,
+        ..task(&inputs, &idle[..layout.output_size()], &first)
+    };
+    assert_eq!(judge.task(1, seen, 100), Vec::<Breach>::new());
+    // Inputs.TxCounter is still 0: the batch is not acknowledged.
+    let second = outputs(2, &[request(0x101)]);
+    let breach = judge
+        .task(
+            2,
+            task(&inputs, &first[..layout.output_size()], &second),
+            100,
+        )
+        .into_iter()
+        .next()
+        .unwrap();
+    assert_eq!(breach.requirements, TX_UNTOUCHED);
+}
+
+#[test]
+fn more_messages_than_requests_or_another_frame_than_asked_is_a_breach() {
+    let layout = layout();
+    let inputs = vec![0; layout.input_size()];
+    let idle = outputs(0, &[]);
+    let invented = outputs(1, &[request(0x7FF)]);
+    let breach = Judge::new(layout, QueueMode::Standard)
+        .task(
+            1,
+            task(&inputs, &idle[..layout.output_size()], &invented),
+            100,
+        )
+        .into_iter()
+        .next()
+        .unwrap();
+    assert_eq!(breach.requirements, TX_COUNT, "{breach:?}");
+    let asked = [request(0x101)];
+    let seen = TaskSeen {
+        accepted: &asked,
+        ..task(&inputs, &idle[..layout.output_size()], &invented)
+    };
+    let breach = Judge::new(layout, QueueMode::Standard)
+        .task(1, seen, 100)
+        .into_iter()
+        .next()
+        .unwrap();
+    assert_eq!(breach.requirements, TX_ENCODING, "{breach:?}");
+}
+
+#[test]
+fn writing_behind_the_image_or_reading_past_the_slots_breaks_its_bounds() {
+    let layout = layout();
+    let inputs = vec![0; layout.input_size()];
+    let idle = outputs(0, &[]);
+    let mut scribbled = idle.clone();
+    *scribbled.last_mut().unwrap() = 0;
+    let mut judge = Judge::new(layout, QueueMode::Standard);
+    let breach = judge
+        .task(
+            1,
+            task(&inputs, &idle[..layout.output_size()], &scribbled),
+            100,
+        )
+        .into_iter()
+        .next()
+        .unwrap();
+    assert_eq!(breach.requirements, IMAGE_BOUNDS);
+    let three = [request(1), request(2), request(3)];
+    let seen = TaskSeen {
+        delivered: &three,
+        ..task(&inputs, &idle[..layout.output_size()], &idle)
+    };
+    let breach = Judge::new(layout, QueueMode::Standard)
+        .task(1, seen, 100)
+        .into_iter()
+        .next()
+        .unwrap();
+    assert_eq!(breach.requirements, IMAGE_BOUNDS);
+    assert_eq!(breach.actual, "3");
+}
+
+#[test]
+fn a_delivered_message_that_is_no_frame_is_a_decoding_breach() {
+    let layout = layout();
+    let inputs = vec![0; layout.input_size()];
+    let idle = outputs(0, &[]);
+    let not_frames = ["29-bit identifier without the flag".to_string()];
+    let seen = TaskSeen {
+        not_frames: &not_frames,
+        ..task(&inputs, &idle[..layout.output_size()], &idle)
+    };
+    let breach = Judge::new(layout, QueueMode::Standard)
+        .task(1, seen, 100)
+        .into_iter()
+        .next()
+        .unwrap();
+    assert_eq!(breach.requirements, RX_DECODING);
+}
