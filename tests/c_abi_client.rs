@@ -329,3 +329,65 @@ fn a_client_with_two_defects_in_one_scenario_shows_both() {
     );
     assert!(failed.contains(&"CL-TN-001".to_string()), "{failed:?}");
 }
+
+/// Advisories beside the verdicts (issue 27): a client that hands over a
+/// batch of nothing whenever it may (000's sample without its `> 0` guard)
+/// conforms (HS-TX-009 allows it), and report.json, the summary and the HTML
+/// count its empty batches and the handshakes it spends per frame; the C
+/// example with the guard hands over one only where a restarted program's
+/// first image (all zeros) changes the counter.
+#[test]
+fn empty_batches_are_counted_beside_the_verdict_and_change_nothing() {
+    let run = |name: &str, flags: &[&str]| {
+        let library = build(name, flags);
+        let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("c-abi-client-{name}"));
+        let _ = std::fs::remove_dir_all(&dir);
+        let out = Command::new(env!("CARGO_BIN_EXE_canif"))
+            .args([
+                "run",
+                "--side",
+                "plc",
+                "--profile",
+                "fc510x",
+                "--master",
+                "lrw",
+                "--iut",
+            ])
+            .arg(format!("lib:{}", library.display()))
+            .arg("--report")
+            .arg(&dir)
+            .output()
+            .unwrap();
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap())
+                .unwrap();
+        let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap();
+        let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+        (json["profiles"][0]["advisories"].clone(), summary, html)
+    };
+    let (advised, summary, html) = run("empty_batches", &["-DCANIF_EMPTY_BATCHES"]);
+    let empty = advised["empty_batches"].as_u64().unwrap_or(0);
+    let batches = advised["batches"].as_u64().unwrap_or(0);
+    assert!(empty > 100 && batches > empty, "{advised}");
+    assert!(
+        summary.contains("## Advisories") && summary.contains("of nothing"),
+        "{summary}"
+    );
+    assert!(html.contains("id=\"advisories\""));
+    let (guarded, _, _) = run("guarded_batches", &[]);
+    let restarts = 4 * 2; // two PLC and two module restarts, on each of the two interfaces
+    assert!(
+        guarded["empty_batches"].as_u64().unwrap_or(0) <= restarts,
+        "{guarded}"
+    );
+    assert!(
+        guarded["frames_sent"].as_u64().unwrap_or(0) > 0,
+        "{guarded}"
+    );
+}

@@ -17,6 +17,7 @@
 #![forbid(unsafe_code)]
 
 pub mod adapter;
+pub mod advisory;
 pub mod bus;
 pub mod canopen;
 pub mod certificate;

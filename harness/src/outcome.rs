@@ -130,6 +130,8 @@ pub struct ScenarioRun {
     /// What the IUT itself declared where the documents leave a choice (its
     /// `configure` answer), as `NAME=VALUE`: the run judged it by these.
     pub iut_declares: Vec<String>,
+    /// What the documents allow but an author wants to know (PLC side).
+    pub advisories: crate::advisory::Advisories,
 }
 
 /// How one Gherkin scenario (or Examples row) ended.

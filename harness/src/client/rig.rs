@@ -197,6 +197,8 @@ pub struct Record {
     pub told_sent: Vec<u16>,
     /// The client declared it tells its application nothing of what was sent.
     pub tells_nothing_sent: bool,
+    /// Batches, batches of nothing and request-to-bus latency (never judged).
+    pub advisories: crate::advisory::Advisories,
     /// Keep `sent` and `delivered` (a counter wrap is 65,600 of each, and
     /// only the Gherkin steps read them).
     keep_frames: bool,
@@ -301,6 +303,7 @@ fn run_with(
     };
     let run = ScenarioRun {
         iut_declares,
+        advisories: record.advisories,
         scenario: name,
         covers,
         outcome,
@@ -351,13 +354,18 @@ fn drive(
     let deadline = 2 * per_cycle + 2 * master.confirmation_tasks();
     let mut events = scenario.events.iter().peekable();
     let mut requests: Vec<MessageRepr> = Vec::new();
+    // The application's requests not yet on the bus, and when each was made.
+    let mut requested: std::collections::VecDeque<(Frame, Nanos)> = Default::default();
     let (mut overstate, mut device_saw) = (false, 0u16);
     for task in 0..scenario.cycles * per_cycle {
         let time = task * period;
         (tracker.task, tracker.time) = (task, time);
         while let Some((_, event)) = events.next_if(|(cycle, _)| cycle * per_cycle <= task) {
             match event {
-                Event::Send(message) => requests.push(*message),
+                Event::Send(message) => {
+                    requests.push(*message);
+                    requested.push_back((message.frame, time));
+                }
                 Event::Arrive(frame) => device.schedule(time + period / 4, *frame),
                 Event::OverstateRxCount => overstate = true,
                 Event::PlcRestart => {
@@ -404,6 +412,10 @@ fn drive(
                 }
                 tracker.breached(judge.device_sent(&ended.frame));
                 record.frames_checked += 1;
+                if let Some(at) = requested.iter().position(|(f, _)| *f == ended.frame) {
+                    let (_, asked) = requested.remove(at).expect("found");
+                    record.advisories.frame_sent(asked, ended.end);
+                }
             }
         }
         if exchange.client_runs() {
@@ -451,6 +463,22 @@ fn drive(
                 record.delivered.extend_from_slice(&answer.delivered);
             }
             record.told_sent.extend_from_slice(&answer.sent);
+            // A new batch: a TxCounter the client did not write before and
+            // the device has not acknowledged (a restarted program taking
+            // Inputs.TxCounter over asks for nothing).
+            let header = |image: &[u8]| OutputImage::new_checked(image, layout).map(|o| o.header());
+            let acknowledged = InputImage::new_checked(exchange.task_input_image(), layout)
+                .map(|i| i.tx_counter());
+            let written = (
+                header(exchange.device_outputs()),
+                header(&buffer[..layout.output_size()]),
+            );
+            if let ((Ok(was), Ok(now)), Ok(acknowledged)) = (written, acknowledged) {
+                if now.tx_counter != was.tx_counter && now.tx_counter != acknowledged {
+                    record.advisories.batches += 1;
+                    record.advisories.empty_batches += u64::from(now.no_of_tx_messages == 0);
+                }
+            }
             exchange.client_wrote(&buffer[..layout.output_size()]);
         } else {
             tracker.note(Note::Overrun(task));

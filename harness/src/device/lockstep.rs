@@ -42,6 +42,7 @@ pub fn run_scenario(
         tolerated,
         elapsed: std::time::Duration::ZERO,
         iut_declares: Vec::new(),
+        advisories: Default::default(),
     };
     let bus = match scenario.bus.open(scenario.bit_rates, kind.owns_its_bus()) {
         Ok(bus) => bus,
@@ -69,6 +70,7 @@ pub fn run_scenario(
     covers.extend(judged_declared);
     ScenarioRun {
         iut_declares,
+        advisories: Default::default(),
         covers,
         ..run
     }

@@ -192,6 +192,7 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
     });
     ScenarioRun {
         iut_declares: Vec::new(),
+        advisories: Default::default(),
         scenario: REFUSALS.into(),
         covers: REFUSAL_IDS.to_vec(),
         outcome,

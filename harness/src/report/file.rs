@@ -176,6 +176,9 @@ pub struct TotalsEntry {
 /// One profile's run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ProfileEntry {
+    /// What the documents allow but a client's author wants to know (never a verdict).
+    #[serde(default, skip_serializing_if = "crate::advisory::Advisories::is_empty")]
+    pub advisories: crate::advisory::Advisories,
     pub checks: Vec<CheckEntry>,
     pub cycles: u64,
     pub failures: Vec<FailureEntry>,
@@ -282,6 +285,7 @@ impl ReportFile {
                 .profiles
                 .iter()
                 .map(|p| ProfileEntry {
+                    advisories: p.lockstep.advisories(),
                     checks: p
                         .checks
                         .iter()

@@ -80,6 +80,21 @@ impl RunReport {
             .iter()
             .map(|problem| format!("<li>{}</li>\n", esc(&problem.to_string())))
             .collect();
+        let advisories: String = self
+            .profiles
+            .iter()
+            .filter(|p| !p.lockstep.advisories().is_empty())
+            .map(|p| {
+                let line = p.lockstep.advisories().line();
+                format!("<li>{}: {}</li>\n", esc(&p.profile), esc(&line))
+            })
+            .collect();
+        let advisories = match advisories.is_empty() {
+            true => String::new(),
+            false => format!(
+                "<h2>Advisories (allowed, never a verdict)</h2>\n<ul id=\"advisories\">{advisories}</ul>\n"
+            ),
+        };
         let mut failures = String::new();
         let mut checks = String::new();
         for p in &self.profiles {
@@ -196,7 +211,7 @@ pre{{background:#f6f6f6;padding:6px;overflow-x:auto;font-size:12px}} svg.timing{
 <h2>Profiles</h2>
 <table id="profiles"><tr><th>profile</th><th>pass</th><th>fail</th><th>error</th><th>not applicable</th><th>not run</th><th>not testable</th><th>checks</th><th>cycles</th><th>frames checked</th></tr>
 {profiles}</table>
-<h2>Failing and erring requirements</h2>
+{advisories}<h2>Failing and erring requirements</h2>
 {problems}
 <h2>Failures</h2>
 {failures}

@@ -108,6 +108,17 @@ impl RunReport {
                 p.lockstep.frames_checked()
             );
         }
+        let advised: Vec<String> = self
+            .profiles
+            .iter()
+            .filter(|p| !p.lockstep.advisories().is_empty())
+            .map(|p| format!("- {}: {}", p.profile, p.lockstep.advisories().line()))
+            .collect();
+        if !advised.is_empty() {
+            md.push_str("\n## Advisories (allowed, never a verdict)\n\n");
+            md.push_str(&advised.join("\n"));
+            md.push('\n');
+        }
         let mut failing = self
             .problems()
             .into_iter()

@@ -135,6 +135,15 @@ impl ProfileRun {
         checks
     }
 
+    /// The advisories of every run together.
+    pub fn advisories(&self) -> crate::advisory::Advisories {
+        let mut total = crate::advisory::Advisories::default();
+        for run in &self.runs {
+            total.add(&run.advisories);
+        }
+        total
+    }
+
     pub fn frames_checked(&self) -> u64 {
         self.runs.iter().map(|r| r.frames_checked).sum()
     }
@@ -167,6 +176,7 @@ pub fn run_profile<S: Side>(
         let run = match &broken {
             Some(after) => ScenarioRun {
                 iut_declares: Vec::new(),
+                advisories: Default::default(),
                 scenario: name,
                 covers: S::covers(&case).to_vec(),
                 outcome: Outcome::Error(RunError::Skipped(Box::new(after.clone()))),
