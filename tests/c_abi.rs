@@ -62,6 +62,18 @@ fn run_tx_batches(
         .expect("canif runs")
 }
 
+/// `canif run --profile fc510x-before-fw2.14 --iut lib:LIBRARY`, all of it,
+/// as a new user runs it, reports into `report`.
+fn run_whole_profile(library: &Path, report: &Path) -> std::process::Output {
+    let _ = std::fs::remove_dir_all(report);
+    Command::new(env!("CARGO_BIN_EXE_canif"))
+        .args(["run", "--profile", "fc510x-before-fw2.14", "--report"])
+        .arg(report)
+        .arg(format!("--iut=lib:{}", library.display()))
+        .output()
+        .expect("canif runs")
+}
+
 fn example() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/c/minimal_device.c")
 }
@@ -100,12 +112,7 @@ fn the_c_example_is_certified_in_process() {
 fn canif_run_takes_a_library_from_the_command_line() {
     let library = build("minimal-cli", &example(), "");
     let report = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi-report");
-    let output = Command::new(env!("CARGO_BIN_EXE_canif"))
-        .args(["run", "--profile", "fc510x-before-fw2.14", "--report"])
-        .arg(&report)
-        .arg(format!("--iut=lib:{}", library.display()))
-        .output()
-        .unwrap();
+    let output = run_whole_profile(&library, &report);
     let stdout = String::from_utf8_lossy(&output.stdout);
     assert_eq!(
         output.status.code(),
@@ -282,13 +289,7 @@ fn a_library_device_that_reads_past_its_outputs_fails_g3_with_every_report() {
         &["-DCANIF_FAULT_TRUSTS_NO_OF_TX"],
     );
     let report = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi-trusts-report");
-    let _ = std::fs::remove_dir_all(&report);
-    let output = Command::new(env!("CARGO_BIN_EXE_canif"))
-        .args(["run", "--profile", "fc510x-before-fw2.14", "--report"])
-        .arg(&report)
-        .arg(format!("--iut=lib:{}", library.display()))
-        .output()
-        .unwrap();
+    let output = run_whole_profile(&library, &report);
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert_eq!(output.status.code(), Some(1), "{stderr}");
     for file in ["report.json", "summary.md", "junit.xml", "report.html"] {

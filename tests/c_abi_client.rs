@@ -39,6 +39,36 @@ fn options() -> ClientOptions {
     }
 }
 
+/// `canif run --side plc --profile PROFILE [--master lrw] --iut lib:LIBRARY`
+/// as a new user runs it, reports into a fresh folder named `name`: the exit
+/// code (with stderr for a message) and report.json.
+fn canif_run(
+    name: &str,
+    library: &std::path::Path,
+    profile: &str,
+    lrw_only: bool,
+) -> (Option<i32>, String, PathBuf, serde_json::Value) {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("c-abi-client-{name}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut command = Command::new(env!("CARGO_BIN_EXE_canif"));
+    command.args(["run", "--side", "plc", "--profile", profile]);
+    if lrw_only {
+        command.args(["--master", "lrw"]);
+    }
+    let out = command
+        .arg(format!("--iut=lib:{}", library.display()))
+        .arg("--report")
+        .arg(&dir)
+        .output()
+        .expect("canif runs");
+    let json = std::fs::read_to_string(dir.join("report.json"))
+        .ok()
+        .and_then(|text| serde_json::from_str(&text).ok())
+        .unwrap_or_default();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    (out.status.code(), stderr, dir, json)
+}
+
 /// Covers: CL-TX-001, CL-TX-003, CL-TX-004, CL-RX-001, CL-RX-002, CL-RX-003, CL-FQ-001, CL-TN-002
 #[test]
 fn the_c_example_client_conforms_in_process() {
@@ -139,23 +169,8 @@ fn zero_transaction_numbers_are_a_fault_only_of_a_client_that_tells_what_was_sen
 #[test]
 fn the_reason_a_client_is_not_judged_on_sent_messages_reaches_report_json() {
     let library = build("without_sent_cli", &["-DCANIF_WITHOUT_SENT"]);
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi-client-report");
-    let _ = std::fs::remove_dir_all(&dir);
-    let output = Command::new(env!("CARGO_BIN_EXE_canif"))
-        .args(["run", "--side", "plc", "--profile", "el6751-mdp"])
-        .arg(format!("--iut=lib:{}", library.display()))
-        .arg("--report")
-        .arg(&dir)
-        .output()
-        .expect("canif runs");
-    assert_eq!(
-        output.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&output.stderr)
-    );
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    let (code, stderr, _, report) = canif_run("report", &library, "el6751-mdp", false);
+    assert_eq!(code, Some(0), "{stderr}");
     let verdict = &report["profiles"][0]["verdicts"]["CL-TN-002"];
     assert_eq!(verdict["verdict"], "not applicable", "{verdict}");
     assert!(
@@ -228,33 +243,11 @@ fn a_library_without_the_client_role_is_an_error_naming_the_symbol() {
 #[test]
 fn a_library_client_that_reads_far_past_its_image_fails_cl_img_001_with_every_report() {
     let library = build("trusts_count", &["-DCANIF_FAULT_TRUSTS_COUNT"]);
-    let report =
-        PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi-client/trusts-count-report");
-    let _ = std::fs::remove_dir_all(&report);
-    let out = Command::new(env!("CARGO_BIN_EXE_canif"))
-        .args([
-            "run",
-            "--side",
-            "plc",
-            "--profile",
-            "fc510x",
-            "--master",
-            "lrw",
-            "--iut",
-        ])
-        .arg(format!("lib:{}", library.display()))
-        .arg("--report")
-        .arg(&report)
-        .output()
-        .unwrap();
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    let (code, stderr, report, json) = canif_run("trusts-count", &library, "fc510x", true);
+    assert_eq!(code, Some(1), "{stderr}");
     for file in ["report.json", "summary.md", "junit.xml", "report.html"] {
         assert!(report.join(file).is_file(), "{file} written");
     }
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(report.join("report.json")).unwrap())
-            .unwrap();
     let verdicts = &json["profiles"][0]["verdicts"];
     assert_eq!(
         verdicts["CL-IMG-001"]["verdict"], "fail",
@@ -276,20 +269,8 @@ fn a_library_client_that_reads_far_past_its_image_fails_cl_img_001_with_every_re
 #[test]
 fn the_c_example_client_conforms_in_its_host_as_in_process() {
     let library = build("example_hosted", &[]);
-    let report = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi-client/hosted-report");
-    let out = Command::new(env!("CARGO_BIN_EXE_canif"))
-        .args(["run", "--side", "plc", "--profile", "fc510x", "--iut"])
-        .arg(format!("lib:{}", library.display()))
-        .arg("--report")
-        .arg(&report)
-        .output()
-        .unwrap();
-    assert_eq!(
-        out.status.code(),
-        Some(0),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let (code, stderr, _, _) = canif_run("hosted", &library, "fc510x", false);
+    assert_eq!(code, Some(0), "{stderr}");
 }
 
 /// One defect no longer hides the next (issue 27): a client with two, one on
@@ -340,33 +321,8 @@ fn a_client_with_two_defects_in_one_scenario_shows_both() {
 fn empty_batches_are_counted_beside_the_verdict_and_change_nothing() {
     let run = |name: &str, flags: &[&str]| {
         let library = build(name, flags);
-        let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("c-abi-client-{name}"));
-        let _ = std::fs::remove_dir_all(&dir);
-        let out = Command::new(env!("CARGO_BIN_EXE_canif"))
-            .args([
-                "run",
-                "--side",
-                "plc",
-                "--profile",
-                "fc510x",
-                "--master",
-                "lrw",
-                "--iut",
-            ])
-            .arg(format!("lib:{}", library.display()))
-            .arg("--report")
-            .arg(&dir)
-            .output()
-            .unwrap();
-        assert_eq!(
-            out.status.code(),
-            Some(0),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let json: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(dir.join("report.json")).unwrap())
-                .unwrap();
+        let (code, stderr, dir, json) = canif_run(name, &library, "fc510x", true);
+        assert_eq!(code, Some(0), "{stderr}");
         let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap();
         let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
         (json["profiles"][0]["advisories"].clone(), summary, html)
