@@ -87,7 +87,8 @@ pub fn timing_diagram(failure: &Failure) -> String {
         (LABEL_WIDTH + CELL * cycles.len() as f64).max(last_x + BYTE_WIDTH * longest as f64) + 10.0;
     let height = ROW * (rows.len() as f64 + 1.5) + 20.0;
     let mut svg = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" class=\"timing\" width=\"{width}\" height=\"{height}\" font-family=\"monospace\" font-size=\"11\">\n"
+        // Scaled to the page, never wider: the failing cycle, last, stays in view.
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" class=\"timing\" width=\"{width}\" height=\"{height}\" viewBox=\"0 0 {width} {height}\" style=\"max-width:100%;height:auto\" font-family=\"monospace\" font-size=\"11\">\n"
     );
     for (i, name) in rows.iter().enumerate() {
         let y = ROW * (i as f64 + 1.5);
