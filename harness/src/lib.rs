@@ -7,7 +7,9 @@
 //! bus in virtual time, or a Linux SocketCAN interface in real time, plays the
 //! other nodes). It runs the reference model beside the implementation under
 //! test on the same stimulus and reports the first difference of each
-//! scenario against the requirement ids it breaks.
+//! scenario against the requirement ids it breaks (a PLC-side client: every
+//! breach, each judge part stopping at its own first). What the documents
+//! allow but an author wants to know is counted beside, as `advisory`.
 //!
 //! The arrows run one way (see README.md): `suite` → `lockstep` → `plc`,
 //! `pair`, `bus` → `diff`, `blame`, `history`; `iut_kind` → `adapter`, `iut`;
