@@ -70,11 +70,6 @@ pub(crate) struct RawTask {
 }
 
 impl LibClient {
-    /// Whether the library exports `canif_client_sent`.
-    pub(crate) fn program_tells_sent(&self) -> bool {
-        self.program.tells_sent()
-    }
-
     /// One task, the delivered messages undecoded (the host passes them on
     /// as they are, for canif to judge).
     pub(crate) fn task_raw(&mut self, io: TaskIo<'_>) -> Result<RawTask, IutError> {
@@ -126,7 +121,7 @@ impl LibClient {
 
 impl Client for LibClient {
     fn tells_sent(&self) -> Option<bool> {
-        Some(self.program_tells_sent())
+        Some(self.program.tells_sent())
     }
 
     fn task(&mut self, io: TaskIo<'_>) -> Result<TaskAnswer, IutError> {

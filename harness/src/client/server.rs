@@ -10,7 +10,7 @@ use canif_model::config::InterfaceConfig;
 use canif_model::image::{ImageLayout, MessageRepr};
 
 use super::lib_client::LibClient;
-use super::TaskIo;
+use super::{Client, TaskIo};
 use crate::adapter::protocol::{Answer, Config, Hex, Request, WireFrame, WireMessage};
 use crate::error::IutError;
 
@@ -53,7 +53,7 @@ pub fn serve_library(
                 None => Answer::error("the image sizes fit no layout of this configuration"),
                 Some(layout) => match start(&config.interface(), layout) {
                     Ok(started) => {
-                        let tells_sent = Some(started.program_tells_sent());
+                        let tells_sent = started.tells_sent();
                         client = Some((started, layout));
                         Answer::Started {
                             protocol: PROTOCOL,

@@ -149,9 +149,6 @@ impl fmt::Display for Choice {
     }
 }
 
-/// The name the send queue's accounting is declared by.
-pub const TX_QUEUE_ACCOUNTING: &str = "tx-queue-accounting";
-
 /// The requirements the send queue's accounting decides: a failure blamed on
 /// one of them, while the device declared none, is tried under the other.
 pub(crate) const TX_QUEUE_ACCOUNTING_IDS: &[ReqId] =
@@ -340,7 +337,8 @@ pub struct Observed {
 impl Observed {
     /// `NAME=VALUE`, as a declaration of it reads.
     pub fn line(&self) -> String {
-        format!("{TX_QUEUE_ACCOUNTING}={}", self.tx_queue_accounting.name())
+        let choice = Choice::TxQueueAccounting;
+        format!("{choice}={}", self.tx_queue_accounting.name())
     }
 }
 

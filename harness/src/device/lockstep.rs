@@ -53,7 +53,7 @@ pub fn run_scenario(
         Err(error) => return run(Outcome::Error(error), 0, (0, 0)),
     };
     // A declared freedom is judged, so a pass is evidence for it too.
-    let judged_declared = lockstep.judged_declared(&scenario.covers);
+    let judged_declared = lockstep.judged_declared(scenario);
     let result = lockstep.run(steps);
     let iut_declares = std::mem::take(&mut lockstep.iut_declares);
     let pair = &mut lockstep.pair;
@@ -342,12 +342,10 @@ impl<B: Bus + ?Sized> Lockstep<B> {
 }
 
 impl<B: Bus + ?Sized> Lockstep<B> {
-    /// The requirements of the don't-care fields this scenario judges
-    /// because the device declared what it writes there: those of a
-    /// buffered Rx queue, in scenarios that deliver (those `covers` says).
-    pub fn judged_declared(&self, covers: &[ReqId]) -> Vec<ReqId> {
-        let delivers = covers.iter().any(|id| blame::RX_SET.contains(id));
-        if self.rules.fast_queue || !delivers {
+    /// The requirements of the don't-care fields `scenario` judges because
+    /// the device declared what it writes there (a buffered delivery's).
+    pub fn judged_declared(&self, scenario: &Scenario) -> Vec<ReqId> {
+        if !scenario.delivers_buffered() {
             return Vec::new();
         }
         let declared = self.rules.declared_rx;

@@ -5,7 +5,6 @@
 
 use canif_spec::Profile;
 
-use super::blame;
 use super::choices::{Choice, Declared};
 use super::iut_kind::IutKind;
 use super::scenario::Scenario;
@@ -90,10 +89,7 @@ pub fn probe(kind: &IutKind, profile: &Profile, options: &Options) -> Vec<Probed
 /// (judged only where declared, so covered only then), it delivers.
 fn tells_apart(choice: Choice, settled_by: canif_spec::ReqId, scenario: &Scenario) -> bool {
     match choice {
-        Choice::RxIdleCount | Choice::StaleRxSlots => {
-            scenario.interface.queue.is_buffered()
-                && scenario.covers.iter().any(|id| blame::RX_SET.contains(id))
-        }
+        Choice::RxIdleCount | Choice::StaleRxSlots => scenario.delivers_buffered(),
         _ => scenario.covers.contains(&settled_by),
     }
 }

@@ -130,6 +130,17 @@ pub struct Scenario {
 }
 
 impl Scenario {
+    /// Whether it delivers received messages through a buffered Rx queue
+    /// (where what a delivery leaves, and an idle NoOfRxMessages, are the
+    /// device's declared choices: HS-RX-008, HS-RX-009).
+    pub fn delivers_buffered(&self) -> bool {
+        self.interface.queue.is_buffered()
+            && self
+                .covers
+                .iter()
+                .any(|id| crate::device::blame::RX_SET.contains(id))
+    }
+
     pub fn steps(&self) -> Box<dyn Iterator<Item = Step> + '_> {
         match &self.steps {
             Steps::Scripted(steps) => Box::new(steps.iter().cloned()),
