@@ -166,6 +166,14 @@ int canif_client_task(void *client, const uint8_t *inputs, size_t inputs_size,
  * Judged on CL-TN-002; a library without it is not judged there. */
 size_t canif_client_sent(void *client, uint16_t *numbers, size_t capacity);
 
+/* Optional. What the client declares it is (docs/plc-side.md): "name=value"
+ * lines separated by '\n', NUL-terminated, valid while the library is loaded;
+ * NULL declares nothing. Asked before any canif_client_start, so a client
+ * can say which interfaces it serves before it is started on one:
+ * formats, queues, transaction-numbers, time-stamps, slots, direction,
+ * application, restart, tells-sent. */
+const char *canif_client_declares(void);
+
 #ifdef __cplusplus
 }
 #endif

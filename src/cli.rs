@@ -124,14 +124,17 @@ pub(crate) struct IutOptions {
     #[arg(long)]
     pub fault: Vec<String>,
     /// Let the soft device take a freedom the documents leave (repeatable; see
-    /// `canif faults`): it must still conform.
+    /// `canif faults`): it must still conform. With --side plc: the soft
+    /// client takes one way of working and declares it.
     #[arg(long)]
     pub choice: Vec<String>,
     /// Device side: what the device does where the documents leave a choice,
     /// as NAME=VALUE (repeatable; `canif faults` lists the choices), or
     /// @FILE, the choices `canif probe` wrote. Undeclared, every documented
     /// choice passes, and the first scenario that tells them apart settles
-    /// which one the device is held to.
+    /// which one the device is held to. PLC side: what the client is
+    /// (formats, queues, slots, direction, application, restart, tells-sent;
+    /// docs/plc-side.md), or @FILE of NAME=VALUE lines.
     #[arg(long, value_name = "NAME=VALUE|@FILE")]
     pub declare: Vec<String>,
     /// Let an external IUT run on any CPU. By default it shares the harness's:

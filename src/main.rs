@@ -94,7 +94,6 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                 (trace.is_some(), "--trace"),
                 (no_fail_fast, "--no-fail-fast"),
                 (real_time.ethercat_soak_s > 0, "--ethercat-soak-s"),
-                (!iut.declare.is_empty(), "--declare"),
             ];
             let plc_only = [(!master.is_empty(), "--master")];
             if let Err(conflict) = cli::side_conflicts(side, &device_only, &plc_only) {
@@ -130,13 +129,20 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                     Ok(masters) => masters,
                     Err(code) => return Ok(code),
                 };
+                let declared = match commands::client_declaration(&iut.declare) {
+                    Ok(declared) => declared,
+                    Err(code) => return Ok(code),
+                };
                 let options = canif_harness::client::suite::ClientOptions {
                     seed,
                     bus: client_bus,
                     counter_wrap: !no_counter_wrap,
                     masters,
                     selection,
+                    declared: Ok(declared),
                 };
+                // What the client declares of itself, asked once.
+                let options = options.declared_by(&kind);
                 return Ok(match run::Plan::new(profiles, options, product.product()) {
                     Ok(plan) => plc::run(&catalogue, &kind, &plan, &report),
                     Err(code) => code,
@@ -300,6 +306,13 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
             );
             for fault in canif_harness::client::faulty::ClientFault::ALL {
                 outln!(out, "{:<36} {}", fault.name(), fault.description());
+            }
+            outln!(
+                out,
+                "\nclient ways of working (--side plc --choice; the soft client takes one and declares it):"
+            );
+            for shape in canif_harness::client::faulty::ClientShape::ALL {
+                outln!(out, "{:<36} declares {}", shape.name(), shape.declares());
             }
             outln!(out, "\nmaster models (--side plc --master):");
             for master in canif_harness::client::master::Master::ALL {

@@ -347,3 +347,39 @@ fn empty_batches_are_counted_beside_the_verdict_and_change_nothing() {
         "{guarded}"
     );
 }
+
+/// A library that only sends declares it through `canif_client_declares`:
+/// certified on sending, reception not applicable; the same code without
+/// the declaration fails reception.
+#[test]
+fn a_tx_only_library_is_certified_on_what_it_declares() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("el6751-mdp").unwrap();
+    let verdicts = |name: &str, flags: &[&str]| {
+        let kind = ClientKind::Lib {
+            path: build(name, flags),
+            host: None,
+        };
+        let options = ClientOptions {
+            counter_wrap: false,
+            ..ClientOptions::new(1)
+        }
+        .declared_by(&kind);
+        let run = run_profile(profile, &kind, &options, |_| {});
+        run.verdicts(&catalogue, profile)
+    };
+    let declared = verdicts("tx_only", &["-DCANIF_TX_ONLY"]);
+    let kinds = |id: &str| declared[id].kind();
+    assert_eq!(kinds("CL-RX-001"), VerdictKind::NotApplicable);
+    assert_eq!(kinds("CL-TX-003"), VerdictKind::Pass);
+    assert!(declared
+        .values()
+        .all(|v| !matches!(v.kind(), VerdictKind::Fail | VerdictKind::Error)));
+    let reason = declared["CL-RX-002"].reason().unwrap_or_default();
+    assert!(reason.contains("direction=tx"), "{reason}");
+    let undeclared = verdicts(
+        "tx_only_undeclared",
+        &["-DCANIF_TX_ONLY", "-DCANIF_UNDECLARED"],
+    );
+    assert_eq!(undeclared["CL-RX-001"].kind(), VerdictKind::Fail);
+}

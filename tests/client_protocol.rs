@@ -113,6 +113,14 @@ fn a_client_that_breaks_the_protocol_is_an_error_naming_what_it_did() {
         &["client protocol version 7"],
     );
     broken(
+        r#"read l; echo '{"type":"started","protocol":1,"declares":{"slots":"40"}}'"#,
+        &["declares what cannot be taken", "slots=40: expected"],
+    );
+    broken(
+        r#"read l; echo '{"type":"started","protocol":1,"declares":{"colour":"red"}}'"#,
+        &["`colour` is no client declaration"],
+    );
+    broken(
         &format!(
             r#"{STARTED}; read l; echo '{{"type":"tasked","outputs":"00","delivered":[],"refused":[]}}'"#
         ),
@@ -163,4 +171,33 @@ fn real_client_traffic_fits_the_schema() {
     assert!(requests.contains(r#""type":"start""#) && requests.contains(r#""requests":[{"#));
     assert!(lines > 300, "{lines} lines");
     let _ = std::fs::remove_dir_all(dir);
+}
+
+/// The example declares itself in `started`, and canif reads it before the run.
+#[test]
+fn the_python_example_declares_what_it_is() {
+    let kind = exec(&format!("python3 {SCRIPT}"), 5_000);
+    let declared = ClientOptions::new(1).declared_by(&kind).declared.unwrap();
+    assert_eq!(
+        declared.lines(),
+        [
+            "slots=1..32",
+            "direction=both",
+            "application=one-stream",
+            "restart=delivers-twice",
+            "tells-sent=yes"
+        ]
+    );
+    // The command line declaring otherwise is an error naming both.
+    let options = ClientOptions {
+        declared: Ok(
+            canif_harness::client::ClientDeclaration::parse(&["restart=drops-once"]).unwrap(),
+        ),
+        ..ClientOptions::new(1)
+    };
+    let error = options.declared_by(&kind).declared.unwrap_err().to_string();
+    assert!(
+        error.contains("restart=drops-once") && error.contains("restart=delivers-twice"),
+        "{error}"
+    );
 }

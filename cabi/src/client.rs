@@ -33,6 +33,7 @@ type Task = unsafe extern "C" fn(
 ) -> c_int;
 
 type Sent = unsafe extern "C" fn(*mut c_void, *mut u16, usize) -> usize;
+type ClientDeclares = unsafe extern "C" fn() -> *const std::ffi::c_char;
 
 #[derive(Clone, Copy)]
 struct Functions {
@@ -41,6 +42,8 @@ struct Functions {
     task: Task,
     /// Optional: a client that does not tell what was sent leaves it out.
     sent: Option<Sent>,
+    /// Optional: a client that declares nothing leaves it out.
+    declares: Option<ClientDeclares>,
 }
 
 /// Room for the transaction numbers one task may tell: more than any
@@ -62,11 +65,32 @@ impl ClientLibrary {
             stop: symbol(&library, "canif_client_stop")?,
             task: symbol(&library, "canif_client_task")?,
             sent: symbol(&library, "canif_client_sent").ok(),
+            declares: symbol(&library, "canif_client_declares").ok(),
         };
         Ok(ClientLibrary {
             functions,
             library: Arc::new(library),
         })
+    }
+
+    /// The lines `canif_client_declares` gave ("name=value"), none without it.
+    pub fn declares(&self) -> Vec<String> {
+        let Some(declares) = self.functions.declares else {
+            return Vec::new();
+        };
+        // SAFETY: the function takes nothing and returns NULL or a
+        // NUL-terminated string valid while the library is loaded.
+        let text = unsafe { declares() };
+        if text.is_null() {
+            return Vec::new();
+        }
+        // SAFETY: non-null and NUL-terminated (the ABI's promise above).
+        let text = unsafe { std::ffi::CStr::from_ptr(text) }.to_string_lossy();
+        text.lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty())
+            .map(String::from)
+            .collect()
     }
 
     /// A program for `config`.

@@ -25,6 +25,9 @@ pub struct ScenarioInfo {
     pub example: Option<String>,
     /// The side under test: `@plc` features judge a client, the others a device.
     pub side: Side,
+    /// Its steps' text, without the keywords (what a client's declaration is
+    /// matched against: the interface set up, the traffic made).
+    pub steps: Vec<String>,
 }
 
 impl ScenarioInfo {
@@ -145,6 +148,7 @@ pub fn scenarios() -> Result<Vec<ScenarioInfo>, String> {
                     } else {
                         Side::Device
                     },
+                    steps: scenario.steps.iter().map(|s| s.value.clone()).collect(),
                 });
             }
         }

@@ -150,6 +150,8 @@ impl ClientWorld {
                 bit_rates: BitRates::classic(500_000),
                 cycles: self.cycle + QUIET,
                 events: self.events.clone(),
+                // The client's own declaration is read as it starts.
+                declared: Default::default(),
             };
             let (kind, config) = (self.target.client.clone(), self.config.clone());
             let build = move |layout| kind.build(&config, layout);

@@ -3,10 +3,12 @@
 //! target both schedule through here.
 
 use canif_harness::client::suite::ClientKind;
+use canif_harness::client::ClientDeclaration;
 use canif_harness::device::refusals::OFFERED_REFUSED;
 use canif_harness::device::{blame, IutKind};
 use canif_harness::verdict::{NotRunReason, Rest};
 use canif_harness::{GherkinOutcome, GherkinRun};
+use canif_model::config::{FrameFormat, QueueMode};
 use canif_spec::{Profile, Side};
 
 use crate::{
@@ -55,6 +57,51 @@ pub fn targets(
         }
     }
     targets
+}
+
+/// Why a client declaring `declared` does not meet a `@plc` scenario on
+/// `profile`, if it does not: the interface its steps set up (format, queue,
+/// slots, and the profile's transaction numbers) or the traffic they make.
+pub fn declined_by_client(
+    scenario: &ScenarioInfo,
+    profile: &Profile,
+    declared: &ClientDeclaration,
+) -> Option<String> {
+    let caps = profile.model_capabilities();
+    let (mut format, mut queue, mut slots) = (FrameFormat::Base11, QueueMode::Standard, 0u8);
+    let count = |text: &str| text.split(' ').find_map(|w| w.parse::<u8>().ok());
+    for step in &scenario.steps {
+        if let Some(rest) = step.strip_prefix("the client's interface is set up for ") {
+            format = match rest {
+                r if r.starts_with("29-bit") => FrameFormat::Extended29,
+                r if r.starts_with("CAN FD") => FrameFormat::Fd,
+                _ => FrameFormat::Base11,
+            };
+            slots = count(rest).unwrap_or(slots);
+        } else if let Some(rest) =
+            step.strip_prefix("the client's interface uses the Fast CAN Queue")
+        {
+            queue = QueueMode::Fast;
+            slots = count(rest).unwrap_or(slots);
+        } else {
+            let sends = step.starts_with("the application asks the client to send");
+            let receives = step.starts_with("other nodes send");
+            let direction = declared.direction();
+            if (sends && !direction.sends()) || (receives && !direction.receives()) {
+                return Some(declared.declined_direction());
+            }
+        }
+    }
+    let config = canif_harness::device::cases::interface(format, queue, &caps);
+    if let Err(why) = declared.serve(&config) {
+        return Some(why);
+    }
+    match declared.slots {
+        Some(range) if !range.contains(slots) => Some(format!(
+            "the client declares slots={range}; the scenario's interface has {slots}"
+        )),
+        _ => None,
+    }
 }
 
 /// Runs one scenario on `profile` and says how it ended, blamed the way its side blames.
@@ -147,5 +194,53 @@ pub fn failing_step(report: &str) -> String {
     match said {
         Some(said) => format!("{step}: {}", said.trim()),
         None => step.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plc(name: &str) -> ScenarioInfo {
+        crate::scenarios()
+            .unwrap()
+            .into_iter()
+            .find(|s| s.side == Side::Plc && s.name.starts_with(name))
+            .unwrap_or_else(|| panic!("no @plc scenario {name}"))
+    }
+
+    fn declined(scenario: &str, lines: &[&str]) -> Option<String> {
+        let catalogue = canif_spec::Catalogue::embedded().unwrap();
+        let declared = ClientDeclaration::parse(lines).unwrap();
+        declined_by_client(
+            &plc(scenario),
+            catalogue.profile("fc510x").unwrap(),
+            &declared,
+        )
+    }
+
+    #[test]
+    fn a_declaration_leaves_out_the_scenarios_it_does_not_serve_and_says_why() {
+        let reads = "The client reads exactly NoOfRxMessages";
+        let sends = "The device sends every message the application asked for";
+        assert_eq!(declined(reads, &[]), None);
+        assert_eq!(
+            declined(reads, &["direction=tx"]).as_deref(),
+            Some("the client declares direction=tx")
+        );
+        assert_eq!(declined(sends, &["direction=tx"]), None);
+        assert_eq!(
+            declined(sends, &["slots=10"]).as_deref(),
+            Some("the client declares slots=10; the scenario's interface has 4")
+        );
+        assert_eq!(declined(sends, &["slots=1..8"]), None);
+        assert_eq!(
+            declined("Transaction numbers tell", &["formats=11-bit"]).as_deref(),
+            Some("the client declares formats=11-bit")
+        );
+        assert_eq!(
+            declined("With the Fast CAN Queue", &["queues=standard"]).as_deref(),
+            Some("the client declares queues=standard")
+        );
     }
 }

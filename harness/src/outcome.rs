@@ -19,8 +19,9 @@ pub struct Failure {
     pub actual: String,
     /// The last cycles before the failure, oldest first.
     pub context: Vec<String>,
-    /// The same cycles as data, for the timing diagram.
-    pub timeline: Vec<CycleView>,
+    /// The same cycles (a device's) or tasks (a client's) as data, for the
+    /// timing diagram.
+    pub timeline: Timeline,
     /// The frames that differ, when the failure is a frame.
     pub frames: Option<FrameDiff>,
     /// What the failure says of the rest of what the scenario covers.
@@ -89,6 +90,59 @@ pub struct BusFrame {
     pub from_iut: bool,
     /// The frame in candump notation.
     pub text: String,
+}
+
+/// A failure's last cycles as data: each side's own rows.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Timeline {
+    /// A device under test: the model's input header against the IUT's.
+    Cycles(Vec<CycleView>),
+    /// A client under test: what each task was handed and left, and the row
+    /// of the diagram the breach is about.
+    Tasks { tasks: Vec<TaskView>, row: TaskRow },
+}
+
+impl Timeline {
+    pub fn is_empty(&self) -> bool {
+        match self {
+            Timeline::Cycles(cycles) => cycles.is_empty(),
+            Timeline::Tasks { tasks, .. } => tasks.is_empty(),
+        }
+    }
+}
+
+impl Default for Timeline {
+    fn default() -> Self {
+        Timeline::Cycles(Vec::new())
+    }
+}
+
+/// One task of a client's failure: the input header the master handed it,
+/// the output header it left, what its application asked and got, and the
+/// frames that ended on the bus since the task before.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct TaskView {
+    pub task: u64,
+    pub time: Nanos,
+    pub inputs: InputHeader,
+    pub outputs: OutputHeader,
+    /// The application's requests this task was given.
+    pub requests: usize,
+    /// The messages it delivered to its application.
+    pub delivered: usize,
+    pub frames: Vec<BusFrame>,
+}
+
+/// What a client's breach is about, as a row of its diagram.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TaskRow {
+    TxCounter,
+    RxCounter,
+    NoOfTxMessages,
+    /// What it delivered to its application, or told it was sent.
+    Application,
+    /// What the device sent on the bus from its batches.
+    Bus,
 }
 
 /// One cycle of a failure's history: the PLC's outputs, the model's (expected)

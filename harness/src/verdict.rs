@@ -259,6 +259,9 @@ pub struct Reach {
     /// Requirements the implementation declares it does not take up (a
     /// client that tells its application nothing of what was sent), with why.
     pub not_applicable: BTreeMap<String, String>,
+    /// What the profile offers and the implementation declares it does not
+    /// serve (an interface, a slot count, a direction), each with why.
+    pub not_served: Vec<(String, String)>,
     /// Why this run left out what it could have run (the selection, an error, a signal).
     pub left_out: NotRunReason,
 }
@@ -273,6 +276,7 @@ impl Default for Reach {
             here: BTreeSet::new(),
             unobserved: BTreeMap::new(),
             not_applicable: BTreeMap::new(),
+            not_served: Vec::new(),
             left_out: NotRunReason::NotSelected,
         }
     }
@@ -352,10 +356,11 @@ pub fn judge(
         let missing = profile.lacks(&requirement.capabilities);
         let verdict = if !missing.is_empty() {
             Verdict::NotApplicable(format!("{} lacks {}", profile.name, missing.join(", ")))
+        } else if let Some(found) = failed.remove(id) {
+            // A declaration never hides what was seen broken.
+            Verdict::Fail(found)
         } else if let Some(why) = reach.not_applicable.get(id) {
             Verdict::NotApplicable(why.clone())
-        } else if let Some(found) = failed.remove(id) {
-            Verdict::Fail(found)
         } else if let Some(errors) = broke.remove(id) {
             Verdict::Error(errors)
         } else if let Some(evidence) = passed.remove(id) {

@@ -77,6 +77,7 @@ fn scenario_of(cycles: &[Cycle]) -> ClientScenario {
         bit_rates: BitRates::classic(500_000),
         cycles: cycles.len() as u64 + 60,
         events,
+        declared: Default::default(),
     }
 }
 

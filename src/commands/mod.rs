@@ -8,7 +8,7 @@ pub(crate) mod tools;
 
 use std::process::ExitCode;
 
-use canif_harness::client::faulty::ClientFault;
+use canif_harness::client::faulty::{ClientFault, ClientShape};
 use canif_harness::client::suite::ClientKind;
 use canif_harness::device::IutKind;
 use canif_softdevice::{Choice, Fault};
@@ -120,9 +120,28 @@ pub(crate) fn resolve_client(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
         eprintln!("--side plc: one --fault at a time (the soft client has one defect)");
         return Err(ExitCode::from(2));
     }
-    if !iut.choice.is_empty() {
-        eprintln!("--choice applies to the soft device only");
-        return Err(ExitCode::from(2));
+    let shapes: Vec<ClientShape> = iut
+        .choice
+        .iter()
+        .map(|name| {
+            ClientShape::from_name(name).ok_or_else(|| {
+                eprintln!("unknown soft-client choice `{name}`; `canif faults` lists them");
+                ExitCode::from(2)
+            })
+        })
+        .collect::<Result<_, _>>()?;
+    match (shapes.as_slice(), faults.first(), &iut.iut) {
+        ([], _, _) => {}
+        ([shape], None, None | Some(IutArg::SoftClient)) => {
+            return Ok(ClientKind::Shaped {
+                shape: *shape,
+                declared: true,
+            })
+        }
+        _ => {
+            eprintln!("--side plc: --choice takes the soft client (--iut softclient), one at a time, without --fault");
+            return Err(ExitCode::from(2));
+        }
     }
     match (&iut.iut, faults.first()) {
         (None | Some(IutArg::SoftClient), fault) if fault.is_some() || iut.iut.is_some() => {
@@ -153,6 +172,37 @@ pub(crate) fn resolve_client(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
         }
         (None, Some(_)) => unreachable!("a fault without --iut is the soft client"),
     }
+}
+
+/// What `--declare` says of a client (NAME=VALUE lines, or @FILE of such
+/// lines, docs/plc-side.md), or the exit code of a usage error naming the
+/// line that cannot be taken.
+pub(crate) fn client_declaration(
+    declare: &[String],
+) -> Result<canif_harness::client::ClientDeclaration, ExitCode> {
+    let mut declared = canif_harness::client::ClientDeclaration::default();
+    for argument in declare {
+        let (lines, origin) = match argument.strip_prefix('@') {
+            Some(path) => match std::fs::read_to_string(path) {
+                Ok(text) => (text.lines().map(String::from).collect(), path.to_string()),
+                Err(error) => {
+                    eprintln!("--declare @{path}: {error}");
+                    return Err(ExitCode::from(2));
+                }
+            },
+            None => (vec![argument.clone()], String::new()),
+        };
+        for (n, line) in lines.iter().enumerate() {
+            if let Err(error) = declared.declare(line) {
+                match origin.is_empty() {
+                    true => eprintln!("--declare {line}: {error}"),
+                    false => eprintln!("--declare @{origin}, line {}: {error}", n + 1),
+                }
+                return Err(ExitCode::from(2));
+            }
+        }
+    }
+    Ok(declared)
 }
 
 /// The choices `--declare` names (NAME=VALUE, or @FILE as `canif probe`

@@ -11,6 +11,7 @@ use canif_model::image::MessageRepr;
 use canif_model::timing::BitRates;
 use canif_spec::{req_ids, ReqId};
 
+use super::declaration::{Application, ClientDeclaration};
 use super::master::Master;
 use crate::device::scenario::Rng;
 
@@ -45,6 +46,8 @@ pub struct ClientScenario {
     pub cycles: u64,
     /// By cycle, in order.
     pub events: Vec<(u64, Event)>,
+    /// What the client it is run on declares (judged by it).
+    pub declared: ClientDeclaration,
 }
 
 /// Cycles at the end with no new traffic, for everything to arrive.
@@ -111,10 +114,12 @@ impl Traffic {
         })
     }
 
-    /// `cycles` of traffic from `first`: up to `sends` requests and `arrivals`
-    /// frames per cycle, about half the bus.
-    fn steady(&mut self, first: u64, cycles: u64, events: &mut Vec<(u64, Event)>) {
-        for cycle in first..first + cycles {
+    /// `cycles` of traffic from `first`: up to 2 requests and 1 arrival per
+    /// cycle, about half the bus; with fewer than 4 slots, only every 4th
+    /// cycle, which is what a handshake per few messages can carry.
+    fn steady(&mut self, first: u64, cycles: u64, slots: u8, events: &mut Vec<(u64, Event)>) {
+        let every = if slots < 4 { 4 } else { 1 };
+        for cycle in (first..first + cycles).step_by(every) {
             for _ in 0..self.rng.below(3) {
                 events.push((cycle, self.send()));
             }
@@ -164,6 +169,60 @@ fn scenario(
         config: config.clone(),
         cycles: cycles + QUIET,
         events,
+        declared: ClientDeclaration::default(),
+    }
+}
+
+/// What only a client that sends is judged on.
+const SENDING: &[ReqId] = req_ids![
+    "CL-TX-001",
+    "CL-TX-002",
+    "CL-TX-003",
+    "CL-TX-004",
+    "CL-TX-005",
+    "CL-TN-001",
+    "CL-TN-002",
+];
+
+/// What only a client that receives is judged on.
+const RECEIVING: &[ReqId] = req_ids!["CL-RX-001", "CL-RX-002", "CL-RX-003", "CL-FQ-001"];
+
+/// The identifiers a several-stream application sends on: few, so that
+/// each stream has frames to keep in order.
+const STREAMS: u32 = 4;
+
+impl ClientScenario {
+    /// This life cycle as a client declaring `declared` meets it: traffic
+    /// only the way the client moves frames, few identifiers where its
+    /// application has a stream per identifier, and only the requirements
+    /// it can be judged on. `None` where no traffic is left.
+    pub fn for_client(mut self, declared: &ClientDeclaration) -> Option<Self> {
+        let direction = declared.direction();
+        self.events.retain(|(_, event)| match event {
+            Event::Send(_) => direction.sends(),
+            Event::Arrive(_) | Event::OverstateRxCount => direction.receives(),
+            _ => true,
+        });
+        let traffic = |e: &Event| matches!(e, Event::Send(_) | Event::Arrive(_));
+        if !self.events.iter().any(|(_, e)| traffic(e)) {
+            return None;
+        }
+        self.covers.retain(|id| {
+            (direction.sends() || !SENDING.contains(id))
+                && (direction.receives() || !RECEIVING.contains(id))
+        });
+        if declared.application() == Application::Streams {
+            for (_, event) in &mut self.events {
+                if let Event::Send(message) = event {
+                    message.frame.id = match message.frame.id {
+                        CanId::Standard(raw) => CanId::Standard(0x100 + raw % STREAMS as u16),
+                        CanId::Extended(raw) => CanId::Extended(0x1000_0000 + raw % STREAMS),
+                    };
+                }
+            }
+        }
+        self.declared = declared.clone();
+        Some(self)
     }
 }
 
@@ -191,7 +250,7 @@ pub fn describe(config: &InterfaceConfig) -> String {
 pub fn steady_traffic(config: &InterfaceConfig, seed: u64) -> ClientScenario {
     let mut traffic = Traffic::new(seed, config.format);
     let mut events = Vec::new();
-    traffic.steady(0, 160, &mut events);
+    traffic.steady(0, 160, config.tx_slots, &mut events);
     scenario("steady traffic", config, &[], 160, events)
 }
 
@@ -216,7 +275,7 @@ pub fn bursts(config: &InterfaceConfig, seed: u64) -> ClientScenario {
 pub fn plc_restart(config: &InterfaceConfig, seed: u64) -> ClientScenario {
     let mut traffic = Traffic::new(seed ^ 0x9E57, config.format);
     let mut events = Vec::new();
-    traffic.steady(0, 120, &mut events);
+    traffic.steady(0, 120, config.tx_slots, &mut events);
     events.extend([(37, Event::PlcRestart), (74, Event::PlcRestart)]);
     scenario(
         "PLC restart with the counters not 0",
@@ -232,7 +291,7 @@ pub fn plc_restart(config: &InterfaceConfig, seed: u64) -> ClientScenario {
 pub fn module_restart(config: &InterfaceConfig, seed: u64) -> ClientScenario {
     let mut traffic = Traffic::new(seed ^ 0x40D1, config.format);
     let mut events = Vec::new();
-    traffic.steady(0, 120, &mut events);
+    traffic.steady(0, 120, config.tx_slots, &mut events);
     events.extend([(41, Event::ModuleRestart), (83, Event::ModuleRestart)]);
     scenario(
         "module restart, the master's buffers kept",
@@ -247,7 +306,7 @@ pub fn module_restart(config: &InterfaceConfig, seed: u64) -> ClientScenario {
 pub fn device_restart(config: &InterfaceConfig, seed: u64) -> ClientScenario {
     let mut traffic = Traffic::new(seed ^ 0xDE71, config.format);
     let mut events = Vec::new();
-    traffic.steady(0, 120, &mut events);
+    traffic.steady(0, 120, config.tx_slots, &mut events);
     events.push((53, Event::DeviceRestart));
     scenario(
         "device restart under a running client",
@@ -312,6 +371,11 @@ pub fn interfaces(caps: &Capabilities) -> Vec<InterfaceConfig> {
         list.push(interface(caps.first_format(), QueueMode::Fast, caps));
     }
     list
+}
+
+/// The life cycles of traffic alone, for the edges of the slot range.
+pub fn traffic(config: &InterfaceConfig, seed: u64) -> Vec<ClientScenario> {
+    vec![steady_traffic(config, seed), bursts(config, seed)]
 }
 
 /// The life cycles a client runs on one interface under one master. The

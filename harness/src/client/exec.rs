@@ -8,7 +8,7 @@ use std::time::Duration;
 use canif_model::config::InterfaceConfig;
 use canif_model::image::{ImageLayout, MessageRepr};
 
-use super::{Client, IutError, TaskAnswer, TaskIo};
+use super::{Client, ClientDeclaration, IutError, TaskAnswer, TaskIo};
 use crate::adapter::process::AdapterProcess;
 use crate::adapter::protocol::{Answer, Config, Hex, Request, Tasked, WireMessage};
 use crate::error::IutCause;
@@ -19,8 +19,8 @@ pub(super) const CLIENT_PROTOCOL: u64 = 1;
 pub(super) struct ExecClient {
     process: AdapterProcess,
     layout: ImageLayout,
-    /// What its `started` answer said of telling what was sent.
-    tells_sent: Option<bool>,
+    /// What its `started` answer declared.
+    declaration: ClientDeclaration,
 }
 
 impl ExecClient {
@@ -36,7 +36,8 @@ impl ExecClient {
             protocol: CLIENT_PROTOCOL,
             config: Config::new(config, &layout),
         };
-        let (protocol, tells_sent) = process.exchange(&request, Answer::STARTED)?;
+        let started = process.exchange(&request, Answer::STARTED)?;
+        let protocol = started.protocol;
         if protocol != CLIENT_PROTOCOL {
             return Err(process.fail(
                 IutCause::Protocol,
@@ -45,17 +46,32 @@ impl ExecClient {
             ),
             ));
         }
+        let lines: Vec<String> = started
+            .tells_sent
+            .map(|tells| format!("tells-sent={}", if tells { "yes" } else { "no" }))
+            .into_iter()
+            .chain(started.declares.iter().map(|(k, v)| format!("{k}={v}")))
+            .collect();
+        let declaration = match ClientDeclaration::parse(&lines) {
+            Ok(declaration) => declaration,
+            Err(error) => {
+                return Err(process.fail(
+                    IutCause::Protocol,
+                    format!("declares what cannot be taken in `started`: {error}"),
+                ))
+            }
+        };
         Ok(ExecClient {
             process,
             layout,
-            tells_sent,
+            declaration,
         })
     }
 }
 
 impl Client for ExecClient {
-    fn tells_sent(&self) -> Option<bool> {
-        self.tells_sent
+    fn declaration(&self) -> ClientDeclaration {
+        self.declaration.clone()
     }
 
     fn task(&mut self, io: TaskIo<'_>) -> Result<TaskAnswer, IutError> {

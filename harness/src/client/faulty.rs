@@ -144,11 +144,70 @@ impl fmt::Display for ClientFault {
     }
 }
 
+/// A way of working the documents allow a client only where it declares it
+/// (issue 27): the soft client takes one and declares it, or, to prove the
+/// declaration is what makes it pass, does not.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ClientShape {
+    /// Sends only: never reads the Rx slots nor acknowledges.
+    TxOnly,
+    /// Receives only: refuses every request to send.
+    RxOnly,
+    /// Written for 10 slots each way, whatever the image has.
+    TenSlots,
+    /// Writes each batch ordered by identifier: one stream per identifier.
+    Streams,
+    /// After a restart, acknowledges the batch it finds without reading it (P3).
+    DropsRestartBatch,
+    /// Serves 11-bit interfaces only: it cannot start on another.
+    Only11Bit,
+}
+
+impl ClientShape {
+    pub const ALL: [ClientShape; 6] = [
+        ClientShape::TxOnly,
+        ClientShape::RxOnly,
+        ClientShape::TenSlots,
+        ClientShape::Streams,
+        ClientShape::DropsRestartBatch,
+        ClientShape::Only11Bit,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ClientShape::TxOnly => "tx-only",
+            ClientShape::RxOnly => "rx-only",
+            ClientShape::TenSlots => "ten-slots",
+            ClientShape::Streams => "streams",
+            ClientShape::DropsRestartBatch => "drops-restart-batch",
+            ClientShape::Only11Bit => "only-11-bit",
+        }
+    }
+
+    /// The declaration that makes this shape conform.
+    pub fn declares(self) -> &'static str {
+        match self {
+            ClientShape::TxOnly => "direction=tx",
+            ClientShape::RxOnly => "direction=rx",
+            ClientShape::TenSlots => "slots=10",
+            ClientShape::Streams => "application=streams",
+            ClientShape::DropsRestartBatch => "restart=drops-once",
+            ClientShape::Only11Bit => "formats=11-bit",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<ClientShape> {
+        ClientShape::ALL.into_iter().find(|s| s.name() == name)
+    }
+}
+
 /// A client with at most one fault.
 pub struct FaultyClient {
     layout: ImageLayout,
     queue: QueueMode,
     fault: Option<ClientFault>,
+    /// The way of working it takes, and whether it declares it.
+    shape: Option<(ClientShape, bool)>,
     /// The whole output image as this program keeps it.
     image: Vec<u8>,
     to_send: VecDeque<MessageRepr>,
@@ -165,6 +224,7 @@ impl FaultyClient {
             layout,
             queue,
             fault,
+            shape: None,
             image: vec![0; layout.output_size()],
             to_send: VecDeque::new(),
             own_rx_counter: 0,
@@ -173,8 +233,28 @@ impl FaultyClient {
         }
     }
 
+    /// The same client taking `shape`, declaring it or not.
+    pub fn shaped(self, shape: ClientShape, declared: bool) -> Self {
+        FaultyClient {
+            shape: Some((shape, declared)),
+            ..self
+        }
+    }
+
     fn has(&self, fault: ClientFault) -> bool {
         self.fault == Some(fault)
+    }
+
+    fn takes(&self, shape: ClientShape) -> bool {
+        self.shape.is_some_and(|(s, _)| s == shape)
+    }
+
+    /// The slots its code thinks the image has, each way.
+    fn slots(&self, actual: usize) -> usize {
+        match self.takes(ClientShape::TenSlots) {
+            true => 10,
+            false => actual,
+        }
     }
 
     /// The slot a program means by index `n`.
@@ -184,6 +264,9 @@ impl FaultyClient {
 
     fn read(&mut self, inputs: &[u8], delivered: &mut Vec<MessageRepr>) -> Result<(), IutError> {
         let layout = self.layout;
+        if self.takes(ClientShape::TxOnly) {
+            return Ok(());
+        }
         let image = InputImage::new_checked(&inputs[..layout.input_size()], layout)
             .map_err(|e| IutError::new(crate::error::IutCause::Impossible, e.to_string()))?;
         let outputs = OutputImage::new_checked(&self.image[..], layout)
@@ -210,7 +293,8 @@ impl FaultyClient {
             Some(ClientFault::AcknowledgesAfterFirstMessage) => {
                 usize::from(image.no_of_rx_messages()).min(1)
             }
-            _ => usize::from(image.no_of_rx_messages()).min(layout.rx_slots),
+            _ if first && self.takes(ClientShape::DropsRestartBatch) => 0,
+            _ => usize::from(image.no_of_rx_messages()).min(self.slots(layout.rx_slots)),
         };
         for n in 0..count {
             // Where slot n lies in the master's memory, whether or not it is
@@ -282,14 +366,17 @@ impl FaultyClient {
         if !ready || self.to_send.is_empty() {
             return Ok(());
         }
-        let count = self.to_send.len().min(layout.tx_slots);
+        let count = self.to_send.len().min(self.slots(layout.tx_slots));
+        let mut batch: Vec<MessageRepr> = self.to_send.drain(..count).collect();
+        if self.takes(ClientShape::Streams) {
+            batch.sort_by_key(|m| m.frame.id.raw());
+        }
         // 000's loop runs to NumberOfMessagesToSend inclusive.
         let written = count + usize::from(self.has(ClientFault::SendSample000));
         for n in 0..written {
-            let message = if n < count {
-                self.to_send.pop_front()
-            } else {
-                self.to_send.front().copied()
+            let message = match batch.get(n) {
+                Some(message) => Some(*message),
+                None => self.to_send.front().copied(),
             };
             let Some(mut message) = message.or(Some(MessageRepr {
                 transaction_number: 0,
@@ -361,6 +448,10 @@ impl Client for FaultyClient {
         }
         let mut answer = TaskAnswer::default();
         for (index, request) in io.requests.iter().enumerate() {
+            if self.takes(ClientShape::RxOnly) {
+                answer.refused.push(index);
+                continue;
+            }
             let mut scratch = vec![0u8; layout.tx_message.size];
             let fits = MessageView::new_checked(&mut scratch[..], layout.tx_message)
                 .ok()
@@ -376,5 +467,13 @@ impl Client for FaultyClient {
         self.write(io.inputs, io.outputs)?;
         io.outputs[..size].copy_from_slice(&self.image);
         Ok(answer)
+    }
+
+    fn declaration(&self) -> super::ClientDeclaration {
+        let mut lines = vec!["tells-sent=yes"];
+        if let Some((shape, true)) = self.shape {
+            lines.push(shape.declares());
+        }
+        super::ClientDeclaration::parse(&lines).expect("the soft client's lines are valid")
     }
 }

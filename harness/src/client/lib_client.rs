@@ -11,7 +11,7 @@ use canif_cabi::{CMessage, ClientLibrary, ClientProgram};
 use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_model::image::{ImageLayout, MessageRepr};
 
-use super::{Client, IutError, TaskAnswer, TaskIo};
+use super::{Client, ClientDeclaration, IutError, TaskAnswer, TaskIo};
 use crate::device::lib_iut::{c_config, from_c, to_c};
 use crate::error::IutCause;
 
@@ -23,6 +23,8 @@ pub(crate) struct LibClient {
     /// guard page behind each, so an access past one stops there and is
     /// reported (CL-IMG-001) instead of reading the host's memory.
     guarded: Option<(GuardedImage, GuardedImage)>,
+    /// What `canif_client_declares` said, read before the start.
+    declares: Vec<String>,
 }
 
 impl LibClient {
@@ -33,6 +35,13 @@ impl LibClient {
     ) -> Result<Self, IutError> {
         let library =
             ClientLibrary::open(path).map_err(|e| IutError::new(IutCause::NotStarted, e))?;
+        let declares = library.declares();
+        if let Err(error) = ClientDeclaration::parse(&declares) {
+            return Err(IutError::new(
+                IutCause::Protocol,
+                format!("{}: canif_client_declares: {error}", path.display()),
+            ));
+        }
         let mut c_config = c_config(&Capabilities::everything(), config);
         // The sizes of this interface's images, InfoData or not.
         c_config.input_size = layout.input_size() as u32;
@@ -45,6 +54,7 @@ impl LibClient {
             layout,
             path: path.display().to_string(),
             guarded: None,
+            declares,
         })
     }
 
@@ -120,8 +130,12 @@ impl LibClient {
 }
 
 impl Client for LibClient {
-    fn tells_sent(&self) -> Option<bool> {
-        Some(self.program.tells_sent())
+    fn declaration(&self) -> ClientDeclaration {
+        // A library that exports canif_client_sent tells what was sent; its
+        // lines were checked when it started.
+        let mut declaration = ClientDeclaration::parse(&self.declares).unwrap_or_default();
+        declaration.tells_sent = declaration.tells_sent.or(Some(self.program.tells_sent()));
+        declaration
     }
 
     fn task(&mut self, io: TaskIo<'_>) -> Result<TaskAnswer, IutError> {

@@ -11,6 +11,7 @@
 //! the faulty clients of `faulty`).
 
 pub mod application;
+pub mod declaration;
 mod exec;
 pub mod faulty;
 mod judge;
@@ -25,6 +26,7 @@ use canif_model::client::PlcClient;
 use canif_model::image::{ImageLayout, MessageRepr};
 
 pub use crate::error::IutError;
+pub use declaration::ClientDeclaration;
 
 /// What a client sees in one PLC task.
 ///
@@ -69,18 +71,15 @@ pub trait Client {
     /// One PLC task.
     fn task(&mut self, io: TaskIo<'_>) -> Result<TaskAnswer, IutError>;
 
-    /// Whether the client tells its application which Tx messages were sent
-    /// (CL-TN-002), as it declares: only then do its transaction numbers
-    /// have to tell the messages apart (CL-TN-001; 000 §5.2 lets any number
-    /// be entered). `None`: it declares nothing, and is held to both.
-    fn tells_sent(&self) -> Option<bool> {
-        None
+    /// What the client declares it is: the interfaces it serves, its
+    /// geometry, direction, application model, restart choice, and whether
+    /// it tells its application which Tx messages were sent (only then do
+    /// its transaction numbers have to tell the messages apart: CL-TN-001,
+    /// 000 §5.2). Declaring nothing holds it to everything.
+    fn declaration(&self) -> ClientDeclaration {
+        ClientDeclaration::default()
     }
 }
-
-/// How a client declares, in a run's `iut_declares`, that it tells its
-/// application nothing of what was sent.
-pub const TELLS_NOTHING_SENT: &str = "tells-sent=no";
 
 /// The reference client of 001 §6 (ruling R5) as a client under test: it
 /// keeps its own output image and writes the whole of it every task, so it
@@ -132,7 +131,10 @@ impl Client for ReferenceClient {
         })
     }
 
-    fn tells_sent(&self) -> Option<bool> {
-        Some(true)
+    fn declaration(&self) -> ClientDeclaration {
+        ClientDeclaration {
+            tells_sent: Some(true),
+            ..ClientDeclaration::default()
+        }
     }
 }

@@ -15,11 +15,11 @@ use canif_model::Nanos;
 use super::application::{ClientScenario, Event};
 use super::judge::{self, Breach, Judge, TaskSeen, SENT_REPORTS, TRANSACTION_NUMBERS};
 use super::master::{Master, MasterRun};
-use super::{Client, IutError, TaskIo};
+use super::{Client, ClientDeclaration, IutError, TaskIo};
 use crate::client::played_device::{DeviceSide, PlayedDevice};
 use crate::device::iut::BuildError;
 use crate::error::{HarnessError, IutCause, Refusal, RunError};
-use crate::outcome::{BusFrame, CycleView, Failure, Outcome, ScenarioRun};
+use crate::outcome::{BusFrame, Failure, Outcome, ScenarioRun, TaskView, Timeline};
 use crate::run::Ring;
 
 /// The CAN interface cycle of every client scenario.
@@ -95,10 +95,10 @@ struct Tracker {
     task: u64,
     time: Nanos,
     context: Ring<Note>,
-    /// The same tasks as data, for the report's timing diagram: the client's
-    /// outputs and the inputs it was handed (expected and actual alike: the
-    /// device is the model), and the frames that ended since the task before.
-    timeline: Ring<(CycleView, Vec<Ended>)>,
+    /// The same tasks as data, for the report's timing diagram: the inputs
+    /// each was handed, the outputs it left, its application's requests and
+    /// deliveries, and the frames that ended since the task before.
+    timeline: Ring<(TaskView, Vec<Ended>)>,
     /// Frames that ended since the last task.
     frames: Vec<Ended>,
     /// The scenario's name, for its failures.
@@ -140,14 +140,17 @@ impl Tracker {
             expected: breach.expected,
             actual: breach.actual,
             context: self.context.iter().map(Note::to_string).collect(),
-            timeline: self
-                .timeline
-                .iter()
-                .map(|(view, frames)| CycleView {
-                    frames: frames.iter().map(bus_frame).collect(),
-                    ..view.clone()
-                })
-                .collect(),
+            timeline: Timeline::Tasks {
+                tasks: self
+                    .timeline
+                    .iter()
+                    .map(|(view, frames)| TaskView {
+                        frames: frames.iter().map(bus_frame).collect(),
+                        ..view.clone()
+                    })
+                    .collect(),
+                row: judge::row_of(breach.requirements),
+            },
             frames: None,
             rest: crate::verdict::Rest::Stopped,
             further: Vec::new(),
@@ -159,19 +162,25 @@ impl Tracker {
     }
 
     /// The task just run: its images for the timeline and the history.
-    fn task_ran(&mut self, layout: ImageLayout, inputs: &[u8], outputs: &[u8], delivered: usize) {
+    fn task_ran(
+        &mut self,
+        layout: ImageLayout,
+        (inputs, outputs): (&[u8], &[u8]),
+        (requests, delivered): (usize, usize),
+    ) {
         let inputs = InputImage::new_checked(&inputs[..layout.input_size()], layout);
         let outputs = OutputImage::new_checked(&outputs[..layout.output_size()], layout);
         let (Ok(inputs), Ok(outputs)) = (inputs, outputs) else {
             return;
         };
         let (seen, written) = (InputHeader::parse(&inputs), OutputHeader::parse(&outputs));
-        let view = CycleView {
-            cycle: self.task,
+        let view = TaskView {
+            task: self.task,
             time: self.time,
+            inputs: seen,
             outputs: written,
-            expected: seen,
-            actual: seen,
+            requests,
+            delivered,
             frames: Vec::new(),
         };
         self.timeline.push((view, std::mem::take(&mut self.frames)));
@@ -197,6 +206,8 @@ pub struct Record {
     pub told_sent: Vec<u16>,
     /// The client declared it tells its application nothing of what was sent.
     pub tells_nothing_sent: bool,
+    /// What the client was held to: the run's declaration and its own.
+    pub declared: ClientDeclaration,
     /// Batches, batches of nothing and request-to-bus latency (never judged).
     pub advisories: crate::advisory::Advisories,
     /// Keep `sent` and `delivered` (a counter wrap is 65,600 of each, and
@@ -297,10 +308,7 @@ fn run_with(
         .filter(|id| !record.tells_nothing_sent || !TRANSACTION_NUMBERS.contains(id))
         .cloned()
         .collect();
-    let iut_declares = match record.tells_nothing_sent {
-        true => vec![super::TELLS_NOTHING_SENT.to_string()],
-        false => Vec::new(),
-    };
+    let iut_declares = record.declared.lines();
     let run = ScenarioRun {
         iut_declares,
         advisories: record.advisories,
@@ -343,12 +351,10 @@ fn drive(
         })
     };
     let mut client = built(layout)?;
+    record.declared = declared(&scenario.declared, client.as_ref())?;
     let mut exchange = MasterRun::new(master, layout);
-    let mut judge = Judge::new(layout, config.queue);
-    if client.tells_sent() == Some(false) {
-        judge.numbers_are_free();
-        record.tells_nothing_sent = true;
-    }
+    let mut judge = Judge::new(layout, config.queue, &record.declared);
+    record.tells_nothing_sent = record.declared.tells_sent == Some(false);
     let per_cycle = master.tasks_per_cycle();
     let period = CYCLE / per_cycle;
     let deadline = 2 * per_cycle + 2 * master.confirmation_tasks();
@@ -370,6 +376,7 @@ fn drive(
                 Event::OverstateRxCount => overstate = true,
                 Event::PlcRestart => {
                     client = built(layout)?;
+                    declared(&record.declared, client.as_ref())?;
                     exchange.client_restarted();
                     judge.plc_restarted(device_saw);
                     tracker.note(Note::Restart { task, what: "PLC" });
@@ -378,6 +385,7 @@ fn drive(
                 // wrote, and the new one's first tasks are handed those.
                 Event::ModuleRestart => {
                     client = built(layout)?;
+                    declared(&record.declared, client.as_ref())?;
                     judge.plc_restarted(device_saw);
                     tracker.note(Note::Restart {
                         task,
@@ -441,7 +449,11 @@ fn drive(
                 .filter(|(i, _)| !answer.refused.contains(i))
                 .map(|(_, m)| *m)
                 .collect();
-            tracker.task_ran(layout, &inputs, &buffer, answer.delivered.len());
+            tracker.task_ran(
+                layout,
+                (&inputs, &buffer),
+                (asked.len(), answer.delivered.len()),
+            );
             let breaches = judge.task(
                 task,
                 TaskSeen {
@@ -503,6 +515,18 @@ fn drive(
         tracker.breached(judge.finish(device.queued_rx()));
     }
     Ok(())
+}
+
+/// What the run holds the client to: what was declared before and what this
+/// program declares, together. A program that declares otherwise than the
+/// one before it (or than the run was planned on) broke the exchange.
+fn declared(before: &ClientDeclaration, client: &dyn Client) -> Result<ClientDeclaration, Stop> {
+    before.merged(&client.declaration()).map_err(|error| {
+        Stop::Error(RunError::Iut(IutError::new(
+            IutCause::Protocol,
+            format!("declares otherwise than before: {error}"),
+        )))
+    })
 }
 
 /// Sets NoOfRxMessages = 0xFFFF if the device just entered a new batch.

@@ -53,11 +53,17 @@ pub fn serve_library(
                 None => Answer::error("the image sizes fit no layout of this configuration"),
                 Some(layout) => match start(&config.interface(), layout) {
                     Ok(started) => {
-                        let tells_sent = started.tells_sent();
+                        let declared = started.declaration();
                         client = Some((started, layout));
                         Answer::Started {
                             protocol: PROTOCOL,
-                            tells_sent,
+                            tells_sent: None,
+                            declares: declared
+                                .lines()
+                                .iter()
+                                .filter_map(|l| l.split_once('='))
+                                .map(|(k, v)| (k.to_string(), v.to_string()))
+                                .collect(),
                         }
                     }
                     Err(error) => Answer::error(error.to_string()),

@@ -10,14 +10,15 @@ use canif_model::timing::BitRates;
 use canif_spec::{Profile, ReqId, Scope, Side, Suite};
 
 use super::application::{self, ClientScenario};
+use super::declaration::ClientDeclaration;
 use super::exec::ExecClient;
-use super::faulty::{ClientFault, FaultyClient};
+use super::faulty::{ClientFault, ClientShape, FaultyClient};
 use super::lib_client::LibClient;
 use super::master::Master;
 use super::{judge, rig, Client, ReferenceClient};
 use crate::client::played_device::PlayedDevice;
 use crate::device::iut::BuildError;
-use crate::error::RunError;
+use crate::error::{IutCause, IutError, Refusal, RunError};
 use crate::outcome::{Outcome, ScenarioRun};
 
 use crate::run::{Selection, SelfCheck, Side as RunSide};
@@ -30,6 +31,9 @@ pub enum ClientKind {
     Reference,
     /// The independent client of [`super::faulty`], with at most one fault.
     Faulty(Option<ClientFault>),
+    /// The independent client taking a way of working the documents allow
+    /// only where declared, declaring it or not.
+    Shaped { shape: ClientShape, declared: bool },
     /// A process speaking the adapter protocol's client role.
     Exec { command: String, timeout_ms: u64 },
     /// A shared library of the C ABI's client role: in canif's process, or
@@ -46,6 +50,15 @@ impl ClientKind {
             ClientKind::Reference => "reference client".into(),
             ClientKind::Faulty(None) => "soft client".into(),
             ClientKind::Faulty(Some(fault)) => format!("soft client with fault {fault}"),
+            ClientKind::Shaped { shape, declared } => format!(
+                "soft client taking {}{}",
+                shape.name(),
+                if *declared {
+                    ", declared"
+                } else {
+                    ", undeclared"
+                }
+            ),
             ClientKind::Exec { command, .. } => format!("exec:{command}"),
             ClientKind::Lib { path, .. } => format!("lib:{}", path.display()),
         }
@@ -60,6 +73,18 @@ impl ClientKind {
         Ok(match self {
             ClientKind::Reference => Box::new(ReferenceClient::new(layout)),
             ClientKind::Faulty(fault) => Box::new(FaultyClient::new(layout, config.queue, *fault)),
+            ClientKind::Shaped { shape, .. }
+                if *shape == ClientShape::Only11Bit
+                    && config.format != canif_model::config::FrameFormat::Base11 =>
+            {
+                return Err(BuildError::Failed(crate::error::IutError::new(
+                    crate::error::IutCause::NotStarted,
+                    "the soft client serves 11-bit interfaces only",
+                )))
+            }
+            ClientKind::Shaped { shape, declared } => {
+                Box::new(FaultyClient::new(layout, config.queue, None).shaped(*shape, *declared))
+            }
             ClientKind::Lib { path, host: None } => {
                 Box::new(LibClient::start(path, config, layout).map_err(BuildError::Failed)?)
             }
@@ -83,6 +108,26 @@ impl ClientKind {
                     .map_err(BuildError::Failed)?,
             ),
         })
+    }
+}
+
+impl ClientKind {
+    /// What the client declares: asked of a program started on the first of
+    /// `interfaces` it starts on (it need not serve one to declare), and stopped.
+    pub fn declaration(
+        &self,
+        caps: &Capabilities,
+        interfaces: &[InterfaceConfig],
+    ) -> Result<ClientDeclaration, BuildError> {
+        let mut failed = BuildError::Refused("no interface to start it on".into());
+        for config in interfaces {
+            let layout = ImageLayout::new(config, caps.info_data);
+            match self.build(config, layout) {
+                Ok(client) => return Ok(client.declaration()),
+                Err(error) => failed = error,
+            }
+        }
+        Err(failed)
     }
 }
 
@@ -146,6 +191,9 @@ pub struct ClientOptions {
     /// The master models (all by default).
     pub masters: Vec<Master>,
     pub selection: Selection,
+    /// What the client declares (the command line's and its own together),
+    /// or why it could not be read: then every case is that error.
+    pub declared: Result<ClientDeclaration, RunError>,
 }
 
 impl ClientOptions {
@@ -156,7 +204,45 @@ impl ClientOptions {
             counter_wrap: true,
             masters: Master::ALL.to_vec(),
             selection: Selection::default(),
+            declared: Ok(ClientDeclaration::default()),
         }
+    }
+
+    /// These options with what `kind` declares added to what they declare
+    /// already (the command line's), asked once of a program started on the
+    /// first interface (11-bit, 29-bit, FD, …) the client starts on and the
+    /// command line leaves it: the declaration is the client's, not a profile's.
+    pub fn declared_by(self, kind: &ClientKind) -> Self {
+        let caps = &Capabilities::everything();
+        let declared = self.declared.clone().and_then(|ours| {
+            let interfaces: Vec<InterfaceConfig> = application::interfaces(caps)
+                .iter()
+                .filter_map(|offered| ours.serve(offered).ok())
+                .collect();
+            let theirs = kind
+                .declaration(caps, &interfaces)
+                .map_err(|error| match error {
+                    BuildError::Failed(error) => RunError::Iut(IutError {
+                        what: format!("while its declaration was read: {}", error.what),
+                        ..error
+                    }),
+                    BuildError::Refused(reason) => RunError::Configuration(Refusal::Iut(format!(
+                        "while its declaration was read: {reason}"
+                    ))),
+                })?;
+            ours.merged(&theirs).map_err(|error| {
+                RunError::Iut(IutError::new(
+                    IutCause::Protocol,
+                    format!("its declaration and the command line's: {error}"),
+                ))
+            })
+        });
+        ClientOptions { declared, ..self }
+    }
+
+    /// What the client declares, or nothing where it could not be read.
+    pub fn declaration(&self) -> ClientDeclaration {
+        self.declared.clone().unwrap_or_default()
     }
 }
 
@@ -171,19 +257,70 @@ pub fn masters_for(caps: &Capabilities, options: &ClientOptions) -> Vec<Master> 
         .collect()
 }
 
-/// Every scenario of a profile, each with the master it runs under.
+/// Every scenario of a profile, each with the master it runs under, as the
+/// client's declaration shapes them: on the interfaces it serves, at its
+/// geometry and the edges of the profile's range, in its direction.
 pub fn scenarios(caps: &Capabilities, options: &ClientOptions) -> Vec<(ClientScenario, Master)> {
+    let declared = options.declaration();
     let mut list = Vec::new();
-    for (n, config) in application::interfaces(caps).iter().enumerate() {
-        for master in masters_for(caps, options) {
-            // DC works only with the Fast CAN Queue (PDX-005).
-            if master.distributed_clocks && config.queue != QueueMode::Fast {
-                continue;
+    let masters = masters_for(caps, options);
+    for (n, offered) in application::interfaces(caps).iter().enumerate() {
+        let Ok(served) = declared.serve(offered) else {
+            continue;
+        };
+        for (g, slots) in declared.geometries(caps.max_slots).into_iter().enumerate() {
+            let mut config = served.clone();
+            (config.tx_slots, config.rx_slots) = (slots, slots);
+            for &master in &masters {
+                // DC works only with the Fast CAN Queue (PDX-005).
+                if master.distributed_clocks && config.queue != QueueMode::Fast {
+                    continue;
+                }
+                // The edges of the range: the traffic life cycles, under one master.
+                if g > 0 && master != masters[0] {
+                    continue;
+                }
+                let wrap = options.counter_wrap && n == 0 && g == 0;
+                let life_cycles = match g {
+                    0 => application::scenarios(&config, master, options.seed, wrap),
+                    _ => application::traffic(&config, options.seed),
+                };
+                for scenario in life_cycles {
+                    if let Some(scenario) = scenario.for_client(&declared) {
+                        list.push((scenario, master));
+                    }
+                }
             }
-            let wrap = options.counter_wrap && n == 0;
-            for scenario in application::scenarios(config, master, options.seed, wrap) {
-                list.push((scenario, master));
-            }
+        }
+    }
+    list
+}
+
+/// What the profile offers and the client declares it does not serve, each
+/// with the declaration's reason.
+pub fn not_served(caps: &Capabilities, options: &ClientOptions) -> Vec<(String, String)> {
+    let declared = options.declaration();
+    let mut list = Vec::new();
+    for offered in application::interfaces(caps) {
+        if let Err(why) = declared.serve(&offered) {
+            list.push((application::describe(&offered), why));
+        }
+    }
+    if declared.geometries(caps.max_slots).is_empty() {
+        list.push((
+            format!("every slot count of the profile (1..{})", caps.max_slots),
+            declared.declined_slots(caps.max_slots),
+        ));
+    }
+    for (way, does) in [
+        (
+            "frames the application asks to send",
+            declared.direction().sends(),
+        ),
+        ("frames from the bus", declared.direction().receives()),
+    ] {
+        if !does {
+            list.push((way.to_string(), declared.declined_direction()));
         }
     }
     list
@@ -235,6 +372,19 @@ impl RunSide for ClientOptions {
     }
 
     fn run(&self, kind: &ClientKind, profile: &Profile, case: ClientCase) -> ScenarioRun {
+        if let Err(error) = &self.declared {
+            return ScenarioRun {
+                iut_declares: Vec::new(),
+                advisories: Default::default(),
+                scenario: run_name(&case.scenario, case.master),
+                covers: case.scenario.covers.clone(),
+                outcome: Outcome::Error(error.clone()),
+                cycles: 0,
+                frames_checked: 0,
+                tolerated: 0,
+                elapsed: Duration::ZERO,
+            };
+        }
         let build = |layout| kind.build(&case.scenario.config, layout);
         let open = |caps: &Capabilities, config, rates| self.bus.open(caps, config, rates);
         rig::run(
@@ -256,11 +406,13 @@ impl RunSide for ClientOptions {
 
     fn reach(&self, profile: &Profile, runs: &[ScenarioRun]) -> Reach {
         let mut reach = reach(&profile.model_capabilities(), self);
-        let declared_nothing = runs.iter().any(|r| {
-            r.iut_declares
-                .iter()
-                .any(|d| d == super::TELLS_NOTHING_SENT)
-        });
+        let declared = runs
+            .iter()
+            .filter_map(|r| ClientDeclaration::parse(&r.iut_declares).ok())
+            .fold(self.declaration(), |all, run| {
+                all.merged(&run).unwrap_or(all)
+            });
+        let declared_nothing = declared.tells_sent == Some(false);
         if declared_nothing {
             let why = "the client declares it tells its application nothing of which Tx messages were sent: its transaction numbers may be anything (000 §5.2, \"z. B. eine fortlaufende Nummer\")";
             for id in judge::TRANSACTION_NUMBERS.iter().chain(judge::SENT_REPORTS) {
@@ -290,14 +442,39 @@ fn told_nothing_sent(runs: &[ScenarioRun]) -> bool {
     })
 }
 
-/// What a client run can judge: the PLC side's requirements its cases exercise.
+/// What a client run can judge: the PLC side's requirements its cases
+/// exercise. What only the interfaces, slot counts or direction the client
+/// declines would exercise is not applicable, the declaration the reason.
 pub fn reach(caps: &Capabilities, options: &ClientOptions) -> Reach {
+    let here: std::collections::BTreeSet<String> = checked_ids(caps, options).into_iter().collect();
+    let not_served = not_served(caps, options);
+    let undeclared = ClientOptions {
+        declared: Ok(ClientDeclaration::default()),
+        ..options.clone()
+    };
+    let why = not_served
+        .iter()
+        .map(|(what, why)| format!("{what}: {why}"))
+        .collect::<Vec<_>>()
+        .join("; ");
+    let not_applicable = checked_ids(caps, &undeclared)
+        .into_iter()
+        .filter(|id| !here.contains(id))
+        .map(|id| {
+            (
+                id,
+                format!("only what the client does not serve exercises it ({why})"),
+            )
+        })
+        .collect();
     Reach {
         scope: Scope {
             side: Side::Plc,
             suite: Suite::Interface,
         },
-        here: checked_ids(caps, options).into_iter().collect(),
+        here,
+        not_applicable,
+        not_served,
         left_out: options.selection.not_run(),
         ..Reach::default()
     }

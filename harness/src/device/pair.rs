@@ -142,7 +142,7 @@ impl Pair {
                 );
                 context
             },
-            timeline: self.history.timeline(),
+            timeline: crate::outcome::Timeline::Cycles(self.history.timeline()),
             frames: difference.frames.map(|f| *f),
             rest: crate::verdict::Rest::Stopped,
             further: Vec::new(),

@@ -8,11 +8,11 @@ use std::fmt::Write as _;
 
 use canif_model::frame::Frame;
 
-use crate::outcome::Failure;
+use crate::outcome::{BusFrame, CycleView, Failure, Timeline};
 
-const LABEL_WIDTH: f64 = 300.0;
-const CELL: f64 = 150.0;
-const ROW: f64 = 26.0;
+pub(super) const LABEL_WIDTH: f64 = 300.0;
+pub(super) const CELL: f64 = 150.0;
+pub(super) const ROW: f64 = 26.0;
 /// Width of one byte as `AB ` in the 11-pixel monospace font.
 const BYTE_WIDTH: f64 = 20.0;
 
@@ -58,11 +58,19 @@ fn frame_text(frame: Option<&Frame>, other: Option<&Frame>) -> String {
     text
 }
 
+/// The failure's diagram, drawn for the side under test.
 pub fn timing_diagram(failure: &Failure) -> String {
-    let cycles = &failure.timeline;
-    if cycles.is_empty() {
-        return String::new();
+    match &failure.timeline {
+        Timeline::Cycles(cycles) if !cycles.is_empty() => cycle_diagram(failure, cycles),
+        Timeline::Tasks { tasks, row } if !tasks.is_empty() => {
+            super::task_diagram::task_diagram(failure, tasks, *row)
+        }
+        _ => String::new(),
     }
+}
+
+/// A device's failure: the model's input header against the IUT's.
+fn cycle_diagram(failure: &Failure, cycles: &[CycleView]) -> String {
     let mut rows = vec![
         "Outputs.TxCounter / RxCounter / NoOfTx",
         "Inputs.TxCounter (expected | actual)",
@@ -148,34 +156,13 @@ pub fn timing_diagram(failure: &Failure) -> String {
                 y + 16.0
             );
         }
-        // The frames the text lists under this cycle, placed inside its own
-        // column by when they ended since the cycle before.
-        let previous = if c == 0 {
-            view.time.saturating_sub(1_000_000)
-        } else {
-            cycles[c - 1].time
+        // The frames the text lists under this cycle.
+        let previous = match c {
+            0 => view.time.saturating_sub(1_000_000),
+            _ => cycles[c - 1].time,
         };
-        let span = view.time.saturating_sub(previous).max(1) as f64;
+        bus_frames(&mut svg, x, (previous, view.time), &view.frames, ROW * 6.5);
         let y = ROW * 6.5;
-        for frame in &view.frames {
-            let at = (frame.end.saturating_sub(previous) as f64 / span).clamp(0.0, 1.0);
-            let fx = x + 2.0 + (CELL - 40.0) * at;
-            let colour = if frame.from_iut { "#36c" } else { "#999" };
-            let id = frame.text.split('#').next().unwrap_or("");
-            let _ = writeln!(
-                svg,
-                "<rect class=\"bus-frame\" x=\"{fx:.1}\" y=\"{}\" width=\"3\" height=\"14\" fill=\"{colour}\"><title>{}</title></rect>",
-                y + 4.0,
-                esc(&frame.text)
-            );
-            let _ = writeln!(
-                svg,
-                "<text x=\"{:.1}\" y=\"{}\" font-size=\"8\" fill=\"{colour}\">{}</text>",
-                fx + 4.0,
-                y + 14.0,
-                esc(id)
-            );
-        }
         if let (true, Some(frames)) = (failing, &failure.frames) {
             let _ = writeln!(
                 svg,
@@ -202,4 +189,35 @@ pub fn timing_diagram(failure: &Failure) -> String {
     }
     svg.push_str("</svg>\n");
     svg
+}
+
+/// The frames that ended from `previous` to `now`, placed inside their
+/// column (at `x`, row top `y`) by when they ended.
+pub(super) fn bus_frames(
+    svg: &mut String,
+    x: f64,
+    (previous, now): (canif_model::Nanos, canif_model::Nanos),
+    frames: &[BusFrame],
+    y: f64,
+) {
+    let span = now.saturating_sub(previous).max(1) as f64;
+    for frame in frames {
+        let at = (frame.end.saturating_sub(previous) as f64 / span).clamp(0.0, 1.0);
+        let fx = x + 2.0 + (CELL - 40.0) * at;
+        let colour = if frame.from_iut { "#36c" } else { "#999" };
+        let id = frame.text.split('#').next().unwrap_or("");
+        let _ = writeln!(
+            svg,
+            "<rect class=\"bus-frame\" x=\"{fx:.1}\" y=\"{}\" width=\"3\" height=\"14\" fill=\"{colour}\"><title>{}</title></rect>",
+            y + 4.0,
+            esc(&frame.text)
+        );
+        let _ = writeln!(
+            svg,
+            "<text x=\"{:.1}\" y=\"{}\" font-size=\"8\" fill=\"{colour}\">{}</text>",
+            fx + 4.0,
+            y + 14.0,
+            esc(id)
+        );
+    }
 }

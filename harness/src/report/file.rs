@@ -183,8 +183,20 @@ pub struct ProfileEntry {
     pub cycles: u64,
     pub failures: Vec<FailureEntry>,
     pub frames_checked: u64,
+    /// What the profile offers and the implementation declares it does not
+    /// serve: not run, never a verdict of its own (the requirements only
+    /// these would exercise are not applicable).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub not_served: Vec<NotServedEntry>,
     pub profile: String,
     pub verdicts: BTreeMap<String, VerdictEntry>,
+}
+
+/// Something the implementation declares it does not serve.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct NotServedEntry {
+    pub what: String,
+    pub why: String,
 }
 
 /// One check that ran: a lockstep scenario, a Gherkin scenario, a node check.
@@ -285,6 +297,16 @@ impl ReportFile {
                 .profiles
                 .iter()
                 .map(|p| ProfileEntry {
+                    not_served: p
+                        .lockstep
+                        .reach
+                        .not_served
+                        .iter()
+                        .map(|(what, why)| NotServedEntry {
+                            what: what.clone(),
+                            why: why.clone(),
+                        })
+                        .collect(),
                     advisories: p.lockstep.advisories(),
                     checks: p
                         .checks

@@ -89,6 +89,26 @@ impl RunReport {
                 format!("<li>{}: {}</li>\n", esc(&p.profile), esc(&line))
             })
             .collect();
+        let not_served: String = self
+            .profiles
+            .iter()
+            .flat_map(|p| {
+                p.lockstep.reach.not_served.iter().map(move |(what, why)| {
+                    format!(
+                        "<li>{}: {} — {}</li>\n",
+                        esc(&p.profile),
+                        esc(what),
+                        esc(why)
+                    )
+                })
+            })
+            .collect();
+        let not_served = match not_served.is_empty() {
+            true => String::new(),
+            false => format!(
+                "<h2>Not applicable: what the implementation declares it does not serve</h2>\n<ul id=\"not-served\">{not_served}</ul>\n"
+            ),
+        };
         let advisories = match advisories.is_empty() {
             true => String::new(),
             false => format!(
@@ -211,7 +231,7 @@ pre{{background:#f6f6f6;padding:6px;overflow-x:auto;font-size:12px}} svg.timing{
 <h2>Profiles</h2>
 <table id="profiles"><tr><th>profile</th><th>pass</th><th>fail</th><th>error</th><th>not applicable</th><th>not run</th><th>not testable</th><th>checks</th><th>cycles</th><th>frames checked</th></tr>
 {profiles}</table>
-{advisories}<h2>Failing and erring requirements</h2>
+{not_served}{advisories}<h2>Failing and erring requirements</h2>
 {problems}
 <h2>Failures</h2>
 {failures}

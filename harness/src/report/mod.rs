@@ -7,6 +7,7 @@ mod file;
 mod html;
 mod junit;
 mod summary;
+mod task_diagram;
 
 pub use diagram::timing_diagram;
 pub use file::{

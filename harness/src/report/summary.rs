@@ -108,6 +108,24 @@ impl RunReport {
                 p.lockstep.frames_checked()
             );
         }
+        let not_served: Vec<String> = self
+            .profiles
+            .iter()
+            .flat_map(|p| {
+                p.lockstep
+                    .reach
+                    .not_served
+                    .iter()
+                    .map(move |(what, why)| format!("- {}: {what} — {why}", p.profile))
+            })
+            .collect();
+        if !not_served.is_empty() {
+            md.push_str(
+                "\n## Not applicable: what the implementation declares it does not serve\n\n",
+            );
+            md.push_str(&not_served.join("\n"));
+            md.push('\n');
+        }
         let advised: Vec<String> = self
             .profiles
             .iter()

@@ -5,10 +5,11 @@
 use std::path::Path;
 use std::process::ExitCode;
 
+use canif_features::schedule::declined_by_client;
 use canif_harness::client::master::Master;
 use canif_harness::client::suite::{ClientBus, ClientKind, ClientOptions};
 use canif_harness::device::bus::BusChoice;
-use canif_harness::report::{RunMeta, RunReport};
+use canif_harness::report::{ChoiceEntry, ChoiceSource, RunMeta, RunReport};
 use canif_spec::{Catalogue, Side};
 
 use super::{finish, Plan};
@@ -76,12 +77,47 @@ pub(crate) fn execute(
 ) -> RunReport {
     let options = &plan.options;
     let started = std::time::Instant::now();
+    let declared = options.declaration();
     let meta = RunMeta {
         side: Side::Plc,
         masters: options.masters.iter().map(|m| m.name.to_string()).collect(),
+        // What the client declares: the verdicts rest on it.
+        choices: declared
+            .lines()
+            .into_iter()
+            .map(|choice| ChoiceEntry {
+                choice,
+                how: ChoiceSource::Declared,
+            })
+            .collect(),
         ..RunMeta::new(kind.name(), options.bus.describe(), options.seed, catalogue)
     };
-    let lockstep = plan.run_profiles(catalogue, kind, "task cycles");
+    // The Gherkin scenarios the client's declaration leaves out, with why.
+    let (gherkin, declined): (Vec<_>, Vec<_>) =
+        plan.gherkin
+            .iter()
+            .cloned()
+            .partition(|(profile, scenario)| {
+                let profile = plan.profiles.iter().find(|p| p.name == *profile);
+                profile.is_none_or(|p| declined_by_client(scenario, p, &declared).is_none())
+            });
+    let plan = &Plan {
+        profiles: plan.profiles.clone(),
+        options: plan.options.clone(),
+        product: plan.product.clone(),
+        gherkin,
+    };
+    let mut lockstep = plan.run_profiles(catalogue, kind, "task cycles");
+    for run in &mut lockstep {
+        for (profile, scenario) in declined.iter().filter(|(p, _)| *p == run.profile) {
+            let profile = plan.profiles.iter().find(|p| p.name == *profile);
+            if let Some(why) = profile.and_then(|p| declined_by_client(scenario, p, &declared)) {
+                run.reach
+                    .not_served
+                    .push((format!("gherkin: {}", scenario.id()), why));
+            }
+        }
+    }
     let mut left_out = plan.selection_left_out();
     if !options.counter_wrap {
         left_out.push("the 65,600-cycle counter wrap (--no-counter-wrap)".to_string());

@@ -109,6 +109,14 @@ pub struct Configured {
     pub declares: std::collections::BTreeMap<String, String>,
 }
 
+/// The fields of a `started` answer.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Started {
+    pub protocol: u64,
+    pub tells_sent: Option<bool>,
+    pub declares: std::collections::BTreeMap<String, String>,
+}
+
 /// What the IUT answers.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
@@ -139,11 +147,14 @@ pub enum Answer {
         plan: Vec<PlannedFrame>,
     },
     /// Client role: the program runs, speaking this version; it may say
-    /// whether it tells its application which Tx messages were sent.
+    /// whether it tells its application which Tx messages were sent, and
+    /// declare what it is (docs/plc-side.md), name to value.
     Started {
         protocol: u64,
         #[serde(default, skip_serializing_if = "Option::is_none")]
         tells_sent: Option<bool>,
+        #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+        declares: std::collections::BTreeMap<String, String>,
     },
     /// Client role: the output image the task left, the messages it
     /// delivered to its application, the requests (by index) it cannot send,
@@ -231,15 +242,20 @@ impl Answer {
             other => Err(other),
         },
     };
-    /// `started`: the client role's version the program speaks, and
-    /// whether it says it tells its application what was sent.
-    pub const STARTED: Expected<(u64, Option<bool>)> = Expected {
+    /// `started`: the client role's version the program speaks, whether it
+    /// says it tells its application what was sent, and what it declares.
+    pub const STARTED: Expected<Started> = Expected {
         name: "started",
         take: |answer| match answer {
             Answer::Started {
                 protocol,
                 tells_sent,
-            } => Ok((protocol, tells_sent)),
+                declares,
+            } => Ok(Started {
+                protocol,
+                tells_sent,
+                declares,
+            }),
             other => Err(other),
         },
     };

@@ -12,6 +12,7 @@ use canif_model::handshake;
 use canif_model::image::{ImageLayout, InputImage, MessageRepr, OutputImage};
 use canif_spec::{req_ids, ReqId};
 
+use super::declaration::{Application, ClientDeclaration, RestartChoice};
 use super::master::NEIGHBOUR_PATTERN;
 
 mod rx;
@@ -34,6 +35,23 @@ pub(super) const PLC_RESTART: &[ReqId] = req_ids!["CL-RST-001"];
 pub(super) const DEVICE_RESTART: &[ReqId] = req_ids!["CL-RST-002"];
 pub(super) const TRANSACTION_NUMBERS: &[ReqId] = req_ids!["CL-TN-001"];
 pub(super) const SENT_REPORTS: &[ReqId] = req_ids!["CL-TN-002"];
+
+/// The row of a client's diagram a breach of `requirements` is about.
+pub(super) fn row_of(requirements: &[ReqId]) -> crate::outcome::TaskRow {
+    use crate::outcome::TaskRow;
+    let about = |ids: &[ReqId]| requirements.iter().any(|id| ids.contains(id));
+    if about(TX_REQUEST) || about(TX_UNTOUCHED) {
+        TaskRow::TxCounter
+    } else if about(RX_ACKNOWLEDGE) {
+        TaskRow::RxCounter
+    } else if about(TX_COUNT) || about(IMAGE_BOUNDS) {
+        TaskRow::NoOfTxMessages
+    } else if about(TX_ONCE) || about(TX_ENCODING) || about(DEVICE_RESTART) {
+        TaskRow::Bus
+    } else {
+        TaskRow::Application
+    }
+}
 
 /// What a client did wrong, before the rig adds where.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -138,6 +156,11 @@ pub(super) struct Judge {
     /// The client declares it tells its application nothing of what was
     /// sent: its transaction numbers are free (000 §5.2), CL-TN-001 is not judged.
     numbers_free: bool,
+    /// The application has a stream per identifier: frames of different
+    /// identifiers may pass each other, those of one identifier not.
+    streams: bool,
+    /// P3 as the client declares it; `None`: either.
+    restart_choice: Option<RestartChoice>,
     /// A part of the judge that found a breach stops judging: its state has
     /// left the client's, and what it would say next follows from the
     /// breach (the Tx part: batches, frames on the bus, what was told sent,
@@ -147,15 +170,15 @@ pub(super) struct Judge {
 }
 
 impl Judge {
-    /// A client that declares it tells its application nothing of what was
-    /// sent may enter any transaction number (000 §5.2).
-    pub(super) fn numbers_are_free(&mut self) {
-        self.numbers_free = true;
-    }
-
-    pub(super) fn new(layout: ImageLayout, queue: QueueMode) -> Self {
+    /// The judge of a client declaring `declared`: one that tells its
+    /// application nothing of what was sent may enter any transaction number
+    /// (000 §5.2); one with a stream per identifier keeps each in order; a
+    /// declared restart choice (P3) is the only one it may take.
+    pub(super) fn new(layout: ImageLayout, queue: QueueMode, declared: &ClientDeclaration) -> Self {
         Judge {
-            numbers_free: false,
+            numbers_free: declared.tells_sent == Some(false),
+            streams: declared.application() == Application::Streams,
+            restart_choice: declared.restart,
             tx_broken: false,
             rx_broken: false,
             layout,

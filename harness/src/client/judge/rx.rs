@@ -7,7 +7,10 @@ use std::collections::VecDeque;
 use canif_model::config::QueueMode;
 use canif_model::image::{InputImage, MessageRepr, OutputImage};
 
-use super::{breach, Breach, Judge, FAST_QUEUE, PLC_RESTART, RX_ACKNOWLEDGE, RX_DECODING, RX_ONCE};
+use super::{
+    breach, Breach, Judge, RestartChoice, FAST_QUEUE, PLC_RESTART, RX_ACKNOWLEDGE, RX_DECODING,
+    RX_ONCE,
+};
 
 /// A batch the device entered in the input image.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -21,6 +24,9 @@ pub(super) struct RxBatch {
     pub(super) before_device_restart: bool,
     /// Messages of it delivered so far.
     taken: usize,
+    /// The first batch a restarted program was shown (P3's one batch with
+    /// the Fast CAN Queue, where the device does not wait for it).
+    at_plc_restart: bool,
 }
 
 impl RxBatch {
@@ -31,6 +37,7 @@ impl RxBatch {
             shown: false,
             before_device_restart: false,
             taken: 0,
+            at_plc_restart: false,
         }
     }
 }
@@ -50,6 +57,11 @@ impl Judge {
             self.skip_unshown(counter)?;
         }
         let restart_batch = self.restart_batch.take();
+        if restart_batch.is_some() && self.queue == QueueMode::Fast {
+            if let Some(front) = self.rx.front_mut().filter(|b| b.counter == counter) {
+                front.at_plc_restart = true;
+            }
+        }
         let mut delivered = delivered;
         // P3: a restarted client may deliver the batch it finds once more.
         if let (Some(again), Some(last)) = (restart_batch, &self.last_delivered) {
@@ -58,6 +70,14 @@ impl Judge {
                 && delivered.len() >= n
                 && delivered[..n].iter().eq(last.messages.iter())
             {
+                if self.restart_choice == Some(RestartChoice::DropsOnce) {
+                    return breach(
+                        PLC_RESTART,
+                        format!("the batch of RxCounter {again} in the image at the restart"),
+                        "acknowledged unread: the client declares restart=drops-once",
+                        "delivered again",
+                    );
+                }
                 delivered = &delivered[n..];
             }
         }
@@ -94,6 +114,14 @@ impl Judge {
                 );
             }
             if undelivered {
+                if self.restart_choice == Some(RestartChoice::DeliversTwice) {
+                    return breach(
+                        PLC_RESTART,
+                        format!("the batch of RxCounter {counter} in the image at the restart"),
+                        "delivered: the client declares restart=delivers-twice",
+                        "acknowledged unread",
+                    );
+                }
                 self.rx.pop_front(); // P3: dropped once
             }
         }
@@ -107,6 +135,7 @@ impl Judge {
         };
         for batch in self.rx.drain(..at).collect::<Vec<_>>() {
             let lost_with_restart = self.restart_batch == Some(batch.counter)
+                || batch.at_plc_restart
                 || (batch.before_device_restart && !batch.shown);
             match self.queue {
                 QueueMode::Fast if batch.shown && !lost_with_restart => {
@@ -136,6 +165,15 @@ impl Judge {
     }
 
     fn take_delivered(&mut self, message: &MessageRepr) -> Result<(), Breach> {
+        if self.streams {
+            // Its stream's next message comes first; the others keep their order.
+            if let Some(batch) = self.rx.front_mut() {
+                let id = message.frame.id;
+                if let Some(at) = batch.messages.iter().position(|m| m.frame.id == id) {
+                    batch.messages.make_contiguous()[..=at].rotate_right(1);
+                }
+            }
+        }
         let expected = self.rx.front().and_then(|b| b.messages.front()).copied();
         if expected.as_ref() == Some(message) {
             let batch = self.rx.front_mut().expect("a front message has a batch");

@@ -50,7 +50,7 @@ fn task<'a>(inputs: &'a [u8], before: &'a [u8], after: &'a [u8]) -> TaskSeen<'a>
 #[test]
 fn a_batch_of_what_the_application_asked_passes_and_a_second_before_the_acknowledge_does_not() {
     let layout = layout();
-    let mut judge = Judge::new(layout, QueueMode::Standard);
+    let mut judge = Judge::new(layout, QueueMode::Standard, &Default::default());
     let inputs = vec![0; layout.input_size()];
     let idle = outputs(0, &[]);
     let first = outputs(1, &[request(0x101)]);
@@ -80,7 +80,7 @@ fn more_messages_than_requests_or_another_frame_than_asked_is_a_breach() {
     let inputs = vec![0; layout.input_size()];
     let idle = outputs(0, &[]);
     let invented = outputs(1, &[request(0x7FF)]);
-    let breach = Judge::new(layout, QueueMode::Standard)
+    let breach = Judge::new(layout, QueueMode::Standard, &Default::default())
         .task(
             1,
             task(&inputs, &idle[..layout.output_size()], &invented),
@@ -95,7 +95,7 @@ fn more_messages_than_requests_or_another_frame_than_asked_is_a_breach() {
         accepted: &asked,
         ..task(&inputs, &idle[..layout.output_size()], &invented)
     };
-    let breach = Judge::new(layout, QueueMode::Standard)
+    let breach = Judge::new(layout, QueueMode::Standard, &Default::default())
         .task(1, seen, 100)
         .into_iter()
         .next()
@@ -110,7 +110,7 @@ fn writing_behind_the_image_or_reading_past_the_slots_breaks_its_bounds() {
     let idle = outputs(0, &[]);
     let mut scribbled = idle.clone();
     *scribbled.last_mut().unwrap() = 0;
-    let mut judge = Judge::new(layout, QueueMode::Standard);
+    let mut judge = Judge::new(layout, QueueMode::Standard, &Default::default());
     let breach = judge
         .task(
             1,
@@ -126,7 +126,7 @@ fn writing_behind_the_image_or_reading_past_the_slots_breaks_its_bounds() {
         delivered: &three,
         ..task(&inputs, &idle[..layout.output_size()], &idle)
     };
-    let breach = Judge::new(layout, QueueMode::Standard)
+    let breach = Judge::new(layout, QueueMode::Standard, &Default::default())
         .task(1, seen, 100)
         .into_iter()
         .next()
@@ -145,7 +145,7 @@ fn a_delivered_message_that_is_no_frame_is_a_decoding_breach() {
         not_frames: &not_frames,
         ..task(&inputs, &idle[..layout.output_size()], &idle)
     };
-    let breach = Judge::new(layout, QueueMode::Standard)
+    let breach = Judge::new(layout, QueueMode::Standard, &Default::default())
         .task(1, seen, 100)
         .into_iter()
         .next()

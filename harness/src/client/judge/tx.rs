@@ -86,8 +86,11 @@ impl Judge {
         let mut numbers = Vec::new();
         for slot in 0..usize::from(count) {
             let view = after.tx_message(slot).expect("slot within the slots");
-            let request = self.requests.get(self.batched + slot);
             let written = MessageRepr::parse(&view);
+            if let Ok(written) = &written {
+                self.next_of_its_stream(self.batched + slot, written);
+            }
+            let request = self.requests.get(self.batched + slot);
             match (written, request) {
                 (Ok(written), Some(request)) if written.frame == request.frame => {
                     numbers.push(written.transaction_number)
@@ -101,16 +104,16 @@ impl Judge {
                     )
                 }
                 (written, Some(request)) => {
-                    let sent_before = written.as_ref().is_ok_and(|w| {
-                        self.requests[..self.batched + slot]
-                            .iter()
-                            .any(|r| r.frame == w.frame)
-                    });
+                    // A frame asked for before or after this one: the order
+                    // or the once is broken, not the encoding.
+                    let asked = written
+                        .as_ref()
+                        .is_ok_and(|w| self.requests.iter().any(|r| r.frame == w.frame));
                     let actual = match &written {
                         Ok(w) => w.frame.to_string(),
                         Err(e) => e.to_string(),
                     };
-                    let ids = if sent_before { TX_ONCE } else { TX_ENCODING };
+                    let ids = if asked { TX_ONCE } else { TX_ENCODING };
                     return breach(
                         ids,
                         format!("Tx message {slot}"),
@@ -137,6 +140,20 @@ impl Judge {
         self.batched += usize::from(count);
         self.pending = Some(tx_batch(after));
         Ok(())
+    }
+
+    /// With a stream per identifier, the request `written` may stand for is
+    /// the first not handed over of its identifier: it moves to `at`, the
+    /// others keep their order (one stream: nothing moves).
+    fn next_of_its_stream(&mut self, at: usize, written: &MessageRepr) {
+        if !self.streams {
+            return;
+        }
+        let id = written.frame.id;
+        let first = (at..self.requests.len()).find(|&i| self.requests[i].frame.id == id);
+        if let Some(first) = first {
+            self.requests[at..=first].rotate_right(1);
+        }
     }
 
     /// CL-TN-002: a message is told sent once it is on the bus, once, in

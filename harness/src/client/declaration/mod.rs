@@ -1,0 +1,551 @@
+//! What a PLC-side client declares it is (issue 27): the interfaces it
+//! serves, its slot geometry, its direction, its application model, its
+//! restart choice (P3) and whether it tells its application what was sent.
+//! A client is judged on what it declares; what it does not serve is "not
+//! applicable" with the declaration as the reason, never an error. A client
+//! that declares nothing is held to everything the profile offers.
+//!
+//! Declarations are `name=value` lines (docs/plc-side.md), from the command
+//! line (`--declare`), the protocol's `started` answer (`declares`), a
+//! library's `canif_client_declares` or an in-process [`super::Client`].
+
+use std::fmt;
+
+use canif_model::config::{FrameFormat, InterfaceConfig, QueueMode};
+
+/// The most slots an image has each way (ruling R2).
+pub const MAX_SLOTS: u8 = 32;
+
+/// Which way a client moves frames.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Direction {
+    /// It sends the application's frames and delivers the bus's.
+    #[default]
+    Both,
+    /// It only sends: it never reads the Rx slots.
+    Tx,
+    /// It only receives: it never writes a Tx batch.
+    Rx,
+}
+
+impl Direction {
+    pub fn sends(self) -> bool {
+        self != Direction::Rx
+    }
+
+    pub fn receives(self) -> bool {
+        self != Direction::Tx
+    }
+}
+
+/// How the application above the client hands it frames and takes them.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Application {
+    /// One stream: every frame in the order asked (CL-TX-003, CL-RX-002).
+    #[default]
+    OneStream,
+    /// Several streams, one per CAN identifier, each in order; frames of
+    /// different identifiers may pass each other (a module with a queue per
+    /// identifier or priority). An assumption of this suite: the documents
+    /// know one queue, and an identifier is what a CAN stream is named by.
+    Streams,
+}
+
+/// P3: what a restarted client does with the one batch the image may still
+/// hold from before the restart.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RestartChoice {
+    /// It delivers that batch (again, if the old program had).
+    DeliversTwice,
+    /// It acknowledges it without delivering (dropped, if the old program had not).
+    DropsOnce,
+}
+
+/// The slot counts a client's code runs with, each way (1..=32, R2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SlotRange {
+    pub min: u8,
+    pub max: u8,
+}
+
+impl SlotRange {
+    pub fn contains(self, slots: u8) -> bool {
+        (self.min..=self.max).contains(&slots)
+    }
+}
+
+impl fmt::Display for SlotRange {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.min == self.max {
+            true => write!(f, "{}", self.min),
+            false => write!(f, "{}..{}", self.min, self.max),
+        }
+    }
+}
+
+/// What a client declares; `None` (or the default): it declares nothing there.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct ClientDeclaration {
+    /// The frame formats whose interfaces it serves.
+    pub formats: Option<Vec<FrameFormat>>,
+    /// The queue modes it serves.
+    pub queues: Option<Vec<QueueMode>>,
+    /// Whether it serves interfaces with transaction numbers.
+    pub transaction_numbers: Option<bool>,
+    /// Whether it serves interfaces with time stamps.
+    pub time_stamps: Option<bool>,
+    pub slots: Option<SlotRange>,
+    pub direction: Option<Direction>,
+    pub application: Option<Application>,
+    /// P3; undeclared, either is accepted.
+    pub restart: Option<RestartChoice>,
+    /// Whether it tells its application which Tx messages were sent (CL-TN-*).
+    pub tells_sent: Option<bool>,
+}
+
+/// A declaration's line that cannot be taken.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum DeclarationError {
+    /// Not `name=value`.
+    Malformed {
+        line: String,
+    },
+    UnknownName {
+        name: String,
+    },
+    BadValue {
+        name: &'static str,
+        value: String,
+        expected: &'static str,
+    },
+    /// Declared twice, two ways (say, on the command line and by the client).
+    Conflict {
+        name: &'static str,
+        first: String,
+        second: String,
+    },
+}
+
+impl fmt::Display for DeclarationError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            DeclarationError::Malformed { line } => {
+                write!(f, "`{line}` is not a declaration `name=value`")
+            }
+            DeclarationError::UnknownName { name } => write!(
+                f,
+                "`{name}` is no client declaration; known: {}",
+                Item::ALL.map(Item::name).join(", ")
+            ),
+            DeclarationError::BadValue {
+                name,
+                value,
+                expected,
+            } => write!(f, "{name}={value}: expected {expected}"),
+            DeclarationError::Conflict {
+                name,
+                first,
+                second,
+            } => write!(f, "{name} is declared twice: {first} and {second}"),
+        }
+    }
+}
+
+impl std::error::Error for DeclarationError {}
+
+/// What can be declared, by name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Item {
+    Formats,
+    Queues,
+    TransactionNumbers,
+    TimeStamps,
+    Slots,
+    Direction,
+    Application,
+    Restart,
+    TellsSent,
+}
+
+impl Item {
+    const ALL: [Item; 9] = [
+        Item::Formats,
+        Item::Queues,
+        Item::TransactionNumbers,
+        Item::TimeStamps,
+        Item::Slots,
+        Item::Direction,
+        Item::Application,
+        Item::Restart,
+        Item::TellsSent,
+    ];
+
+    fn name(self) -> &'static str {
+        match self {
+            Item::Formats => "formats",
+            Item::Queues => "queues",
+            Item::TransactionNumbers => "transaction-numbers",
+            Item::TimeStamps => "time-stamps",
+            Item::Slots => "slots",
+            Item::Direction => "direction",
+            Item::Application => "application",
+            Item::Restart => "restart",
+            Item::TellsSent => "tells-sent",
+        }
+    }
+
+    fn expected(self) -> &'static str {
+        match self {
+            Item::Formats => "a list of 11-bit, 29-bit, fd (comma-separated)",
+            Item::Queues => "a list of standard, optimized, fast (comma-separated)",
+            Item::TransactionNumbers | Item::TimeStamps | Item::TellsSent => "yes or no",
+            Item::Slots => "a slot count N or a range MIN..MAX within 1..32",
+            Item::Direction => "tx, rx or both",
+            Item::Application => "one-stream or streams",
+            Item::Restart => "delivers-twice or drops-once",
+        }
+    }
+}
+
+fn format_name(format: FrameFormat) -> &'static str {
+    match format {
+        FrameFormat::Base11 => "11-bit",
+        FrameFormat::Extended29 => "29-bit",
+        FrameFormat::Fd => "fd",
+    }
+}
+
+fn queue_name(queue: QueueMode) -> &'static str {
+    match queue {
+        QueueMode::Standard => "standard",
+        QueueMode::Optimized => "optimized",
+        QueueMode::Fast => "fast",
+    }
+}
+
+fn list<T: Copy>(value: &str, named: impl Fn(&str) -> Option<T>) -> Option<Vec<T>> {
+    value.split(',').map(|v| named(v.trim())).collect()
+}
+
+fn yes_no(value: &str) -> Option<bool> {
+    match value {
+        "yes" => Some(true),
+        "no" => Some(false),
+        _ => None,
+    }
+}
+
+fn slot_range(value: &str) -> Option<SlotRange> {
+    let count = |s: &str| {
+        s.trim()
+            .parse::<u8>()
+            .ok()
+            .filter(|n| (1..=MAX_SLOTS).contains(n))
+    };
+    let (min, max) = match value.split_once("..") {
+        Some((min, max)) => (count(min)?, count(max)?),
+        None => (count(value)?, count(value)?),
+    };
+    (min <= max).then_some(SlotRange { min, max })
+}
+
+/// Sets `slot` to `value` unless it holds another value already.
+fn set<T: PartialEq + fmt::Debug>(
+    slot: &mut Option<T>,
+    value: T,
+    item: Item,
+    line: &str,
+    shown: impl Fn(&T) -> String,
+) -> Result<(), DeclarationError> {
+    match slot {
+        Some(old) if *old != value => Err(DeclarationError::Conflict {
+            name: item.name(),
+            first: format!("{}={}", item.name(), shown(old)),
+            second: line.to_string(),
+        }),
+        _ => {
+            *slot = Some(value);
+            Ok(())
+        }
+    }
+}
+
+impl ClientDeclaration {
+    /// The declaration these lines make, blank lines and `#` comments skipped.
+    pub fn parse<S: AsRef<str>>(lines: &[S]) -> Result<Self, DeclarationError> {
+        let mut declaration = ClientDeclaration::default();
+        for line in lines {
+            declaration.declare(line.as_ref())?;
+        }
+        Ok(declaration)
+    }
+
+    /// Takes one `name=value` line; the same value twice is no conflict.
+    pub fn declare(&mut self, line: &str) -> Result<(), DeclarationError> {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            return Ok(());
+        }
+        let Some((name, value)) = line.split_once('=') else {
+            return Err(DeclarationError::Malformed { line: line.into() });
+        };
+        let (name, value) = (name.trim(), value.trim());
+        let item = Item::ALL
+            .into_iter()
+            .find(|i| i.name() == name)
+            .ok_or_else(|| DeclarationError::UnknownName { name: name.into() })?;
+        let bad = || DeclarationError::BadValue {
+            name: item.name(),
+            value: value.into(),
+            expected: item.expected(),
+        };
+        let line = format!("{name}={value}");
+        match item {
+            Item::Formats => {
+                let formats = list(value, |v| {
+                    [
+                        FrameFormat::Base11,
+                        FrameFormat::Extended29,
+                        FrameFormat::Fd,
+                    ]
+                    .into_iter()
+                    .find(|f| format_name(*f) == v)
+                })
+                .ok_or_else(bad)?;
+                set(&mut self.formats, formats, item, &line, |f| {
+                    f.iter()
+                        .map(|f| format_name(*f))
+                        .collect::<Vec<_>>()
+                        .join(",")
+                })
+            }
+            Item::Queues => {
+                let queues = list(value, |v| {
+                    [QueueMode::Standard, QueueMode::Optimized, QueueMode::Fast]
+                        .into_iter()
+                        .find(|q| queue_name(*q) == v)
+                })
+                .ok_or_else(bad)?;
+                set(&mut self.queues, queues, item, &line, |q| {
+                    q.iter()
+                        .map(|q| queue_name(*q))
+                        .collect::<Vec<_>>()
+                        .join(",")
+                })
+            }
+            Item::TransactionNumbers => {
+                let v = yes_no(value).ok_or_else(bad)?;
+                set(&mut self.transaction_numbers, v, item, &line, yes_no_name)
+            }
+            Item::TimeStamps => {
+                let v = yes_no(value).ok_or_else(bad)?;
+                set(&mut self.time_stamps, v, item, &line, yes_no_name)
+            }
+            Item::TellsSent => {
+                let v = yes_no(value).ok_or_else(bad)?;
+                set(&mut self.tells_sent, v, item, &line, yes_no_name)
+            }
+            Item::Slots => {
+                let range = slot_range(value).ok_or_else(bad)?;
+                set(&mut self.slots, range, item, &line, SlotRange::to_string)
+            }
+            Item::Direction => {
+                let direction = match value {
+                    "tx" => Direction::Tx,
+                    "rx" => Direction::Rx,
+                    "both" => Direction::Both,
+                    _ => return Err(bad()),
+                };
+                set(&mut self.direction, direction, item, &line, |d| {
+                    direction_name(*d).into()
+                })
+            }
+            Item::Application => {
+                let application = match value {
+                    "one-stream" => Application::OneStream,
+                    "streams" => Application::Streams,
+                    _ => return Err(bad()),
+                };
+                set(&mut self.application, application, item, &line, |a| {
+                    application_name(*a).into()
+                })
+            }
+            Item::Restart => {
+                let choice = match value {
+                    "delivers-twice" => RestartChoice::DeliversTwice,
+                    "drops-once" => RestartChoice::DropsOnce,
+                    _ => return Err(bad()),
+                };
+                set(&mut self.restart, choice, item, &line, |c| {
+                    restart_name(*c).into()
+                })
+            }
+        }
+    }
+
+    /// This declaration and `other`'s lines together; a value declared two
+    /// ways is an error naming both.
+    pub fn merged(&self, other: &ClientDeclaration) -> Result<Self, DeclarationError> {
+        let mut merged = self.clone();
+        for line in other.lines() {
+            merged.declare(&line)?;
+        }
+        Ok(merged)
+    }
+
+    /// The declaration as `name=value` lines, in a fixed order.
+    pub fn lines(&self) -> Vec<String> {
+        let join = |names: Vec<&str>| names.join(",");
+        let mut lines = Vec::new();
+        let mut line = |item: Item, value: Option<String>| {
+            if let Some(value) = value {
+                lines.push(format!("{}={value}", item.name()));
+            }
+        };
+        line(
+            Item::Formats,
+            self.formats
+                .as_ref()
+                .map(|f| join(f.iter().map(|f| format_name(*f)).collect())),
+        );
+        line(
+            Item::Queues,
+            self.queues
+                .as_ref()
+                .map(|q| join(q.iter().map(|q| queue_name(*q)).collect())),
+        );
+        line(
+            Item::TransactionNumbers,
+            self.transaction_numbers.as_ref().map(yes_no_name),
+        );
+        line(Item::TimeStamps, self.time_stamps.as_ref().map(yes_no_name));
+        line(Item::Slots, self.slots.map(|s| s.to_string()));
+        line(
+            Item::Direction,
+            self.direction.map(|d| direction_name(d).into()),
+        );
+        line(
+            Item::Application,
+            self.application.map(|a| application_name(a).into()),
+        );
+        line(Item::Restart, self.restart.map(|c| restart_name(c).into()));
+        line(Item::TellsSent, self.tells_sent.as_ref().map(yes_no_name));
+        lines
+    }
+
+    pub fn direction(&self) -> Direction {
+        self.direction.unwrap_or_default()
+    }
+
+    pub fn application(&self) -> Application {
+        self.application.unwrap_or_default()
+    }
+
+    /// The interface this client is run on where the profile offers
+    /// `offered`: the same, without transaction numbers or time stamps where
+    /// the client declines them and the interface lets them off; or why it
+    /// does not serve it.
+    pub fn serve(&self, offered: &InterfaceConfig) -> Result<InterfaceConfig, String> {
+        let mut config = offered.clone();
+        if let Some(formats) = &self.formats {
+            if !formats.contains(&config.format) {
+                return Err(self.declined(Item::Formats));
+            }
+        }
+        if let Some(queues) = &self.queues {
+            if !queues.contains(&config.queue) {
+                return Err(self.declined(Item::Queues));
+            }
+        }
+        // FD messages always carry both (LAY-FD); elsewhere they are options.
+        let fixed = config.format == FrameFormat::Fd;
+        if self.transaction_numbers == Some(false) && config.transaction_number {
+            if fixed {
+                return Err(self.declined(Item::TransactionNumbers));
+            }
+            config.transaction_number = false;
+            config.time_stamp = false;
+        }
+        if self.time_stamps == Some(false) && config.time_stamp {
+            if fixed {
+                return Err(self.declined(Item::TimeStamps));
+            }
+            config.time_stamp = false;
+        }
+        Ok(config)
+    }
+
+    /// The slot counts a client is run at on a profile with `max_slots`: the
+    /// default 8 (or the nearest the client takes), and the edges 1 and the
+    /// profile's most, each where the client takes it.
+    pub fn geometries(&self, max_slots: u8) -> Vec<u8> {
+        let range = self.slots.unwrap_or(SlotRange {
+            min: 1,
+            max: MAX_SLOTS,
+        });
+        let (low, high) = (range.min, range.max.min(max_slots));
+        if low > high {
+            return Vec::new();
+        }
+        let mut list = vec![8.clamp(low, high), low, high];
+        list.dedup();
+        list.sort_by_key(|n| (*n != 8.clamp(low, high), *n));
+        list.dedup();
+        list
+    }
+
+    /// Why an interface is not served: the declaration's line.
+    fn declined(&self, item: Item) -> String {
+        let line = self
+            .lines()
+            .into_iter()
+            .find(|l| l.starts_with(&format!("{}=", item.name())))
+            .unwrap_or_default();
+        format!("the client declares {line}")
+    }
+
+    /// Why no slot count of a profile with `max_slots` is served.
+    pub fn declined_slots(&self, max_slots: u8) -> String {
+        format!(
+            "{}, outside the profile's 1..{max_slots}",
+            self.declined(Item::Slots)
+        )
+    }
+
+    /// Why traffic one way is not served.
+    pub fn declined_direction(&self) -> String {
+        self.declined(Item::Direction)
+    }
+}
+
+fn yes_no_name(v: &bool) -> String {
+    match v {
+        true => "yes".into(),
+        false => "no".into(),
+    }
+}
+
+fn direction_name(d: Direction) -> &'static str {
+    match d {
+        Direction::Both => "both",
+        Direction::Tx => "tx",
+        Direction::Rx => "rx",
+    }
+}
+
+fn application_name(a: Application) -> &'static str {
+    match a {
+        Application::OneStream => "one-stream",
+        Application::Streams => "streams",
+    }
+}
+
+fn restart_name(c: RestartChoice) -> &'static str {
+    match c {
+        RestartChoice::DeliversTwice => "delivers-twice",
+        RestartChoice::DropsOnce => "drops-once",
+    }
+}
+
+#[cfg(test)]
+mod tests;
