@@ -198,7 +198,11 @@ int canif_client_task(void *handle, const uint8_t *inputs, size_t inputs_size, u
         }
     }
     /* Read: a new Inputs.RxCounter means NoOfRxMessages new messages. */
+#ifdef CANIF_TX_ONLY /* tests/c_abi_client.rs: a client that only sends, declaring it or not */
+    if (0) {
+#else
     if (get(inputs + 2, 2) != get(c->image + 2, 2)) {
+#endif
         size_t n = get(inputs + 4, 2);
 #ifdef CANIF_FAULT_TRUSTS_COUNT /* tests/c_abi_client.rs: checks every slot NoOfRxMessages names, past the image */
         volatile uint8_t seen = 0;
@@ -236,6 +240,20 @@ int canif_client_task(void *handle, const uint8_t *inputs, size_t inputs_size, u
     memcpy(outputs, c->image, outputs_size);
     return 0;
 }
+
+#ifndef CANIF_UNDECLARED /* tests/c_abi_client.rs builds it without: optional */
+/* What this client is (docs/plc-side.md): it serves every interface the
+ * profile offers at any slot count, both ways, as one stream; a restarted
+ * program delivers the batch it finds in the image, which the program before
+ * may have delivered already (P3). */
+const char *canif_client_declares(void) {
+#ifdef CANIF_TX_ONLY
+    return "direction=tx\nslots=1..32\napplication=one-stream\nrestart=delivers-twice\n";
+#else
+    return "direction=both\nslots=1..32\napplication=one-stream\nrestart=delivers-twice\n";
+#endif
+}
+#endif
 
 #ifndef CANIF_WITHOUT_SENT /* tests/c_abi_client.rs builds it without: optional */
 size_t canif_client_sent(void *handle, uint16_t *numbers, size_t capacity) {

@@ -160,7 +160,13 @@ def main():
             return
         if kind == "start":
             client = Client(request["config"])
-            answer = {"type": "started", "protocol": 1, "tells_sent": True}
+            # What this client is (docs/plc-side.md): any slot count, both
+            # ways, one stream; a restarted program (a new process) delivers
+            # the batch it finds in the image, perhaps again (P3).
+            answer = {"type": "started", "protocol": 1, "tells_sent": True,
+                      "declares": {"slots": "1..32", "direction": "both",
+                                   "application": "one-stream",
+                                   "restart": "delivers-twice"}}
         elif kind == "task" and client is not None:
             answer = client.task(bytes.fromhex(request["inputs"]), request["requests"])
         else:
