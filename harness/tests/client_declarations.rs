@@ -119,6 +119,31 @@ fn a_client_with_a_stream_per_identifier_keeps_each_in_order() {
     assert!(with(&undeclared, VerdictKind::Fail).contains("CL-TX-003"));
 }
 
+/// Covers: CL-TX-003, CL-RX-002
+#[test]
+fn a_byte_stream_client_may_cut_the_bytes_into_frames_its_own_way() {
+    conforms(&shaped(ClientShape::ByteStream, true), "fc510x", "");
+    let undeclared = verdicts(&shaped(ClientShape::ByteStream, false), "fc510x", &[]);
+    let failed = with(&undeclared, VerdictKind::Fail);
+    assert!(
+        failed.contains("CL-TX-003") || failed.contains("CL-TX-004"),
+        "{failed:?}"
+    );
+    // FD frames cannot be cut at any byte: not served, with why.
+    let catalogue = Catalogue::embedded().unwrap();
+    let kind = shaped(ClientShape::ByteStream, true);
+    let profile = catalogue.profile("fc532x").unwrap();
+    let run = run_profile(profile, &kind, &options(&[]).declared_by(&kind), |_| {});
+    assert!(
+        run.reach
+            .not_served
+            .iter()
+            .any(|(what, why)| what.starts_with("FD") && why.contains("application=byte-stream")),
+        "{:?}",
+        run.reach.not_served
+    );
+}
+
 /// Covers: CL-RST-001
 #[test]
 fn the_restart_choice_is_either_undeclared_and_the_declared_one_only_declared() {

@@ -211,13 +211,34 @@ impl ClientScenario {
             (direction.sends() || !SENDING.contains(id))
                 && (direction.receives() || !RECEIVING.contains(id))
         });
-        if declared.application() == Application::Streams {
-            for (_, event) in &mut self.events {
-                if let Event::Send(message) = event {
-                    message.frame.id = match message.frame.id {
-                        CanId::Standard(raw) => CanId::Standard(0x100 + raw % STREAMS as u16),
-                        CanId::Extended(raw) => CanId::Extended(0x1000_0000 + raw % STREAMS),
+        let stream = |id: CanId| match id {
+            CanId::Standard(raw) => CanId::Standard(0x100 + raw % STREAMS as u16),
+            CanId::Extended(raw) => CanId::Extended(0x1000_0000 + raw % STREAMS),
+        };
+        match declared.application() {
+            Application::OneStream => {}
+            Application::Streams => {
+                for (_, event) in &mut self.events {
+                    if let Event::Send(message) = event {
+                        message.frame.id = stream(message.frame.id);
+                    }
+                }
+            }
+            // Bytes on few identifiers, both ways: data frames that carry some.
+            Application::ByteStream => {
+                for (_, event) in &mut self.events {
+                    let frame = match event {
+                        Event::Send(message) => &mut message.frame,
+                        Event::Arrive(frame) => frame,
+                        _ => continue,
                     };
+                    let id = stream(frame.id);
+                    let data = match frame.data() {
+                        [] => vec![id.raw() as u8],
+                        data => data.to_vec(),
+                    };
+                    *frame =
+                        Frame::classic(id, &data[..data.len().min(8)]).expect("at most 8 bytes");
                 }
             }
         }

@@ -157,6 +157,8 @@ pub enum ClientShape {
     TenSlots,
     /// Writes each batch ordered by identifier: one stream per identifier.
     Streams,
+    /// Fills each frame with the next bytes of its identifier: a byte stream.
+    ByteStream,
     /// After a restart, acknowledges the batch it finds without reading it (P3).
     DropsRestartBatch,
     /// Serves 11-bit interfaces only: it cannot start on another.
@@ -164,11 +166,12 @@ pub enum ClientShape {
 }
 
 impl ClientShape {
-    pub const ALL: [ClientShape; 6] = [
+    pub const ALL: [ClientShape; 7] = [
         ClientShape::TxOnly,
         ClientShape::RxOnly,
         ClientShape::TenSlots,
         ClientShape::Streams,
+        ClientShape::ByteStream,
         ClientShape::DropsRestartBatch,
         ClientShape::Only11Bit,
     ];
@@ -179,6 +182,7 @@ impl ClientShape {
             ClientShape::RxOnly => "rx-only",
             ClientShape::TenSlots => "ten-slots",
             ClientShape::Streams => "streams",
+            ClientShape::ByteStream => "byte-stream",
             ClientShape::DropsRestartBatch => "drops-restart-batch",
             ClientShape::Only11Bit => "only-11-bit",
         }
@@ -191,6 +195,7 @@ impl ClientShape {
             ClientShape::RxOnly => "direction=rx",
             ClientShape::TenSlots => "slots=10",
             ClientShape::Streams => "application=streams",
+            ClientShape::ByteStream => "application=byte-stream",
             ClientShape::DropsRestartBatch => "restart=drops-once",
             ClientShape::Only11Bit => "formats=11-bit",
         }
@@ -247,6 +252,37 @@ impl FaultyClient {
 
     fn takes(&self, shape: ClientShape) -> bool {
         self.shape.is_some_and(|(s, _)| s == shape)
+    }
+
+    /// Up to `slots` frames, each filled with the next bytes of its
+    /// identifier from the requests in a row that share it (a byte stream
+    /// cut its own way); a request partly taken keeps the rest.
+    fn packed(&mut self, slots: usize) -> Vec<MessageRepr> {
+        let mut batch = Vec::new();
+        while batch.len() < slots {
+            let Some(first) = self.to_send.pop_front() else {
+                break;
+            };
+            let id = first.frame.id;
+            let mut bytes = first.frame.data().to_vec();
+            while let Some(next) = self.to_send.front_mut().filter(|n| n.frame.id == id) {
+                let data = next.frame.data();
+                let take = (8 - bytes.len()).min(data.len());
+                if take == 0 {
+                    break;
+                }
+                bytes.extend_from_slice(&data[..take]);
+                match Frame::classic(id, &data[take..]) {
+                    Ok(rest) if take < data.len() => next.frame = rest,
+                    _ => {
+                        self.to_send.pop_front();
+                    }
+                }
+            }
+            let frame = Frame::classic(id, &bytes).expect("at most 8 bytes");
+            batch.push(MessageRepr { frame, ..first });
+        }
+        batch
     }
 
     /// The slots its code thinks the image has, each way.
@@ -366,8 +402,15 @@ impl FaultyClient {
         if !ready || self.to_send.is_empty() {
             return Ok(());
         }
-        let count = self.to_send.len().min(self.slots(layout.tx_slots));
-        let mut batch: Vec<MessageRepr> = self.to_send.drain(..count).collect();
+        let slots = self.slots(layout.tx_slots);
+        let mut batch: Vec<MessageRepr> = match self.takes(ClientShape::ByteStream) {
+            true => self.packed(slots),
+            false => self
+                .to_send
+                .drain(..self.to_send.len().min(slots))
+                .collect(),
+        };
+        let count = batch.len();
         if self.takes(ClientShape::Streams) {
             batch.sort_by_key(|m| m.frame.id.raw());
         }

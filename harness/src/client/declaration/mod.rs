@@ -49,6 +49,12 @@ pub enum Application {
     /// identifier or priority). An assumption of this suite: the documents
     /// know one queue, and an identifier is what a CAN stream is named by.
     Streams,
+    /// A byte stream per CAN identifier: the application hands the client
+    /// bytes, and the client may cut them into frames as it likes (fill a
+    /// frame from several requests, split one); the bytes of each identifier
+    /// must arrive in order, once. Classic frames only: an FD frame's length
+    /// is one of 16 sizes, so a stream of them cannot be cut at any byte.
+    ByteStream,
 }
 
 /// P3: what a restarted client does with the one batch the image may still
@@ -201,7 +207,7 @@ impl Item {
             Item::TransactionNumbers | Item::TimeStamps | Item::TellsSent => "yes or no",
             Item::Slots => "a slot count N or a range MIN..MAX within 1..32",
             Item::Direction => "tx, rx or both",
-            Item::Application => "one-stream or streams",
+            Item::Application => "one-stream, streams or byte-stream",
             Item::Restart => "delivers-twice or drops-once",
         }
     }
@@ -364,6 +370,7 @@ impl ClientDeclaration {
                 let application = match value {
                     "one-stream" => Application::OneStream,
                     "streams" => Application::Streams,
+                    "byte-stream" => Application::ByteStream,
                     _ => return Err(bad()),
                 };
                 set(&mut self.application, application, item, &line, |a| {
@@ -459,6 +466,12 @@ impl ClientDeclaration {
         }
         // FD messages always carry both (LAY-FD); elsewhere they are options.
         let fixed = config.format == FrameFormat::Fd;
+        if fixed && self.application == Some(Application::ByteStream) {
+            return Err(format!(
+                "{}: a byte stream is judged on classic frames (an FD frame cannot be cut at any byte)",
+                self.declined(Item::Application)
+            ));
+        }
         if self.transaction_numbers == Some(false) && config.transaction_number {
             if fixed {
                 return Err(self.declined(Item::TransactionNumbers));
@@ -537,6 +550,7 @@ fn application_name(a: Application) -> &'static str {
     match a {
         Application::OneStream => "one-stream",
         Application::Streams => "streams",
+        Application::ByteStream => "byte-stream",
     }
 }
 

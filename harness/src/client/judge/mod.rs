@@ -159,6 +159,9 @@ pub(super) struct Judge {
     /// The application has a stream per identifier: frames of different
     /// identifiers may pass each other, those of one identifier not.
     streams: bool,
+    /// The application's streams are bytes: a frame may carry the next
+    /// bytes of its identifier however the client cut them.
+    byte_stream: bool,
     /// P3 as the client declares it; `None`: either.
     restart_choice: Option<RestartChoice>,
     /// A part of the judge that found a breach stops judging: its state has
@@ -177,7 +180,8 @@ impl Judge {
     pub(super) fn new(layout: ImageLayout, queue: QueueMode, declared: &ClientDeclaration) -> Self {
         Judge {
             numbers_free: declared.tells_sent == Some(false),
-            streams: declared.application() == Application::Streams,
+            streams: declared.application() != Application::OneStream,
+            byte_stream: declared.application() == Application::ByteStream,
             restart_choice: declared.restart,
             tx_broken: false,
             rx_broken: false,

@@ -165,7 +165,13 @@ impl Judge {
     }
 
     fn take_delivered(&mut self, message: &MessageRepr) -> Result<(), Breach> {
-        if self.streams {
+        if self.byte_stream {
+            // The next bytes of its identifier, however the client cut them.
+            if let Some(batch) = self.rx.front_mut() {
+                let pending = std::mem::take(&mut batch.messages).into();
+                batch.messages = super::tx::cut(pending, message).into();
+            }
+        } else if self.streams {
             // Its stream's next message comes first; the others keep their order.
             if let Some(batch) = self.rx.front_mut() {
                 let id = message.frame.id;

@@ -152,3 +152,27 @@ fn a_delivered_message_that_is_no_frame_is_a_decoding_breach() {
         .unwrap();
     assert_eq!(breach.requirements, RX_DECODING);
 }
+
+#[test]
+fn a_byte_stream_is_cut_where_the_client_cut_it() {
+    use canif_model::frame::{CanId, Frame};
+    let message = |id: u16, data: &[u8]| MessageRepr {
+        transaction_number: 0,
+        frame: Frame::classic(CanId::Standard(id), data).unwrap(),
+        time_stamp: 0,
+    };
+    let pending = vec![
+        message(1, &[1, 2, 3]),
+        message(2, &[9]),
+        message(1, &[4, 5, 6, 7, 8, 9]),
+    ];
+    // Eight bytes of identifier 1 from two requests; the rest stays behind.
+    let taken = message(1, &[1, 2, 3, 4, 5, 6, 7, 8]);
+    assert_eq!(
+        super::tx::cut(pending.clone(), &taken),
+        vec![taken, message(2, &[9]), message(1, &[9])]
+    );
+    // Bytes that are not the next of their identifier change nothing.
+    assert_eq!(super::tx::cut(pending.clone(), &message(1, &[2])), pending);
+    assert_eq!(super::tx::cut(pending.clone(), &message(3, &[1])), pending);
+}

@@ -146,6 +146,11 @@ impl Judge {
     /// the first not handed over of its identifier: it moves to `at`, the
     /// others keep their order (one stream: nothing moves).
     fn next_of_its_stream(&mut self, at: usize, written: &MessageRepr) {
+        if self.byte_stream {
+            let pending = self.requests.split_off(at);
+            self.requests.extend(cut(pending, written));
+            return;
+        }
         if !self.streams {
             return;
         }
@@ -235,4 +240,40 @@ pub(super) fn tx_batch(image: &OutputImage<&[u8]>) -> TxBatch {
         count,
         slots,
     }
+}
+
+/// A byte stream's `pending` messages, oldest first, with `taken`'s bytes
+/// cut from its identifier's: `taken` first, the bytes it carried gone from
+/// those it came from (a message partly taken keeps the rest), the other
+/// identifiers' untouched. Unchanged where `taken` is not the next bytes of
+/// its identifier (the ordinary comparison then says what is wrong).
+pub(super) fn cut(pending: Vec<MessageRepr>, taken: &MessageRepr) -> Vec<MessageRepr> {
+    let id = taken.frame.id;
+    let want = taken.frame.data();
+    let next: Vec<u8> = pending
+        .iter()
+        .filter(|m| m.frame.id == id)
+        .flat_map(|m| m.frame.data().iter().copied())
+        .take(want.len())
+        .collect();
+    if want.is_empty() || taken.frame.is_remote() || next != want {
+        return pending;
+    }
+    let mut left = want.len();
+    let mut rest = Vec::with_capacity(pending.len());
+    for message in pending {
+        if left == 0 || message.frame.id != id {
+            rest.push(message);
+            continue;
+        }
+        let data = message.frame.data();
+        if data.len() <= left {
+            left -= data.len();
+            continue;
+        }
+        let frame = Frame::classic(id, &data[left..]).expect("fewer bytes than it had");
+        left = 0;
+        rest.push(MessageRepr { frame, ..message });
+    }
+    std::iter::once(*taken).chain(rest).collect()
 }
