@@ -25,10 +25,12 @@ const CAUGHT: &[(ClientFault, &str, &str)] = &[
         "exactly NoOfRxMessages",
         "CL-RX-001",
     ),
+    // Out of step after the restart, its own counter is judged by what its
+    // application sees (P1): the batch it reads again.
     (
         ClientFault::OwnRxCounter,
         "After a PLC restart",
-        "CL-RX-001",
+        "CL-RX-002",
     ),
     (
         ClientFault::IgnoresRxCounterZero,

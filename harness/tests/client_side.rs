@@ -78,7 +78,13 @@ const KILL_TABLE: &[(ClientFault, &[&str])] = &[
         ClientFault::DecodeOverNoOfTxMessages,
         &["CL-FQ-001", "CL-RX-001", "CL-RX-002", "CL-RX-003"],
     ),
-    (ClientFault::OwnRxCounter, &["CL-FQ-001", "CL-RX-001"]),
+    // After a restart its own counter is out of step: judged by what its
+    // application sees (P1), the batch it reads again after a PLC restart
+    // (CL-RX-002) and nothing more after a device restart (CL-RST-002).
+    (
+        ClientFault::OwnRxCounter,
+        &["CL-FQ-001", "CL-RST-002", "CL-RX-002"],
+    ),
     // Also CL-TX-001 since the triple-buffered separate input update hands
     // it an old image to count on from.
     (

@@ -164,6 +164,12 @@ pub(super) struct Judge {
     byte_stream: bool,
     /// P3 as the client declares it; `None`: either.
     restart_choice: Option<RestartChoice>,
+    /// A restart put the client's Outputs.RxCounter out of step with the
+    /// device's, this many tasks ago: until the images it is handed come from
+    /// after the restart (the exchange's dead time) and it copies
+    /// Inputs.RxCounter again, a value of its own is judged by what its
+    /// application sees (P1), not as such.
+    out_of_step: Option<u64>,
     /// A part of the judge that found a breach stops judging: its state has
     /// left the client's, and what it would say next follows from the
     /// breach (the Tx part: batches, frames on the bus, what was told sent,
@@ -183,6 +189,7 @@ impl Judge {
             streams: declared.application() != Application::OneStream,
             byte_stream: declared.application() == Application::ByteStream,
             restart_choice: declared.restart,
+            out_of_step: None,
             tx_broken: false,
             rx_broken: false,
             layout,
@@ -309,6 +316,7 @@ impl Judge {
         self.reported = self.batched;
         self.requests.truncate(self.batched);
         self.restarted = true;
+        self.out_of_step = Some(0);
         self.after_plc_restart = true;
         self.restart_batch = Some(self.seen_rx_counter);
         // What it had handed over may still be in the image: the device takes
@@ -347,6 +355,7 @@ impl Judge {
         self.pending = None;
         self.device_restart = Some(task);
         self.device_restarted = true;
+        self.out_of_step = Some(0);
         self.last_device_restart = Some(task);
     }
 
@@ -409,6 +418,10 @@ impl Judge {
             // What the device before its restart entered and the client did
             // not read by now is gone with its memory (inherent, CL-RST-002).
             self.rx.retain(|b| !b.before_device_restart);
+        }
+        if let Some(tasks) = self.out_of_step {
+            let copied = after.rx_counter() == inputs.rx_counter();
+            self.out_of_step = (tasks <= deadline || !copied).then_some(tasks + 1);
         }
         if !self.rx_broken {
             let judged = self.judge_rx(&inputs, &before, &after, seen.delivered);
