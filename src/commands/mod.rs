@@ -103,33 +103,33 @@ pub(crate) fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
     })
 }
 
-/// The client named on the command line for `--side plc`, or the exit code
-/// of a usage error. A fault without `--iut` picks the soft client.
-pub(crate) fn resolve_client(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
-    let faults: Vec<ClientFault> = iut
-        .fault
+/// The values `names` name, or the exit code of a usage error naming the
+/// first that names none.
+fn named<T>(
+    names: &[String],
+    from_name: fn(&str) -> Option<T>,
+    what: &str,
+) -> Result<Vec<T>, ExitCode> {
+    names
         .iter()
         .map(|name| {
-            ClientFault::from_name(name).ok_or_else(|| {
-                eprintln!("unknown client fault `{name}`; `canif faults` lists them");
+            from_name(name).ok_or_else(|| {
+                eprintln!("unknown {what} `{name}`; `canif faults` lists them");
                 ExitCode::from(2)
             })
         })
-        .collect::<Result<_, _>>()?;
+        .collect()
+}
+
+/// The client named on the command line for `--side plc`, or the exit code
+/// of a usage error. A fault without `--iut` picks the soft client.
+pub(crate) fn resolve_client(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
+    let faults = named(&iut.fault, ClientFault::from_name, "client fault")?;
     if faults.len() > 1 {
         eprintln!("--side plc: one --fault at a time (the soft client has one defect)");
         return Err(ExitCode::from(2));
     }
-    let shapes: Vec<ClientShape> = iut
-        .choice
-        .iter()
-        .map(|name| {
-            ClientShape::from_name(name).ok_or_else(|| {
-                eprintln!("unknown soft-client choice `{name}`; `canif faults` lists them");
-                ExitCode::from(2)
-            })
-        })
-        .collect::<Result<_, _>>()?;
+    let shapes = named(&iut.choice, ClientShape::from_name, "soft-client choice")?;
     match (shapes.as_slice(), faults.first(), &iut.iut) {
         ([], _, _) => {}
         ([shape], None, None | Some(IutArg::SoftClient)) => {

@@ -94,28 +94,16 @@ fn cycle_diagram(failure: &Failure, cycles: &[CycleView]) -> String {
     let width =
         (LABEL_WIDTH + CELL * cycles.len() as f64).max(last_x + BYTE_WIDTH * longest as f64) + 10.0;
     let height = ROW * (rows.len() as f64 + 1.5) + 20.0;
-    let mut svg = format!(
-        // Scaled to the page, never wider: the failing cycle, last, stays in view.
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" class=\"timing\" width=\"{width}\" height=\"{height}\" viewBox=\"0 0 {width} {height}\" style=\"max-width:100%;height:auto\" font-family=\"monospace\" font-size=\"11\">\n"
-    );
-    for (i, name) in rows.iter().enumerate() {
-        let y = ROW * (i as f64 + 1.5);
-        let _ = writeln!(svg, "<text x=\"4\" y=\"{}\">{}</text>", y + 16.0, esc(name));
-        let _ = writeln!(
-            svg,
-            "<line x1=\"0\" y1=\"{y}\" x2=\"{width}\" y2=\"{y}\" stroke=\"#ddd\"/>"
-        );
-    }
+    let mut svg = canvas("timing", (width, height), &rows);
     for (c, view) in cycles.iter().enumerate() {
         let x = LABEL_WIDTH + CELL * c as f64;
         let failing = c + 1 == cycles.len();
-        let _ = writeln!(
-            svg,
-            "<text x=\"{}\" y=\"18\" font-weight=\"{}\">cycle {} · {:.3} ms</text>",
-            x + 4.0,
-            if failing { "bold" } else { "normal" },
-            view.cycle,
-            view.time as f64 / 1e6
+        column_head(
+            &mut svg,
+            x,
+            failing,
+            &format!("cycle {}", view.cycle),
+            view.time,
         );
         if failing {
             let _ = writeln!(
@@ -220,4 +208,38 @@ pub(super) fn bus_frames(
             esc(id)
         );
     }
+}
+
+/// An SVG of `width` × `height`, scaled to the page and never wider (the
+/// failing column, last, stays in view), with a labelled line per row.
+pub(super) fn canvas(class: &str, (width, height): (f64, f64), rows: &[&str]) -> String {
+    let mut svg = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" class=\"{class}\" width=\"{width}\" height=\"{height}\" viewBox=\"0 0 {width} {height}\" style=\"max-width:100%;height:auto\" font-family=\"monospace\" font-size=\"11\">\n"
+    );
+    for (i, name) in rows.iter().enumerate() {
+        let y = ROW * (i as f64 + 1.5);
+        let _ = writeln!(svg, "<text x=\"4\" y=\"{}\">{}</text>", y + 16.0, esc(name));
+        let _ = writeln!(
+            svg,
+            "<line x1=\"0\" y1=\"{y}\" x2=\"{width}\" y2=\"{y}\" stroke=\"#ddd\"/>"
+        );
+    }
+    svg
+}
+
+/// A column's head: what it is and when, bold for the failing one.
+pub(super) fn column_head(
+    svg: &mut String,
+    x: f64,
+    failing: bool,
+    what: &str,
+    time: canif_model::Nanos,
+) {
+    let _ = writeln!(
+        svg,
+        "<text x=\"{}\" y=\"18\" font-weight=\"{}\">{what} · {:.3} ms</text>",
+        x + 4.0,
+        if failing { "bold" } else { "normal" },
+        time as f64 / 1e6
+    );
 }

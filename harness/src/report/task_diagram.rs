@@ -6,7 +6,7 @@
 
 use std::fmt::Write as _;
 
-use super::diagram::{bus_frames, esc, CELL, LABEL_WIDTH, ROW};
+use super::diagram::{bus_frames, canvas, column_head, esc, CELL, LABEL_WIDTH, ROW};
 use crate::outcome::{Failure, TaskRow, TaskView};
 
 const ROWS: [(&str, Option<TaskRow>); 6] = [
@@ -22,27 +22,17 @@ pub(super) fn task_diagram(failure: &Failure, tasks: &[TaskView], row: TaskRow) 
     let width = LABEL_WIDTH + CELL * tasks.len() as f64 + 10.0;
     // The rows, then the breach: expected and actual, under the failing task.
     let height = ROW * (ROWS.len() as f64 + 3.5) + 20.0;
-    let mut svg = format!(
-        "<svg xmlns=\"http://www.w3.org/2000/svg\" class=\"timing tasks\" width=\"{width}\" height=\"{height}\" viewBox=\"0 0 {width} {height}\" style=\"max-width:100%;height:auto\" font-family=\"monospace\" font-size=\"11\">\n"
-    );
-    for (i, (name, _)) in ROWS.iter().enumerate() {
-        let y = ROW * (i as f64 + 1.5);
-        let _ = writeln!(svg, "<text x=\"4\" y=\"{}\">{}</text>", y + 16.0, esc(name));
-        let _ = writeln!(
-            svg,
-            "<line x1=\"0\" y1=\"{y}\" x2=\"{width}\" y2=\"{y}\" stroke=\"#ddd\"/>"
-        );
-    }
+    let labels: Vec<&str> = ROWS.iter().map(|(label, _)| *label).collect();
+    let mut svg = canvas("timing tasks", (width, height), &labels);
     for (t, view) in tasks.iter().enumerate() {
         let x = LABEL_WIDTH + CELL * t as f64;
         let failing = t + 1 == tasks.len();
-        let _ = writeln!(
-            svg,
-            "<text x=\"{}\" y=\"18\" font-weight=\"{}\">task {} · {:.3} ms</text>",
-            x + 4.0,
-            if failing { "bold" } else { "normal" },
-            view.task,
-            view.time as f64 / 1e6
+        column_head(
+            &mut svg,
+            x,
+            failing,
+            &format!("task {}", view.task),
+            view.time,
         );
         let (i, o) = (view.inputs, view.outputs);
         let cells = [

@@ -12,6 +12,7 @@
 use std::fmt;
 
 use canif_model::config::{FrameFormat, InterfaceConfig, QueueMode};
+use canif_model::freedoms::Named;
 
 /// The most slots an image has each way (ruling R2).
 pub const MAX_SLOTS: u8 = 32;
@@ -55,6 +56,48 @@ pub enum Application {
     /// must arrive in order, once. Classic frames only: an FD frame's length
     /// is one of 16 sizes, so a stream of them cannot be cut at any byte.
     ByteStream,
+}
+
+impl Named for Direction {
+    const ALL: &'static [Self] = &[Direction::Both, Direction::Tx, Direction::Rx];
+    const NAMES: &'static [&'static str] = &["both", "tx", "rx"];
+
+    fn name(self) -> &'static str {
+        match self {
+            Direction::Both => "both",
+            Direction::Tx => "tx",
+            Direction::Rx => "rx",
+        }
+    }
+}
+
+impl Named for Application {
+    const ALL: &'static [Self] = &[
+        Application::OneStream,
+        Application::Streams,
+        Application::ByteStream,
+    ];
+    const NAMES: &'static [&'static str] = &["one-stream", "streams", "byte-stream"];
+
+    fn name(self) -> &'static str {
+        match self {
+            Application::OneStream => "one-stream",
+            Application::Streams => "streams",
+            Application::ByteStream => "byte-stream",
+        }
+    }
+}
+
+impl Named for RestartChoice {
+    const ALL: &'static [Self] = &[RestartChoice::DeliversTwice, RestartChoice::DropsOnce];
+    const NAMES: &'static [&'static str] = &["delivers-twice", "drops-once"];
+
+    fn name(self) -> &'static str {
+        match self {
+            RestartChoice::DeliversTwice => "delivers-twice",
+            RestartChoice::DropsOnce => "drops-once",
+        }
+    }
 }
 
 /// P3: what a restarted client does with the one batch the image may still
@@ -276,6 +319,21 @@ fn set<T: PartialEq + fmt::Debug>(
     }
 }
 
+/// Sets `slot` to the value `value` names.
+fn named<T: Named + PartialEq + fmt::Debug>(
+    slot: &mut Option<T>,
+    value: &str,
+    item: Item,
+    line: &str,
+) -> Result<(), DeclarationError> {
+    let parsed = T::from_name(value).ok_or_else(|| DeclarationError::BadValue {
+        name: item.name(),
+        value: value.into(),
+        expected: item.expected(),
+    })?;
+    set(slot, parsed, item, line, |v| v.name().into())
+}
+
 impl ClientDeclaration {
     /// The declaration these lines make, blank lines and `#` comments skipped.
     pub fn parse<S: AsRef<str>>(lines: &[S]) -> Result<Self, DeclarationError> {
@@ -355,38 +413,9 @@ impl ClientDeclaration {
                 let range = slot_range(value).ok_or_else(bad)?;
                 set(&mut self.slots, range, item, &line, SlotRange::to_string)
             }
-            Item::Direction => {
-                let direction = match value {
-                    "tx" => Direction::Tx,
-                    "rx" => Direction::Rx,
-                    "both" => Direction::Both,
-                    _ => return Err(bad()),
-                };
-                set(&mut self.direction, direction, item, &line, |d| {
-                    direction_name(*d).into()
-                })
-            }
-            Item::Application => {
-                let application = match value {
-                    "one-stream" => Application::OneStream,
-                    "streams" => Application::Streams,
-                    "byte-stream" => Application::ByteStream,
-                    _ => return Err(bad()),
-                };
-                set(&mut self.application, application, item, &line, |a| {
-                    application_name(*a).into()
-                })
-            }
-            Item::Restart => {
-                let choice = match value {
-                    "delivers-twice" => RestartChoice::DeliversTwice,
-                    "drops-once" => RestartChoice::DropsOnce,
-                    _ => return Err(bad()),
-                };
-                set(&mut self.restart, choice, item, &line, |c| {
-                    restart_name(*c).into()
-                })
-            }
+            Item::Direction => named(&mut self.direction, value, item, &line),
+            Item::Application => named(&mut self.application, value, item, &line),
+            Item::Restart => named(&mut self.restart, value, item, &line),
         }
     }
 
@@ -427,15 +456,9 @@ impl ClientDeclaration {
         );
         line(Item::TimeStamps, self.time_stamps.as_ref().map(yes_no_name));
         line(Item::Slots, self.slots.map(|s| s.to_string()));
-        line(
-            Item::Direction,
-            self.direction.map(|d| direction_name(d).into()),
-        );
-        line(
-            Item::Application,
-            self.application.map(|a| application_name(a).into()),
-        );
-        line(Item::Restart, self.restart.map(|c| restart_name(c).into()));
+        line(Item::Direction, self.direction.map(|d| d.name().into()));
+        line(Item::Application, self.application.map(|a| a.name().into()));
+        line(Item::Restart, self.restart.map(|c| c.name().into()));
         line(Item::TellsSent, self.tells_sent.as_ref().map(yes_no_name));
         lines
     }
@@ -535,29 +558,6 @@ fn yes_no_name(v: &bool) -> String {
     match v {
         true => "yes".into(),
         false => "no".into(),
-    }
-}
-
-fn direction_name(d: Direction) -> &'static str {
-    match d {
-        Direction::Both => "both",
-        Direction::Tx => "tx",
-        Direction::Rx => "rx",
-    }
-}
-
-fn application_name(a: Application) -> &'static str {
-    match a {
-        Application::OneStream => "one-stream",
-        Application::Streams => "streams",
-        Application::ByteStream => "byte-stream",
-    }
-}
-
-fn restart_name(c: RestartChoice) -> &'static str {
-    match c {
-        RestartChoice::DeliversTwice => "delivers-twice",
-        RestartChoice::DropsOnce => "drops-once",
     }
 }
 
