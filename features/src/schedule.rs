@@ -2,6 +2,7 @@
 //! run of it as the harness reports it. The command line and the test
 //! target both schedule through here.
 
+use canif_harness::client::declaration::Application;
 use canif_harness::client::suite::ClientKind;
 use canif_harness::client::ClientDeclaration;
 use canif_harness::device::refusals::OFFERED_REFUSED;
@@ -83,6 +84,12 @@ pub fn declined_by_client(
         {
             queue = QueueMode::Fast;
             slots = count(rest).unwrap_or(slots);
+        } else if step.ends_with("once and in order")
+            && declared.application() != Application::OneStream
+        {
+            // One stream's order, frame by frame: what a client with
+            // several streams, or one that cuts bytes its own way, need not keep.
+            return Some(declared.declined_application());
         } else {
             let sends = step.starts_with("the application asks the client to send");
             let receives = step.starts_with("other nodes send");
@@ -241,6 +248,10 @@ mod tests {
         assert_eq!(
             declined("With the Fast CAN Queue", &["queues=standard"]).as_deref(),
             Some("the client declares queues=standard")
+        );
+        assert_eq!(
+            declined(sends, &["application=streams"]).as_deref(),
+            Some("the client declares application=streams")
         );
     }
 }

@@ -548,6 +548,11 @@ impl ClientDeclaration {
         )
     }
 
+    /// Why one stream's frame-by-frame order is not the client's.
+    pub fn declined_application(&self) -> String {
+        self.declined(Item::Application)
+    }
+
     /// Why traffic one way is not served.
     pub fn declined_direction(&self) -> String {
         self.declined(Item::Direction)
