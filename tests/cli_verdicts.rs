@@ -245,6 +245,42 @@ fn the_plc_side_on_the_command_line() {
     assert_eq!(certificate["masters"], report["meta"]["masters"]);
     assert_eq!(certificate["bus"], report["meta"]["bus"]);
     assert!(certificate.get("left_out").is_none(), "{certificate}");
+    // A client that only sends, declaring it: certified on that, and the
+    // certificate says what it rests on and what was not run.
+    let tx_only = scratch("plc-certificate-tx-only");
+    let output = canif(&[
+        "certify",
+        "--side",
+        "plc",
+        "--profile",
+        "fc510x",
+        "--iut",
+        "softclient",
+        "--choice",
+        "tx-only",
+        "--out",
+        &tx_only.display().to_string(),
+    ]);
+    assert_eq!(output.status.code(), Some(0), "{output:?}");
+    let certificate: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(tx_only.join("certificate.json")).unwrap()).unwrap();
+    assert_eq!(certificate["conforms"], true, "{certificate}");
+    assert!(
+        certificate["choices"].to_string().contains("direction=tx"),
+        "{certificate}"
+    );
+    assert!(
+        certificate["not_served"]
+            .to_string()
+            .contains("frames from the bus — the client declares direction=tx"),
+        "{certificate}"
+    );
+    assert_eq!(
+        certificate["verdicts"]["fc510x::CL-RX-002"]["verdict"],
+        "not applicable"
+    );
+    let page = std::fs::read_to_string(tx_only.join("certificate.html")).unwrap();
+    assert!(page.contains("not served (not run)"), "{page}");
     let output = canif(&[
         "run",
         "--side",

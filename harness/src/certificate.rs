@@ -59,6 +59,10 @@ pub struct Certificate {
     /// not conform, and says what is missing.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub left_out: Option<String>,
+    /// What the profiles offer and the implementation declares it does not
+    /// serve, `profile: what — why`: never run, never certified.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub not_served: Vec<String>,
     /// The EtherCAT master models a PLC-side run drove the client under.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub masters: Vec<String>,
@@ -93,6 +97,17 @@ impl Certificate {
                     .unwrap_or_else(|| "interrupted".to_string())
             }),
             masters: m.masters.clone(),
+            not_served: report
+                .profiles
+                .iter()
+                .flat_map(|p| {
+                    p.lockstep
+                        .reach
+                        .not_served
+                        .iter()
+                        .map(move |(what, why)| format!("{}: {what} — {why}", p.profile))
+                })
+                .collect(),
             product: m.product.clone(),
             profiles: report.profiles.iter().map(|p| p.profile.clone()).collect(),
             seed: m.seed,
@@ -216,6 +231,17 @@ pub fn html(certificate: &Certificate, catalogue: &canif_spec::Catalogue) -> Str
             ));
         }
     }
+    let list = |what: &str, lines: &[String]| match lines.is_empty() {
+        true => String::new(),
+        false => format!(
+            "<tr><th>{what}</th><td>{}</td></tr>",
+            lines
+                .iter()
+                .map(|l| esc(l))
+                .collect::<Vec<_>>()
+                .join("<br>")
+        ),
+    };
     let t = &certificate.totals;
     format!(
         r#"<!DOCTYPE html>
@@ -224,7 +250,7 @@ pub fn html(certificate: &Certificate, catalogue: &canif_spec::Catalogue) -> Str
 .pass td:nth-child(3){{color:#070}} .fail td:nth-child(3),.error td:nth-child(3){{color:#b00;font-weight:bold}} .not-applicable,.not-testable,.not-run{{color:#777}}</style></head>
 <body><h1>canif conformance certificate</h1>
 <p><b>{verdict}</b> — <code>{iut}</code>{product}, {side} side, profiles {profiles}</p>
-<table><tr><th>date</th><td>{date}</td></tr><tr><th>bus</th><td>{bus}</td></tr>{masters}{left_out}<tr><th>canif</th><td>{version} ({commit})</td></tr>
+<table><tr><th>date</th><td>{date}</td></tr><tr><th>bus</th><td>{bus}</td></tr>{masters}{choices}{not_served}{left_out}<tr><th>canif</th><td>{version} ({commit})</td></tr>
 <tr><th>catalogue SHA-256</th><td><code>{catalogue}</code></td></tr><tr><th>seed</th><td>{seed}</td></tr>
 <tr><th>totals</th><td>{pass} pass, {fail} fail, {error} error, {na} not applicable, {nr} not run, {nt} not testable</td></tr></table>
 <p>certificate.json carries this page's SHA-256 and is signed in certificate.json.sig; see docs/certificates.md for checking it with <code>ssh-keygen -Y verify</code>.</p>
@@ -252,6 +278,8 @@ pub fn html(certificate: &Certificate, catalogue: &canif_spec::Catalogue) -> Str
                 esc(&certificate.masters.join(", "))
             )
         },
+        choices = list("declared (the verdicts rest on it)", &certificate.choices),
+        not_served = list("not served (not run)", &certificate.not_served),
         left_out = certificate
             .left_out
             .as_ref()

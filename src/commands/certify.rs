@@ -12,7 +12,7 @@ use canif_spec::Catalogue;
 use canif_harness::client::suite::ClientOptions;
 
 use super::run::{device, finish, plc, profiles, Plan};
-use super::{resolve_client, resolve_iut};
+use super::{client_declaration, declared_choices, resolve_client, resolve_iut};
 use crate::cli::{CompareFormat, IutOptions, SideArg};
 
 /// How to check a certificate without canif, for the output and the docs.
@@ -64,8 +64,14 @@ pub(crate) fn certify(
                 Ok(kind) => kind,
                 Err(code) => return code,
             };
+            // What the device declares on the command line: the certificate rests on it.
+            let declared = match declared_choices(&iut.declare) {
+                Ok(declared) => declared,
+                Err(code) => return code,
+            };
             let options = Options {
                 seed,
+                declared,
                 ..Options::default()
             };
             let plan = match Plan::new(profiles, options, product) {
@@ -87,7 +93,17 @@ pub(crate) fn certify(
                 Ok(kind) => kind,
                 Err(code) => return code,
             };
-            let plan = match Plan::new(profiles, ClientOptions::new(seed), product) {
+            // What the client declares, on the command line and of itself.
+            let declared = match client_declaration(&iut.declare) {
+                Ok(declared) => declared,
+                Err(code) => return code,
+            };
+            let options = ClientOptions {
+                declared: Ok(declared),
+                ..ClientOptions::new(seed)
+            }
+            .declared_by(&kind);
+            let plan = match Plan::new(profiles, options, product) {
                 Ok(plan) => plan,
                 Err(code) => return code,
             };
