@@ -19,6 +19,8 @@ use canif_model::timing::BitRates;
 #[derive(Debug, Clone)]
 pub struct ClientTarget {
     pub client: ClientKind,
+    /// What the client declares: its scenarios are judged by it.
+    pub declared: canif_harness::client::ClientDeclaration,
     pub profile: String,
     pub caps: Capabilities,
 }
@@ -36,6 +38,7 @@ fn client_target() -> ClientTarget {
         .with(|t| t.borrow().clone())
         .unwrap_or_else(|| ClientTarget {
             client: ClientKind::Reference,
+            declared: Default::default(),
             profile: "everything".into(),
             caps: Capabilities::everything(),
         })
@@ -150,8 +153,8 @@ impl ClientWorld {
                 bit_rates: BitRates::classic(500_000),
                 cycles: self.cycle + QUIET,
                 events: self.events.clone(),
-                // The client's own declaration is read as it starts.
-                declared: Default::default(),
+                // What the run holds it to; the rig adds what it says as it starts.
+                declared: self.target.declared.clone(),
             };
             let (kind, config) = (self.target.client.clone(), self.config.clone());
             let build = move |layout| kind.build(&config, layout);

@@ -20,14 +20,15 @@ use crate::{
 #[derive(Debug, Clone)]
 pub enum UnderTest {
     Device(IutKind),
-    Client(ClientKind),
+    /// A client, and what it declares (the command line's and its own).
+    Client(ClientKind, ClientDeclaration),
 }
 
 impl UnderTest {
     pub fn side(&self) -> Side {
         match self {
             UnderTest::Device(_) => Side::Device,
-            UnderTest::Client(_) => Side::Plc,
+            UnderTest::Client(..) => Side::Plc,
         }
     }
 }
@@ -129,11 +130,12 @@ pub fn run(profile: &Profile, scenario: &ScenarioInfo, under_test: &UnderTest) -
                 },
             )
         }
-        UnderTest::Client(client) => run_client_scenario(
+        UnderTest::Client(client, declared) => run_client_scenario(
             &scenario.file,
             scenario.line,
             ClientTarget {
                 client: client.clone(),
+                declared: declared.clone(),
                 profile: name,
                 caps,
             },
@@ -149,8 +151,8 @@ pub fn run(profile: &Profile, scenario: &ScenarioInfo, under_test: &UnderTest) -
                 UnderTest::Device(_) => blame::narrow_tags(&scenario.requirements, &witness),
                 // The client judge names exactly what a client broke,
                 // whatever the scenario is tagged with.
-                UnderTest::Client(_) if witness.is_empty() => scenario.requirements.clone(),
-                UnderTest::Client(_) => witness.iter().map(|id| id.to_string()).collect(),
+                UnderTest::Client(..) if witness.is_empty() => scenario.requirements.clone(),
+                UnderTest::Client(..) => witness.iter().map(|id| id.to_string()).collect(),
             },
             report,
             rest: Rest::Stopped,

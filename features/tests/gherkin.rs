@@ -19,7 +19,7 @@ fn under_test(side: Side) -> UnderTest {
             faults: vec![],
             choices: vec![],
         }),
-        Side::Plc => UnderTest::Client(ClientKind::Reference),
+        Side::Plc => UnderTest::Client(ClientKind::Reference, Default::default()),
     }
 }
 

@@ -69,6 +69,7 @@ fn each_faulty_client_fails_the_scenario_of_its_life_cycle_on_its_requirement() 
             .unwrap_or_else(|| panic!("no PLC-side scenario says {words:?}"));
         let target = ClientTarget {
             client: ClientKind::Faulty(Some(*fault)),
+            declared: Default::default(),
             profile: "everything".into(),
             caps: Capabilities::everything(),
         };
@@ -80,5 +81,38 @@ fn each_faulty_client_fails_the_scenario_of_its_life_cycle_on_its_requirement() 
             ),
             other => panic!("{fault} in {:?}: {other:?}, not a failure", scenario.id()),
         }
+    }
+}
+
+/// What the run holds a client to reaches the Gherkin steps: a client that
+/// delivers the batch it finds after a restart again passes undeclared, and
+/// fails CL-RST-001 when the command line says it drops it.
+#[test]
+fn a_declared_restart_choice_is_judged_in_the_gherkin_scenario_too() {
+    let scenario = scenarios()
+        .unwrap()
+        .into_iter()
+        .find(|s| s.id().contains("After a PLC restart"))
+        .expect("the PLC restart scenario");
+    let run = |declared: &[&str]| {
+        let target = ClientTarget {
+            client: ClientKind::Faulty(None),
+            declared: canif_harness::client::ClientDeclaration::parse(declared).unwrap(),
+            profile: "everything".into(),
+            caps: Capabilities::everything(),
+        };
+        run_client_scenario(&scenario.file, scenario.line, target)
+    };
+    assert!(
+        matches!(run(&[]), ScenarioOutcome::Passed),
+        "{:?}",
+        run(&[])
+    );
+    match run(&["restart=drops-once"]) {
+        ScenarioOutcome::Failed { witness, report } => assert!(
+            witness.iter().any(|id| id.as_str() == "CL-RST-001"),
+            "{witness:?}\n{report}"
+        ),
+        other => panic!("{other:?}"),
     }
 }

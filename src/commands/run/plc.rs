@@ -132,7 +132,10 @@ pub(crate) fn execute(
         left_out.push("Gherkin scenarios not run: they use the simulated bus".into());
         Vec::new()
     } else {
-        plan.run_gherkin(&canif_features::UnderTest::Client(kind.clone()))
+        plan.run_gherkin(&canif_features::UnderTest::Client(
+            kind.clone(),
+            declared.clone(),
+        ))
     };
     plan.assemble(catalogue, lockstep, gherkin, left_out, meta, started)
 }
