@@ -159,6 +159,19 @@ fn the_restart_choice_is_either_undeclared_and_the_declared_one_only_declared() 
         with(&lied, VerdictKind::Fail),
         BTreeSet::from(["CL-RST-001"])
     );
+    // With the Fast CAN Queue too, where the one batch is the first a
+    // restarted program is shown.
+    let kind = shaped(ClientShape::DropsRestartBatch, false);
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("el6751-mdp").unwrap();
+    let options = options(&["restart=delivers-twice"]).declared_by(&kind);
+    let run = run_profile(profile, &kind, &options, |_| {});
+    assert!(
+        run.failures.iter().any(|f| f.scenario.contains("fast queue")
+            && f.requirements.iter().any(|id| id.as_str() == "CL-RST-001")),
+        "{:?}",
+        run.failures.iter().map(|f| f.headline()).collect::<Vec<_>>()
+    );
     // And the soft client that delivers it again, declared to drop it.
     let lied = verdicts(&ClientKind::Faulty(None), "fc510x", &["restart=drops-once"]);
     assert_eq!(

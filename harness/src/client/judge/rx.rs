@@ -140,6 +140,17 @@ impl Judge {
             return Ok(());
         };
         for batch in self.rx.drain(..at).collect::<Vec<_>>() {
+            if batch.at_plc_restart && self.restart_choice == Some(RestartChoice::DeliversTwice) {
+                return breach(
+                    PLC_RESTART,
+                    format!(
+                        "the batch of RxCounter {} a restarted program was shown",
+                        batch.counter
+                    ),
+                    "delivered: the client declares restart=delivers-twice",
+                    format!("{} never delivered", batch.messages.len()),
+                );
+            }
             let lost_with_restart = self.restart_batch == Some(batch.counter)
                 || batch.at_plc_restart
                 || (batch.before_device_restart && !batch.shown);
