@@ -281,6 +281,13 @@ fn the_plc_side_on_the_command_line() {
     );
     let page = std::fs::read_to_string(tx_only.join("certificate.html")).unwrap();
     assert!(page.contains("not served (not run)"), "{page}");
+    let summary = std::fs::read_to_string(tx_only.join("run/summary.md")).unwrap();
+    assert!(
+        summary.contains("- fc510x: frames from the bus — the client declares direction=tx"),
+        "{summary}"
+    );
+    let html = std::fs::read_to_string(tx_only.join("run/report.html")).unwrap();
+    assert!(html.contains("<ul id=\"not-served\">"), "{html}");
     let output = canif(&[
         "run",
         "--side",

@@ -97,17 +97,7 @@ impl Certificate {
                     .unwrap_or_else(|| "interrupted".to_string())
             }),
             masters: m.masters.clone(),
-            not_served: report
-                .profiles
-                .iter()
-                .flat_map(|p| {
-                    p.lockstep
-                        .reach
-                        .not_served
-                        .iter()
-                        .map(move |(what, why)| format!("{}: {what} — {why}", p.profile))
-                })
-                .collect(),
+            not_served: report.not_served(),
             product: m.product.clone(),
             profiles: report.profiles.iter().map(|p| p.profile.clone()).collect(),
             seed: m.seed,

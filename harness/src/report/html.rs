@@ -90,18 +90,9 @@ impl RunReport {
             })
             .collect();
         let not_served: String = self
-            .profiles
+            .not_served()
             .iter()
-            .flat_map(|p| {
-                p.lockstep.reach.not_served.iter().map(move |(what, why)| {
-                    format!(
-                        "<li>{}: {} — {}</li>\n",
-                        esc(&p.profile),
-                        esc(what),
-                        esc(why)
-                    )
-                })
-            })
+            .map(|line| format!("<li>{}</li>\n", esc(line)))
             .collect();
         let not_served = match not_served.is_empty() {
             true => String::new(),

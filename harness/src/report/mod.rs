@@ -138,6 +138,20 @@ impl RunReport {
         totals
     }
 
+    /// What the implementation declares it does not serve, over every
+    /// profile: `profile: what — why`.
+    pub fn not_served(&self) -> Vec<String> {
+        self.profiles
+            .iter()
+            .flat_map(|p| {
+                let served = &p.lockstep.reach.not_served;
+                served
+                    .iter()
+                    .map(move |(what, why)| format!("{}: {what} — {why}", p.profile))
+            })
+            .collect()
+    }
+
     /// Checks that ran, over every profile.
     pub fn checks(&self) -> impl Iterator<Item = (&ProfileReport, &Check)> {
         self.profiles

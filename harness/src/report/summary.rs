@@ -109,15 +109,9 @@ impl RunReport {
             );
         }
         let not_served: Vec<String> = self
-            .profiles
+            .not_served()
             .iter()
-            .flat_map(|p| {
-                p.lockstep
-                    .reach
-                    .not_served
-                    .iter()
-                    .map(move |(what, why)| format!("- {}: {what} — {why}", p.profile))
-            })
+            .map(|line| format!("- {line}"))
             .collect();
         if !not_served.is_empty() {
             md.push_str(
