@@ -204,8 +204,6 @@ pub struct Record {
     pub delivered: Vec<MessageRepr>,
     /// The transaction numbers the client told its application were sent.
     pub told_sent: Vec<u16>,
-    /// The client declared it tells its application nothing of what was sent.
-    pub tells_nothing_sent: bool,
     /// What the client was held to: the run's declaration and its own.
     pub declared: ClientDeclaration,
     /// Batches, batches of nothing and request-to-bus latency (never judged).
@@ -305,7 +303,7 @@ fn run_with(
         .covers
         .iter()
         .filter(|id| !record.told_sent.is_empty() || !SENT_REPORTS.contains(id))
-        .filter(|id| !record.tells_nothing_sent || !TRANSACTION_NUMBERS.contains(id))
+        .filter(|id| record.declared.tells_sent != Some(false) || !TRANSACTION_NUMBERS.contains(id))
         .cloned()
         .collect();
     let iut_declares = record.declared.lines();
@@ -354,7 +352,6 @@ fn drive(
     record.declared = declared(&scenario.declared, client.as_ref())?;
     let mut exchange = MasterRun::new(master, layout);
     let mut judge = Judge::new(layout, config.queue, &record.declared);
-    record.tells_nothing_sent = record.declared.tells_sent == Some(false);
     let per_cycle = master.tasks_per_cycle();
     let period = CYCLE / per_cycle;
     let deadline = 2 * per_cycle + 2 * master.confirmation_tasks();

@@ -77,8 +77,8 @@ impl ClientKind {
                 if *shape == ClientShape::Only11Bit
                     && config.format != canif_model::config::FrameFormat::Base11 =>
             {
-                return Err(BuildError::Failed(crate::error::IutError::new(
-                    crate::error::IutCause::NotStarted,
+                return Err(BuildError::Failed(IutError::new(
+                    IutCause::NotStarted,
                     "the soft client serves 11-bit interfaces only",
                 )))
             }
