@@ -326,12 +326,50 @@ fn named<T: Named + PartialEq + fmt::Debug>(
     item: Item,
     line: &str,
 ) -> Result<(), DeclarationError> {
-    let parsed = T::from_name(value).ok_or_else(|| DeclarationError::BadValue {
+    let parsed = T::from_name(value).ok_or_else(|| bad_value(item, value))?;
+    set(slot, parsed, item, line, |v| v.name().into())
+}
+
+/// Sets `slot` to `yes` or `no`.
+fn yes_or_no(
+    slot: &mut Option<bool>,
+    value: &str,
+    item: Item,
+    line: &str,
+) -> Result<(), DeclarationError> {
+    let parsed = yes_no(value).ok_or_else(|| bad_value(item, value))?;
+    set(slot, parsed, item, line, yes_no_name)
+}
+
+/// Sets `slot` to the comma-separated values `value` names, each one of
+/// `all` by `name`.
+fn listed<T: Copy + PartialEq + fmt::Debug>(
+    slot: &mut Option<Vec<T>>,
+    value: &str,
+    item: Item,
+    line: &str,
+    (all, name): (&[T], fn(T) -> &'static str),
+) -> Result<(), DeclarationError> {
+    let values = list(value, |v| all.iter().copied().find(|x| name(*x) == v))
+        .ok_or_else(|| bad_value(item, value))?;
+    set(slot, values, item, line, |values| joined(values, name))
+}
+
+/// Values by name, comma-separated, as a declaration writes them.
+fn joined<T: Copy>(values: &[T], name: fn(T) -> &'static str) -> String {
+    values
+        .iter()
+        .map(|v| name(*v))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+fn bad_value(item: Item, value: &str) -> DeclarationError {
+    DeclarationError::BadValue {
         name: item.name(),
         value: value.into(),
         expected: item.expected(),
-    })?;
-    set(slot, parsed, item, line, |v| v.name().into())
+    }
 }
 
 impl ClientDeclaration {
@@ -358,57 +396,32 @@ impl ClientDeclaration {
             .into_iter()
             .find(|i| i.name() == name)
             .ok_or_else(|| DeclarationError::UnknownName { name: name.into() })?;
-        let bad = || DeclarationError::BadValue {
-            name: item.name(),
-            value: value.into(),
-            expected: item.expected(),
-        };
+        let bad = || bad_value(item, value);
         let line = format!("{name}={value}");
         match item {
             Item::Formats => {
-                let formats = list(value, |v| {
-                    [
-                        FrameFormat::Base11,
-                        FrameFormat::Extended29,
-                        FrameFormat::Fd,
-                    ]
-                    .into_iter()
-                    .find(|f| format_name(*f) == v)
-                })
-                .ok_or_else(bad)?;
-                set(&mut self.formats, formats, item, &line, |f| {
-                    f.iter()
-                        .map(|f| format_name(*f))
-                        .collect::<Vec<_>>()
-                        .join(",")
-                })
+                let formats = [
+                    FrameFormat::Base11,
+                    FrameFormat::Extended29,
+                    FrameFormat::Fd,
+                ];
+                listed(
+                    &mut self.formats,
+                    value,
+                    item,
+                    &line,
+                    (&formats, format_name),
+                )
             }
             Item::Queues => {
-                let queues = list(value, |v| {
-                    [QueueMode::Standard, QueueMode::Optimized, QueueMode::Fast]
-                        .into_iter()
-                        .find(|q| queue_name(*q) == v)
-                })
-                .ok_or_else(bad)?;
-                set(&mut self.queues, queues, item, &line, |q| {
-                    q.iter()
-                        .map(|q| queue_name(*q))
-                        .collect::<Vec<_>>()
-                        .join(",")
-                })
+                let queues = [QueueMode::Standard, QueueMode::Optimized, QueueMode::Fast];
+                listed(&mut self.queues, value, item, &line, (&queues, queue_name))
             }
             Item::TransactionNumbers => {
-                let v = yes_no(value).ok_or_else(bad)?;
-                set(&mut self.transaction_numbers, v, item, &line, yes_no_name)
+                yes_or_no(&mut self.transaction_numbers, value, item, &line)
             }
-            Item::TimeStamps => {
-                let v = yes_no(value).ok_or_else(bad)?;
-                set(&mut self.time_stamps, v, item, &line, yes_no_name)
-            }
-            Item::TellsSent => {
-                let v = yes_no(value).ok_or_else(bad)?;
-                set(&mut self.tells_sent, v, item, &line, yes_no_name)
-            }
+            Item::TimeStamps => yes_or_no(&mut self.time_stamps, value, item, &line),
+            Item::TellsSent => yes_or_no(&mut self.tells_sent, value, item, &line),
             Item::Slots => {
                 let range = slot_range(value).ok_or_else(bad)?;
                 set(&mut self.slots, range, item, &line, SlotRange::to_string)
@@ -431,7 +444,6 @@ impl ClientDeclaration {
 
     /// The declaration as `name=value` lines, in a fixed order.
     pub fn lines(&self) -> Vec<String> {
-        let join = |names: Vec<&str>| names.join(",");
         let mut lines = Vec::new();
         let mut line = |item: Item, value: Option<String>| {
             if let Some(value) = value {
@@ -440,15 +452,11 @@ impl ClientDeclaration {
         };
         line(
             Item::Formats,
-            self.formats
-                .as_ref()
-                .map(|f| join(f.iter().map(|f| format_name(*f)).collect())),
+            self.formats.as_deref().map(|f| joined(f, format_name)),
         );
         line(
             Item::Queues,
-            self.queues
-                .as_ref()
-                .map(|q| join(q.iter().map(|q| queue_name(*q)).collect())),
+            self.queues.as_deref().map(|q| joined(q, queue_name)),
         );
         line(
             Item::TransactionNumbers,
