@@ -9,9 +9,9 @@
 
 use std::time::Instant;
 
-use canif_harness::device::iut_kind::LibHost;
 use canif_harness::device::scenario;
 use canif_harness::device::{run_scenario, IutKind};
+use canif_harness::door::{Door, LibHost, Timeouts};
 use canif_harness::Outcome;
 use canif_model::config::{FrameFormat, InterfaceConfig};
 use canif_model::timing::BitRates;
@@ -42,44 +42,44 @@ fn main() {
         ),
         (
             "examples/c over lib:, in process",
-            IutKind::Lib {
+            IutKind::Door(Door::Lib {
                 path: library.clone(),
                 host: None,
-            },
+            }),
         ),
         (
             "examples/c over lib:, canif lib-host",
-            IutKind::Lib {
+            IutKind::Door(Door::Lib {
                 path: library.clone(),
                 host: Some(LibHost {
                     canif: device.into(),
-                    timeout_ms: 10_000,
+                    timeouts: Timeouts::with_request(std::time::Duration::from_millis(10_000)),
                 }),
-            },
+            }),
         ),
         (
             "canif device --stdio, protocol 2",
-            IutKind::Exec {
+            IutKind::Door(Door::Exec {
                 command: format!("{device} device --stdio --protocol 2"),
-                timeout_ms: 10_000,
+                timeouts: Timeouts::with_request(std::time::Duration::from_millis(10_000)),
                 same_cpu: true,
-            },
+            }),
         ),
         (
             "the same, IUT on any CPU (--iut-cpu-free)",
-            IutKind::Exec {
+            IutKind::Door(Door::Exec {
                 command: format!("{device} device --stdio --protocol 2"),
-                timeout_ms: 10_000,
+                timeouts: Timeouts::with_request(std::time::Duration::from_millis(10_000)),
                 same_cpu: false,
-            },
+            }),
         ),
         (
             "canif device --stdio, protocol 1",
-            IutKind::Exec {
+            IutKind::Door(Door::Exec {
                 command: format!("{device} device --stdio --protocol 1"),
-                timeout_ms: 10_000,
+                timeouts: Timeouts::with_request(std::time::Duration::from_millis(10_000)),
                 same_cpu: true,
-            },
+            }),
         ),
     ];
     // CANIF_BENCH_ONLY=2: leave out protocol 1 (for profiling).

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use canif_harness::door::Timeouts;
 use clap::{Args, Parser, Subcommand};
 
 #[derive(Parser)]
@@ -35,7 +36,7 @@ pub(crate) enum IutArg {
     /// `ethercat:emulated` (the soft device behind an emulated terminal, in
     /// memory) or `ethercat:IFACE[@POSITION]` (a terminal on a network
     /// interface), reached by canif's EtherCAT master through real frames.
-    Ethercat(canif_harness::device::ethercat::EthercatLink),
+    Ethercat(canif_harness::door::ethercat::EthercatLink),
 }
 
 fn iut_arg(text: &str) -> Result<IutArg, String> {
@@ -45,7 +46,7 @@ fn iut_arg(text: &str) -> Result<IutArg, String> {
         "reference" => Ok(IutArg::Reference),
         "softclient" => Ok(IutArg::SoftClient),
         other if other.starts_with("ethercat:") => {
-            canif_harness::device::ethercat::EthercatLink::parse(&other["ethercat:".len()..])
+            canif_harness::door::ethercat::EthercatLink::parse(&other["ethercat:".len()..])
                 .map(IutArg::Ethercat)
         }
         _ => match (text.strip_prefix("exec:"), text.strip_prefix("lib:")) {
@@ -111,9 +112,15 @@ pub(crate) struct IutOptions {
     /// (the independent client; --fault picks it).
     #[arg(long, value_parser = iut_arg)]
     pub iut: Option<IutArg>,
-    /// How long an external IUT may take to answer one request, in ms.
-    #[arg(long, default_value_t = 5000, value_parser = clap::value_parser!(u64).range(1..=600_000))]
+    /// How long an external IUT may take to answer one request, in ms; past
+    /// it, the IUT hung.
+    #[arg(long, default_value_t = Timeouts::DEFAULT_REQUEST_MS, value_parser = clap::value_parser!(u64).range(1..=600_000))]
     pub timeout_ms: u64,
+    /// How long an external IUT may take to start (its process, an
+    /// interpreter, a library's load) up to its first answer, in ms; at least
+    /// --timeout-ms. Default: CANIF_START_TIMEOUT_MS, or 60000.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=3_600_000))]
+    pub start_timeout_ms: Option<u64>,
     /// Run a lib:PATH IUT in canif's own process instead of a `canif lib-host`
     /// of its own: faster, but a library that crashes or reads far past its
     /// image then ends the run with it.
@@ -142,6 +149,18 @@ pub(crate) struct IutOptions {
     /// across CPUs costs about ten times one on the same CPU.
     #[arg(long)]
     pub iut_cpu_free: bool,
+}
+
+impl IutOptions {
+    /// The start and per-request limits of an external IUT.
+    pub(crate) fn timeouts(&self) -> Timeouts {
+        let request = std::time::Duration::from_millis(self.timeout_ms);
+        let mut timeouts = Timeouts::with_request(request);
+        if let Some(start) = self.start_timeout_ms {
+            timeouts.start = std::time::Duration::from_millis(start).max(request);
+        }
+        timeouts
+    }
 }
 
 /// How a SocketCAN bus is run (ignored on the simulated bus).

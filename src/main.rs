@@ -15,6 +15,31 @@ macro_rules! outln {
     }};
 }
 
+/// `println!`, except that a reader that has gone (a closed pipe: `canif
+/// run | head`) is no panic: the run goes on and still writes its reports.
+macro_rules! sayln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
+    }};
+}
+
+/// `eprintln!`, with a closed stderr ignored (`canif run 2>&1 | head`).
+macro_rules! errln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
+    }};
+}
+
+/// `eprint!`, with a closed stderr ignored as by [`errln!`].
+macro_rules! err {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = write!(std::io::stderr().lock(), $($arg)*);
+    }};
+}
+
 mod cli;
 mod commands;
 
@@ -43,7 +68,7 @@ fn main() -> ExitCode {
     let code = match run(cli, &mut out) {
         Ok(code) => code,
         Err(error) => {
-            eprint!("{error}");
+            err!("{error}");
             ExitCode::from(2)
         }
     };
@@ -156,7 +181,7 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
                     std::fs::write(&probe, b"").and_then(|()| std::fs::remove_file(probe))
                 });
                 if let Err(error) = writable {
-                    eprintln!("--trace {}: cannot write there: {error}", dir.display());
+                    errln!("--trace {}: cannot write there: {error}", dir.display());
                     return Ok(ExitCode::from(2));
                 }
             }

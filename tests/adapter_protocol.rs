@@ -9,6 +9,7 @@ use canif_harness::device::run_scenario;
 use canif_harness::device::scenario;
 use canif_harness::device::suite::Options;
 use canif_harness::device::IutKind;
+use canif_harness::door::Door;
 use canif_harness::report::{ProfileReport, RunMeta, RunReport};
 use canif_harness::run::run_profile;
 use canif_harness::{Outcome, VerdictKind};
@@ -20,11 +21,13 @@ fn quick() -> Options {
 }
 
 fn exec(command: &str, timeout_ms: u64) -> IutKind {
-    IutKind::Exec {
+    IutKind::Door(Door::Exec {
         command: command.to_string(),
-        timeout_ms,
+        timeouts: canif_harness::door::Timeouts::with_request(std::time::Duration::from_millis(
+            timeout_ms,
+        )),
         same_cpu: false,
-    }
+    })
 }
 
 fn soft_device(args: &str) -> IutKind {
@@ -389,10 +392,13 @@ fn the_configure_of_a_socketcan_bus_fits_the_schema() {
         requests.display(),
         env!("CARGO_BIN_EXE_canif")
     );
-    let mut iut =
-        canif_harness::device::exec_iut::ExecIut::spawn(&command, Duration::from_secs(5), false)
-            .unwrap();
-    let bus = canif_harness::adapter::protocol::OwnedBus {
+    let mut iut = canif_harness::door::exec::ExecIut::spawn(
+        &command,
+        canif_harness::door::Timeouts::default(),
+        false,
+    )
+    .unwrap();
+    let bus = canif_harness::door::adapter::protocol::OwnedBus {
         interface: "vcan0".into(),
         epoch_ns: 1_700_000_000_000_000_000,
     };
@@ -403,10 +409,7 @@ fn the_configure_of_a_socketcan_bus_fits_the_schema() {
             Some(&bus),
         )
         .unwrap();
-    assert_eq!(
-        answer,
-        canif_harness::device::exec_iut::Configured::Accepted
-    );
+    assert_eq!(answer, canif_harness::door::exec::Configured::Accepted);
     drop(iut);
     std::thread::sleep(Duration::from_millis(100));
     let requests = std::fs::read_to_string(&requests).unwrap();

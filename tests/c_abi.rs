@@ -8,6 +8,7 @@ use std::process::Command;
 
 use canif_harness::device::suite::Options;
 use canif_harness::device::IutKind;
+use canif_harness::door::Door;
 use canif_harness::run::run_profile;
 use canif_harness::Outcome;
 use canif_spec::Catalogue;
@@ -85,10 +86,10 @@ fn the_c_example_is_certified_in_process() {
     let profile = catalogue.profile("fc510x-before-fw2.14").unwrap();
     let run = run_profile(
         profile,
-        &IutKind::Lib {
+        &IutKind::Door(Door::Lib {
             path: library,
             host: None,
-        },
+        }),
         &Options::quick(3),
         |_| {},
     );
@@ -197,13 +198,13 @@ fn a_library_of_another_version_or_without_a_function_is_an_error() {
         (v2, "speaks canif ABI version 2"),
         (no_destroy, "has no `canif_destroy`"),
     ] {
-        match (IutKind::Lib {
+        match (IutKind::Door(Door::Lib {
             path: library,
             host: None,
-        })
+        }))
         .build(&caps, &config)
         {
-            Err(canif_harness::device::BuildError::Failed(broke)) => {
+            Err(canif_harness::door::iut::BuildError::Failed(broke)) => {
                 assert_eq!(broke.cause, canif_harness::error::IutCause::NotStarted);
                 assert!(broke.what.contains(words), "{broke}")
             }

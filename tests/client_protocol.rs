@@ -9,6 +9,7 @@ use canif_harness::client::application;
 use canif_harness::client::master::Master;
 use canif_harness::client::rig;
 use canif_harness::client::suite::{ClientKind, ClientOptions};
+use canif_harness::door::Door;
 use canif_harness::run::run_profile;
 use canif_harness::{Outcome, RunError};
 use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig};
@@ -20,10 +21,13 @@ const SCRIPT: &str = concat!(
 );
 
 fn exec(command: &str, timeout_ms: u64) -> ClientKind {
-    ClientKind::Exec {
+    ClientKind::Door(Door::Exec {
         command: command.to_string(),
-        timeout_ms,
-    }
+        timeouts: canif_harness::door::Timeouts::with_request(std::time::Duration::from_millis(
+            timeout_ms,
+        )),
+        same_cpu: true,
+    })
 }
 
 /// Covers: CL-TX-001, CL-TX-003, CL-RX-001, CL-RX-002, CL-FQ-001, CL-RST-001, CL-RST-002, CL-TN-002

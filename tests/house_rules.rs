@@ -123,6 +123,10 @@ fn no_source_file_is_over_600_lines() {
         "src",
         "model/src",
         "softdevice/src",
+        "spec/src",
+        "ethercat/src",
+        "kernel/src",
+        "cabi/src",
     ] {
         for file in rust_files(&root().join(dir)) {
             let lines = std::fs::read_to_string(&file).unwrap().lines().count();
@@ -230,7 +234,182 @@ fn no_harness_module_imports_one_that_imports_it_back() {
             panic!("module cycle: {}", cycle.join(" → "));
         }
     }
-    // The sides: the client side may use the device side's pieces, never the reverse.
-    assert!(!arrows["device"].contains("client"));
-    assert!(!arrows["run"].contains("device") && !arrows["run"].contains("client"));
+    // The sides stand beside each other on what both share: `run` (one
+    // profile's run) and `door` (how an implementation is reached), and
+    // neither of those reaches up into a side.
+    for (from, to) in [
+        ("device", "client"),
+        ("client", "device"),
+        ("run", "device"),
+        ("run", "client"),
+        ("door", "device"),
+        ("door", "client"),
+        ("door", "run"),
+    ] {
+        assert!(!arrows[from].contains(to), "`{from}` uses `{to}`");
+    }
+}
+
+/// A Rust source file's module path below its crate root
+/// (`door/exec/mod.rs` is `door::exec`).
+fn module_path(src: &Path, file: &Path) -> Vec<String> {
+    let relative = file.strip_prefix(src).unwrap().with_extension("");
+    let mut parts: Vec<String> = relative
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    if matches!(
+        parts.last().map(String::as_str),
+        Some("mod" | "lib" | "main")
+    ) {
+        parts.pop();
+    }
+    parts
+}
+
+/// The paths a line names through `crate::` or `super::`, as module paths
+/// of the crate (unresolved: the longest known prefix is taken later).
+fn named_paths(line: &str, from: &[String], is_dir_module: bool) -> Vec<Vec<String>> {
+    let ident = |rest: &str| -> Vec<String> {
+        let mut parts = Vec::new();
+        let mut rest = rest;
+        loop {
+            let name: String = rest
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                .collect();
+            if name.is_empty() {
+                break;
+            }
+            rest = &rest[name.len()..];
+            parts.push(name);
+            match rest.strip_prefix("::") {
+                Some(next) => rest = next,
+                None => break,
+            }
+        }
+        parts
+    };
+    let mut paths = Vec::new();
+    for (at, _) in line.match_indices("crate::") {
+        // `canif_harness::x` is no `crate::` path of this crate, nor is `$crate::`.
+        let before = line[..at].chars().last();
+        if before.is_some_and(|c| c.is_ascii_alphanumeric() || c == '_' || c == '$') {
+            continue;
+        }
+        paths.push(ident(&line[at + 7..]));
+    }
+    let mut rest = line;
+    while let Some(at) = rest.find("super::") {
+        let before = rest[..at].chars().last();
+        let mut tail = &rest[at..];
+        let mut ups = 0;
+        while let Some(next) = tail.strip_prefix("super::") {
+            ups += 1;
+            tail = next;
+        }
+        rest = tail;
+        if before.is_some_and(|c| c.is_ascii_alphanumeric() || c == '_' || c == ':') {
+            continue;
+        }
+        // A file `a/b.rs` is module `a::b`; its `super` is `a`. A `mod.rs` is
+        // its folder's module, whose `super` is one up as well.
+        let _ = is_dir_module;
+        let base = from.len().saturating_sub(ups);
+        let mut path = from[..base].to_vec();
+        path.extend(ident(tail));
+        paths.push(path);
+    }
+    paths
+}
+
+/// Every crate's modules at every level: no two siblings use each other,
+/// directly or around a circle (a child using its parent, or a parent its
+/// child, is not a circle between siblings).
+#[test]
+fn no_module_at_any_level_imports_one_that_imports_it_back() {
+    let mut circles = Vec::new();
+    for src in [
+        "harness/src",
+        "model/src",
+        "spec/src",
+        "softdevice/src",
+        "features/src",
+        "ethercat/src",
+        "kernel/src",
+        "cabi/src",
+        "src",
+    ] {
+        let src = root().join(src);
+        let files = rust_files(&src);
+        let modules: BTreeSet<Vec<String>> = files.iter().map(|f| module_path(&src, f)).collect();
+        // Arrows between siblings, keyed by their parent.
+        let mut arrows: BTreeMap<Vec<String>, BTreeMap<String, BTreeSet<String>>> = BTreeMap::new();
+        for file in &files {
+            let from = module_path(&src, file);
+            let is_dir_module = file.file_name().is_some_and(|n| n == "mod.rs");
+            let text = std::fs::read_to_string(file).unwrap();
+            for line in text.lines().filter(|l| !l.trim_start().starts_with("//")) {
+                for named in named_paths(line, &from, is_dir_module) {
+                    let Some(to) = (0..=named.len())
+                        .rev()
+                        .map(|n| named[..n].to_vec())
+                        .find(|prefix| modules.contains(prefix))
+                    else {
+                        continue;
+                    };
+                    let common = from.iter().zip(&to).take_while(|(a, b)| a == b).count();
+                    if common == from.len() || common == to.len() {
+                        continue; // one contains the other
+                    }
+                    arrows
+                        .entry(from[..common].to_vec())
+                        .or_default()
+                        .entry(from[common].clone())
+                        .or_default()
+                        .insert(to[common].clone());
+                }
+            }
+        }
+        for (parent, level) in &arrows {
+            let mut done = BTreeSet::new();
+            for start in level.keys() {
+                let mut path = Vec::new();
+                if let Some(cycle) = find_cycle(start, level, &mut path, &mut done) {
+                    circles.push(format!(
+                        "{}: in `{}`: {}",
+                        src.strip_prefix(root()).unwrap().display(),
+                        parent.join("::"),
+                        cycle.join(" → ")
+                    ));
+                }
+            }
+        }
+    }
+    assert!(circles.is_empty(), "import circles: {circles:#?}");
+}
+
+fn find_cycle(
+    module: &str,
+    arrows: &BTreeMap<String, BTreeSet<String>>,
+    path: &mut Vec<String>,
+    done: &mut BTreeSet<String>,
+) -> Option<Vec<String>> {
+    if let Some(at) = path.iter().position(|m| m == module) {
+        let mut cycle = path[at..].to_vec();
+        cycle.push(module.to_string());
+        return Some(cycle);
+    }
+    if done.contains(module) {
+        return None;
+    }
+    path.push(module.to_string());
+    for next in arrows.get(module).into_iter().flatten() {
+        if let Some(cycle) = find_cycle(next, arrows, path, done) {
+            return Some(cycle);
+        }
+    }
+    path.pop();
+    done.insert(module.to_string());
+    None
 }

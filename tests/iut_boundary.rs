@@ -131,10 +131,40 @@ fn an_iut_that_exits_after_answering_is_an_error() {
     run("exits", &iut, &[]).is_an_error(30, &["exited (exit status: 0)"]);
 }
 
+/// A command that cannot start is one line naming it with the shell's own
+/// words, and exit 2 (issue 34: it was an ERROR line per requirement, and
+/// once 662 lines of `sh: not found`).
 #[test]
-fn a_mistyped_iut_path_is_an_error() {
-    run("typo", "exec:./no-such-iut-anywhere", &[])
-        .is_an_error(30, &["exit status: 127", "not found"]);
+fn a_mistyped_iut_path_is_one_line() {
+    let run = run("typo", "exec:./no-such-iut-anywhere", &[]);
+    assert_eq!(run.output.status.code(), Some(2), "{}", run.stderr());
+    let stderr = run.stderr();
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "{stderr}");
+    assert!(
+        lines[0].contains("cannot start `./no-such-iut-anywhere`")
+            && lines[0].contains("not found"),
+        "{stderr}"
+    );
+    assert!(
+        run.report.is_empty(),
+        "a run that never started wrote a report"
+    );
+    // The same for the PLC side, and for a library that is no file.
+    for (side, iut) in [
+        ("plc", "exec:./no-such-client-anywhere"),
+        ("device", "lib:./no-such-library.so"),
+    ] {
+        let output = Command::new(CANIF)
+            .args(["run", "--side", side, "--iut", iut, "--report"])
+            .arg(scratch("typo-other").join("report"))
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{side}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{side}: {stderr}");
+        assert!(stderr.contains("no-such-"), "{side}: {stderr}");
+    }
 }
 
 #[test]
@@ -175,6 +205,18 @@ fn an_iut_that_forks_and_hangs_leaves_no_process() {
 fn an_iut_whose_child_leaves_its_session_leaves_no_process() {
     let iut = format!("exec:python3 {} setsid-hang", script("misbehave.py"));
     let run = run("setsid", &iut, &[]);
+    run.is_an_error(30, &["no answer to `cycle` within 1000 ms"]);
+    let pids = std::fs::read_to_string(run.dir.join("pids")).unwrap();
+    assert!(pids.lines().count() >= 2, "recorded: {pids}");
+}
+
+/// A daemon the IUT starts — double fork, `setsid`, stdio closed, an empty
+/// environment — ends with the IUT all the same (issue 34: it survived every
+/// run, as nothing marked it as the IUT's).
+#[test]
+fn an_iut_whose_daemon_forgets_everything_leaves_no_process() {
+    let iut = format!("exec:python3 {} daemon-hang", script("misbehave.py"));
+    let run = run("daemon", &iut, &[]);
     run.is_an_error(30, &["no answer to `cycle` within 1000 ms"]);
     let pids = std::fs::read_to_string(run.dir.join("pids")).unwrap();
     assert!(pids.lines().count() >= 2, "recorded: {pids}");

@@ -15,9 +15,9 @@ use std::path::PathBuf;
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};
 
-use canif_harness::adapter::protocol::OwnedBus;
-use canif_harness::device::exec_iut::ExecIut;
 use canif_harness::device::quick_start::quick_start;
+use canif_harness::door::adapter::protocol::OwnedBus;
+use canif_harness::door::exec::ExecIut;
 use canif_model::canopen::NodeId;
 use canif_model::config::InterfaceConfig;
 use canif_model::image::ImageLayout;
@@ -573,7 +573,7 @@ fn quick_start_over(interface: &str) -> Result<(), Failed> {
         let layout = ImageLayout::new(&config, caps.info_data);
         let mut iut = ExecIut::spawn(
             &device_command(interface, None)["exec:".len()..],
-            Duration::from_secs(5),
+            canif_harness::door::Timeouts::default(),
             false,
         )?;
         let epoch = canif_kernel::realtime_ns();
@@ -581,7 +581,7 @@ fn quick_start_over(interface: &str) -> Result<(), Failed> {
             interface: interface.to_string(),
             epoch_ns: epoch,
         };
-        if let canif_harness::device::exec_iut::Configured::Refused(reason) =
+        if let canif_harness::door::exec::Configured::Refused(reason) =
             iut.configure(&caps, &config, Some(&bus))?
         {
             return Err(

@@ -7,6 +7,7 @@
 
 mod client;
 pub mod guard;
+pub mod isolation;
 
 use std::ffi::{c_char, c_int, c_void, CStr};
 use std::path::Path;

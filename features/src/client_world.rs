@@ -85,11 +85,8 @@ impl std::fmt::Debug for ClientWorld {
 impl ClientWorld {
     fn new() -> Self {
         let target = client_target();
-        let config = canif_harness::device::cases::interface(
-            FrameFormat::Base11,
-            QueueMode::Standard,
-            &target.caps,
-        );
+        let config =
+            canif_harness::run::interface(FrameFormat::Base11, QueueMode::Standard, &target.caps);
         ClientWorld {
             target,
             config,
@@ -106,7 +103,7 @@ impl ClientWorld {
 
     /// The interface as the profile offers it, with `slots` slots.
     pub fn set_up(&mut self, format: FrameFormat, queue: QueueMode, slots: u8) {
-        self.config = canif_harness::device::cases::interface(format, queue, &self.target.caps);
+        self.config = canif_harness::run::interface(format, queue, &self.target.caps);
         (self.config.tx_slots, self.config.rx_slots) = (slots, slots);
     }
 

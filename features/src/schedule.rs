@@ -2,11 +2,11 @@
 //! run of it as the harness reports it. The command line and the test
 //! target both schedule through here.
 
-use canif_harness::client::declaration::Application;
 use canif_harness::client::suite::ClientKind;
 use canif_harness::client::ClientDeclaration;
 use canif_harness::device::refusals::OFFERED_REFUSED;
 use canif_harness::device::{blame, IutKind};
+use canif_harness::door::declaration::client::Application;
 use canif_harness::verdict::{NotRunReason, Rest};
 use canif_harness::{GherkinOutcome, GherkinRun};
 use canif_model::config::{FrameFormat, QueueMode};
@@ -100,7 +100,7 @@ pub fn declined_by_client(
             }
         }
     }
-    let config = canif_harness::device::cases::interface(format, queue, &caps);
+    let config = canif_harness::run::interface(format, queue, &caps);
     if let Err(why) = declared.serve(&config) {
         return Some(why);
     }

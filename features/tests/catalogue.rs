@@ -4,6 +4,7 @@
 use canif_features::{run_scenario, scenarios, ScenarioOutcome, Target};
 use canif_harness::device::blame;
 use canif_harness::device::IutKind;
+use canif_harness::door::{Door, Timeouts};
 use canif_softdevice::Fault;
 use canif_spec::Catalogue;
 
@@ -146,11 +147,11 @@ fn a_broken_iut_makes_a_scenario_an_error() {
         .find(|s| s.file.ends_with("tx-handshake.feature"))
         .unwrap();
     let target = Target {
-        iut: IutKind::Exec {
+        iut: IutKind::Door(Door::Exec {
             command: "echo stuck >&2; sleep 30".into(),
-            timeout_ms: 200,
+            timeouts: Timeouts::with_request(std::time::Duration::from_millis(200)),
             same_cpu: false,
-        },
+        }),
         profile: "el6751-mdp".into(),
         caps: canif_model::config::Capabilities::everything(),
     };
@@ -177,14 +178,14 @@ fn a_babbling_iut_ends_a_scenario_in_bounded_time() {
         .unwrap();
     for mode in ["babble", "stuck-time"] {
         let target = Target {
-            iut: IutKind::Exec {
+            iut: IutKind::Door(Door::Exec {
                 command: format!(
                     "python3 {}/../tests/iuts/misbehave.py {mode}",
                     env!("CARGO_MANIFEST_DIR")
                 ),
-                timeout_ms: 2_000,
+                timeouts: Timeouts::with_request(std::time::Duration::from_millis(2_000)),
                 same_cpu: false,
-            },
+            }),
             profile: "el6751-mdp".into(),
             caps: canif_model::config::Capabilities::everything(),
         };

@@ -11,9 +11,10 @@
 use std::process::Command;
 use std::time::Instant;
 
-use canif_harness::device::ethercat::{Emulated, EthercatLink};
 use canif_harness::device::suite::Options;
 use canif_harness::device::IutKind;
+use canif_harness::door::ethercat::{Emulated, EthercatLink};
+use canif_harness::door::Door;
 use canif_harness::run::run_profile;
 use canif_spec::Catalogue;
 
@@ -39,11 +40,11 @@ fn measure(name: &str, iut: &IutKind) -> (f64, f64) {
         run.failures.is_empty() && errors == 0,
         "{name} did not conform: {errors} errors, first {first_error:?}"
     );
-    if let IutKind::Ethercat { link, .. } = iut {
-        let idle = canif_harness::device::ethercat::survey(
+    if let IutKind::Door(Door::Ethercat { link, .. }) = iut {
+        let idle = canif_harness::door::ethercat::survey(
             profile,
             link,
-            canif_harness::device::ethercat::Pace::Unpaced(IDLE_CYCLES),
+            canif_harness::door::ethercat::Pace::Unpaced(IDLE_CYCLES),
         )
         .expect("the terminal comes up");
         println!(
@@ -95,10 +96,10 @@ fn main() {
     );
     let memory = measure(
         "EtherCAT, in-memory link",
-        &IutKind::Ethercat {
+        &IutKind::Door(Door::Ethercat {
             identity: None,
             link: EthercatLink::Emulated(emulated()),
-        },
+        }),
     );
     println!(
         "in process runs {:.0}x the checked frames/s of the in-memory EtherCAT run",
@@ -108,14 +109,14 @@ fn main() {
         Some((master, terminal)) => {
             let over_veth = measure(
                 "EtherCAT, veth pair",
-                &IutKind::Ethercat {
+                &IutKind::Door(Door::Ethercat {
                     identity: None,
                     link: EthercatLink::Veth {
                         master: master.clone(),
                         terminal,
                         emulated: emulated(),
                     },
-                },
+                }),
             );
             println!(
                 "the in-memory EtherCAT run checks {:.0}x the frames/s of the veth run",

@@ -11,14 +11,13 @@
 //! breach, each judge part stopping at its own first). What the documents
 //! allow but an author wants to know is counted beside, as `advisory`.
 //!
-//! The arrows run one way (see README.md): `suite` → `lockstep` → `plc`,
-//! `pair`, `bus` → `diff`, `blame`, `history`; `iut_kind` → `adapter`, `iut`;
-//! `client::suite` → `client::rig` → `client::{master, judge, application}`,
-//! `device_side` (the device the harness plays for a PLC-side client).
+//! The arrows run one way (see README.md): the two sides, [`device`] and
+//! [`client`], stand on what both share: [`run`] (one profile's run of
+//! either) and [`door`] (how an implementation under test is reached, in
+//! either role). Neither side imports the other.
 
 #![forbid(unsafe_code)]
 
-pub mod adapter;
 pub mod advisory;
 pub mod bus;
 pub mod canopen;
@@ -26,6 +25,7 @@ pub mod certificate;
 pub mod client;
 pub mod compare;
 pub mod device;
+pub mod door;
 pub mod error;
 pub mod interrupt;
 pub mod outcome;

@@ -4,9 +4,10 @@
 //! device is caught on the requirement it breaks in process; a SubDevice that
 //! answers wrongly is an error naming what it did, never a FAIL.
 
-use canif_harness::device::ethercat::{Emulated, EthercatLink, LinkFault};
 use canif_harness::device::suite::Options;
 use canif_harness::device::IutKind;
+use canif_harness::door::ethercat::{Emulated, EthercatLink, LinkFault};
+use canif_harness::door::Door;
 use canif_harness::outcome::Outcome;
 use canif_harness::run::{run_profile, ProfileRun};
 use canif_softdevice::Fault;
@@ -21,14 +22,14 @@ fn terminals(catalogue: &Catalogue) -> Vec<&Profile> {
 }
 
 fn run(profile: &Profile, faults: Vec<Fault>, link_fault: Option<LinkFault>) -> ProfileRun {
-    let iut = IutKind::Ethercat {
+    let iut = IutKind::Door(Door::Ethercat {
         identity: None, // the suite takes it from the profile
         link: EthercatLink::Emulated(Emulated {
             faults,
             choices: vec![],
             link_fault,
         }),
-    };
+    });
     run_profile(profile, &iut, &Options::quick(7), |_| {})
 }
 
@@ -153,7 +154,7 @@ fn an_lrw_that_reads_the_wrong_inputs_fails_the_exchange() {
 /// Covers: PDX-006
 #[test]
 fn a_survey_names_the_terminal_and_counts_a_soak() {
-    use canif_harness::device::ethercat::{survey, Pace};
+    use canif_harness::door::ethercat::{survey, Pace};
     let catalogue = Catalogue::embedded().unwrap();
     let profile = catalogue.profile("el6751-legacy").unwrap();
     let identity = profile.ethercat.unwrap();

@@ -333,3 +333,11 @@ impl InterfaceConfig {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn tx_queue_accounting_reads_back_by_its_name_and_the_reference_comes_first() {
+        crate::freedoms::tests::round_trip::<super::TxQueueAccounting>();
+    }
+}

@@ -109,25 +109,26 @@ impl OversizeBatch {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+
+    /// Every value of `T` reads back by its name, and the reference comes first.
+    pub(crate) fn round_trip<T: Named + PartialEq + Default + std::fmt::Debug>() {
+        assert_eq!(T::ALL[0], T::default());
+        for (v, name) in T::ALL.iter().zip(T::NAMES) {
+            assert_eq!(v.name(), *name);
+            assert_eq!(T::from_name(name), Some(*v));
+        }
+        assert_eq!(T::ALL.len(), T::NAMES.len());
+        assert_eq!(T::from_name("no-such-value"), None);
+    }
 
     #[test]
     fn every_value_reads_back_by_its_name_and_the_reference_comes_first() {
-        fn round_trip<T: Named + PartialEq + Default + std::fmt::Debug>() {
-            assert_eq!(T::ALL[0], T::default());
-            for (v, name) in T::ALL.iter().zip(T::NAMES) {
-                assert_eq!(v.name(), *name);
-                assert_eq!(T::from_name(name), Some(*v));
-            }
-            assert_eq!(T::ALL.len(), T::NAMES.len());
-            assert_eq!(T::from_name("no-such-value"), None);
-        }
         round_trip::<OversizeBatch>();
         round_trip::<BadTxLength>();
         round_trip::<RxIdleCount>();
         round_trip::<StaleRxSlots>();
-        round_trip::<crate::config::TxQueueAccounting>();
     }
 
     #[test]

@@ -1,6 +1,6 @@
 //! Where things are in the process images, written once, firmware style:
 //! the header entries of 003 (0x700z / 0x600z) and the InfoData words of
-//! 000 §8.3.3. The message structures are [`crate::MsgGeometry`]'s table.
+//! 000 §8.3.3. The message structures are `crate::MsgGeometry`'s table.
 
 /// Header offsets, shared by the output and the input image.
 pub mod header {

@@ -80,7 +80,7 @@ pub struct Settings {
     pub dc_sync1_shift: Option<u64>,
     pub rx_fifo_depth: usize,
     pub tx_fifo_depth: usize,
-    /// The bit timing words reported in InfoData[1] and [2].
+    /// The bit timing words reported in InfoData\[1\] and \[2\].
     pub nominal_timing: u32,
     pub data_timing: u32,
 }

@@ -6,8 +6,10 @@ use std::path::Path;
 use serde::Deserialize;
 
 use crate::error::{SpecError, SpecErrors};
+use crate::lines::{line_of, LineIndex};
 use crate::profile::Profile;
 use crate::scope::{Side, Suite};
+pub use crate::source::Source;
 
 /// How firmly a requirement is grounded (see shared/RULINGS.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Deserialize)]
@@ -34,14 +36,6 @@ pub enum Verification {
     /// of the documents' tables, formulas or samples that no implementation's
     /// images or bus show; `reason` says what it is.
     Model,
-}
-
-/// Where a statement comes from.
-#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Source {
-    pub file: String,
-    pub section: String,
 }
 
 /// One testable statement.
@@ -181,34 +175,6 @@ fn files_sha256(files: &[(String, String)]) -> String {
         .iter()
         .map(|b| format!("{b:02x}"))
         .collect()
-}
-
-/// The 1-based line of the first line containing `needle` at or after `from`.
-pub(crate) fn line_of(text: &str, needle: &str, from: usize) -> Option<usize> {
-    LineIndex::new(text).find(needle, from)
-}
-
-/// Where each line of a text starts, so that a search from line N starts at
-/// its byte offset: looking up every requirement of a file stays linear.
-pub(crate) struct LineIndex<'a> {
-    text: &'a str,
-    starts: Vec<usize>,
-}
-
-impl<'a> LineIndex<'a> {
-    pub(crate) fn new(text: &'a str) -> Self {
-        let starts = std::iter::once(0)
-            .chain(text.match_indices('\n').map(|(at, _)| at + 1))
-            .collect();
-        LineIndex { text, starts }
-    }
-
-    /// The 1-based line of the first occurrence of `needle` at or after line `from`.
-    pub(crate) fn find(&self, needle: &str, from: usize) -> Option<usize> {
-        let start = *self.starts.get(from.saturating_sub(1))?;
-        let at = start + self.text[start..].find(needle)?;
-        Some(self.starts.partition_point(|&s| s <= at))
-    }
 }
 
 /// The most a catalogue file may hold: far above any real one (the embedded

@@ -14,9 +14,11 @@
 mod catalogue;
 pub mod coverage;
 mod error;
+mod lines;
 mod profile;
 mod req_id;
 mod scope;
+mod source;
 
 pub use catalogue::{
     Area, Capability, Catalogue, Requirement, Ruling, Source, SourceDocument, Status, Verification,

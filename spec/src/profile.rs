@@ -4,8 +4,9 @@ use std::collections::BTreeSet;
 
 use serde::Deserialize;
 
-use crate::catalogue::{line_of, Source};
 use crate::error::SpecError;
+use crate::lines::line_of;
+use crate::source::Source;
 use canif_model::config::Capabilities;
 
 /// One device (or firmware range) of the feature matrix in 000/001 §2.

@@ -54,7 +54,7 @@ pub(crate) fn certify(
     if let Some(key) = key {
         // A key that cannot sign is found out before the run, not after it.
         if let Err(error) = certificate::sign(b"", key) {
-            eprintln!("--key {error}");
+            errln!("--key {error}");
             return ExitCode::from(2);
         }
     }
@@ -85,7 +85,7 @@ pub(crate) fn certify(
                 catalogue,
                 &kind,
                 &plan,
-                canif_harness::device::ethercat::Pace::Unpaced(device::SURVEY_CYCLES),
+                canif_harness::door::ethercat::Pace::Unpaced(device::SURVEY_CYCLES),
             )
         }
         SideArg::Plc => {
@@ -121,12 +121,12 @@ pub(crate) fn certify(
         .and_then(|()| std::fs::write(out.join("certificate.html"), &page))
         .and_then(|()| std::fs::write(&json, &bytes));
     if let Err(error) = written {
-        eprintln!("cannot write the certificate to {}: {error}", out.display());
+        errln!("cannot write the certificate to {}: {error}", out.display());
         return ExitCode::from(2);
     }
     match key {
         Some(key) => match certificate::sign(&bytes, key).map(|s| std::fs::write(&sig, s)) {
-            Ok(Ok(())) => println!(
+            Ok(Ok(())) => sayln!(
                 "certificate: {} — signed in {}; check it without canif:\n  {}",
                 if cert.conforms {
                     "CONFORMS"
@@ -137,18 +137,18 @@ pub(crate) fn certify(
                 ssh_keygen_command(&json)
             ),
             Ok(Err(error)) => {
-                eprintln!("cannot write {}: {error}", sig.display());
+                errln!("cannot write {}: {error}", sig.display());
                 return ExitCode::from(2);
             }
             Err(error) => {
-                eprintln!("--key {error}");
+                errln!("--key {error}");
                 return ExitCode::from(2);
             }
         },
         None => {
             // A stale signature beside a new certificate would verify nothing.
             let _ = std::fs::remove_file(&sig);
-            println!(
+            sayln!(
                 "certificate: {} — UNSIGNED (no --key): anyone could have written {}",
                 if cert.conforms {
                     "CONFORMS"
@@ -167,20 +167,20 @@ pub(crate) fn verify_certificate(path: &Path, pubkey: &Path) -> ExitCode {
     let bytes = match std::fs::read(path) {
         Ok(bytes) => bytes,
         Err(error) => {
-            eprintln!("{}: {error}", path.display());
+            errln!("{}: {error}", path.display());
             return ExitCode::from(2);
         }
     };
     let cert = match Certificate::parse(&bytes) {
         Ok(cert) => cert,
         Err(error) => {
-            eprintln!("{}: {error}", path.display());
+            errln!("{}: {error}", path.display());
             return ExitCode::from(2);
         }
     };
     let sig_path = path.with_extension("json.sig");
     let Ok(signature) = std::fs::read_to_string(&sig_path) else {
-        println!(
+        sayln!(
             "{}: UNSIGNED — there is no {} beside it",
             path.display(),
             sig_path.display()
@@ -195,7 +195,7 @@ pub(crate) fn verify_certificate(path: &Path, pubkey: &Path) -> ExitCode {
                     "the HTML beside it matches".to_string()
                 }
                 Ok(_) => {
-                    println!(
+                    sayln!(
                         "{}: the signature is good, but {} is not the page it was signed with",
                         path.display(),
                         html.display()
@@ -204,7 +204,7 @@ pub(crate) fn verify_certificate(path: &Path, pubkey: &Path) -> ExitCode {
                 }
                 Err(_) => format!("no {} to check", html.display()),
             };
-            println!(
+            sayln!(
                 "{}: good signature by {fingerprint}; {}, {} on {}; {page}",
                 path.display(),
                 if cert.conforms {
@@ -218,7 +218,7 @@ pub(crate) fn verify_certificate(path: &Path, pubkey: &Path) -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(error) => {
-            println!("{}: {error}", path.display());
+            sayln!("{}: {error}", path.display());
             ExitCode::from(1)
         }
     }
@@ -238,18 +238,16 @@ pub(crate) fn compare(
     let (base, new) = match (load(base), load(new)) {
         (Ok(base), Ok(new)) => (base, new),
         (Err(e), _) | (_, Err(e)) => {
-            eprintln!("{e}");
+            errln!("{e}");
             return ExitCode::from(2);
         }
     };
     let comparison = match canif_harness::compare::compare(&base, &new, options) {
         Ok(comparison) => comparison,
         Err(mismatches) => {
-            eprintln!(
-                "the two reports do not describe the same run (--force compares them anyway):"
-            );
+            errln!("the two reports do not describe the same run (--force compares them anyway):");
             for mismatch in mismatches {
-                eprintln!("  {mismatch}");
+                errln!("  {mismatch}");
             }
             return ExitCode::from(2);
         }

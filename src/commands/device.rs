@@ -5,8 +5,8 @@ use std::io::Write as _;
 use std::process::ExitCode;
 
 use canif_harness::device::bus::BusChoice;
-use canif_harness::device::server::{self, Build};
 use canif_harness::device::IutKind;
+use canif_harness::door::serve::device::{self as server, Build};
 
 use super::{soft_device_choices, soft_device_faults};
 
@@ -19,7 +19,7 @@ pub(crate) fn device(
     bus: Option<&str>,
 ) -> ExitCode {
     if !stdio {
-        eprintln!("canif device needs --stdio: its process image is served over the adapter protocol (docs/adapter-protocol.md)");
+        errln!("canif device needs --stdio: its process image is served over the adapter protocol (docs/adapter-protocol.md)");
         return ExitCode::from(2);
     }
     let kind = match (soft_device_faults(faults), soft_device_choices(choices)) {
@@ -27,10 +27,10 @@ pub(crate) fn device(
         (Err(code), _) | (_, Err(code)) => return code,
     };
     // Checked as `run --declare` checks them, then said as the protocol says them.
-    let mut declared = canif_harness::device::choices::Declared::default();
+    let mut declared = canif_harness::door::declaration::choices::Declared::default();
     for text in declare {
         if let Err(error) = declared.declare(text) {
-            eprintln!("--declare {text}: {error}");
+            errln!("--declare {text}: {error}");
             return ExitCode::from(2);
         }
     }
@@ -49,7 +49,7 @@ pub(crate) fn device(
     match served {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("canif device: {error}");
+            errln!("canif device: {error}");
             ExitCode::from(2)
         }
     }
@@ -65,13 +65,13 @@ pub(crate) fn ethercat_terminal(
     profile: &str,
     (faults, choices): (&[String], &[String]),
 ) -> ExitCode {
-    use canif_harness::device::ethercat::{emulated_terminal, served, Emulated};
+    use canif_harness::door::ethercat::{emulated_terminal, served, Emulated};
     let Some(profile) = catalogue.profile(profile) else {
-        eprintln!("unknown profile `{profile}`; `canif profiles` lists them");
+        errln!("unknown profile `{profile}`; `canif profiles` lists them");
         return ExitCode::from(2);
     };
     let Some(identity) = profile.ethercat else {
-        eprintln!(
+        errln!(
             "--profile {}: no EtherCAT terminal (it gives no identity)",
             profile.name
         );
@@ -89,18 +89,18 @@ pub(crate) fn ethercat_terminal(
     let can = match bus.map(canif_kernel::BusSpec::parse).transpose() {
         Ok(spec) => spec.map(|spec| spec.iut),
         Err(error) => {
-            eprintln!("--bus {error}");
+            errln!("--bus {error}");
             return ExitCode::from(2);
         }
     };
     if let (Some(can), Err(error)) = (&can, canif_kernel::probe()) {
-        eprintln!("--bus socketcan:{can}: {error}");
+        errln!("--bus socketcan:{can}: {error}");
         return ExitCode::from(2);
     }
     let mut terminal = emulated_terminal(&profile.model_capabilities(), &identity, &emulated);
     // Said once both interfaces are open: from here a master finds it.
     let ready = || {
-        eprintln!(
+        errln!(
             "canif device: {} ({}) on {interface}, vendor {:#010x} product {:#010x} revision {:#010x}, CAN side {}; Ctrl-C stops",
             profile.name,
             profile.device,
@@ -120,14 +120,14 @@ pub(crate) fn ethercat_terminal(
         (&ready, &stop),
     ) {
         Ok(served) => {
-            eprintln!(
+            errln!(
                 "canif device: {} EtherCAT frames answered, {} cycles ({} SYNC0 events missed), {} CAN frames sent",
                 served.frames, served.cycles, served.missed_sync0, served.can_frames
             );
             ExitCode::SUCCESS
         }
         Err(error) => {
-            eprintln!("canif device --ethercat {interface}: {error}");
+            errln!("canif device --ethercat {interface}: {error}");
             ExitCode::from(2)
         }
     }
@@ -140,7 +140,7 @@ pub(crate) fn ethercat_terminal(
     _: &str,
     _: (&[String], &[String]),
 ) -> ExitCode {
-    eprintln!("--ethercat {interface}: this canif was built without Linux sockets (cargo feature `socketcan`)");
+    errln!("--ethercat {interface}: this canif was built without Linux sockets (cargo feature `socketcan`)");
     ExitCode::from(2)
 }
 
@@ -148,8 +148,7 @@ pub(crate) fn ethercat_terminal(
 fn serve_on_bus(build: &Build<'_>, bus: &str) -> Result<(), String> {
     let spec = canif_kernel::BusSpec::parse(bus).map_err(|e| format!("--bus {e}"))?;
     canif_kernel::probe().map_err(|e| format!("--bus {bus}: {e}"))?;
-    canif_harness::device::server_bus::serve_on_bus(build, Some(&spec.iut))
-        .map_err(|e| e.to_string())
+    canif_harness::door::serve::bus::serve_on_bus(build, Some(&spec.iut)).map_err(|e| e.to_string())
 }
 
 #[cfg(not(feature = "socketcan"))]
@@ -176,12 +175,12 @@ pub(crate) fn coupler(
             let listener = match std::net::TcpListener::bind(("127.0.0.1", port)) {
                 Ok(listener) => listener,
                 Err(error) => {
-                    eprintln!("cannot listen on 127.0.0.1:{port}: {error}");
+                    errln!("cannot listen on 127.0.0.1:{port}: {error}");
                     return ExitCode::from(2);
                 }
             };
             // The port goes to stdout first, so a caller that asked for port 0 learns it.
-            println!(
+            sayln!(
                 "{}",
                 listener.local_addr().map(|a| a.port()).unwrap_or(port)
             );
@@ -191,7 +190,7 @@ pub(crate) fn coupler(
                 if let Err(error) =
                     canif_harness::canopen::socketcand::serve(&listener, &mut coupler)
                 {
-                    eprintln!("canif coupler --socketcand: {error}");
+                    errln!("canif coupler --socketcand: {error}");
                     return ExitCode::from(2);
                 }
             }
@@ -209,24 +208,24 @@ fn coupler_on_bus(bus: &str, coupler: &mut canif_model::canopen::coupler::Couple
     let socket = match opened {
         Ok(socket) => socket,
         Err(error) => {
-            eprintln!("canif coupler --bus {bus}: {error}");
+            errln!("canif coupler --bus {bus}: {error}");
             return ExitCode::from(2);
         }
     };
-    println!(
+    sayln!(
         "ready: node {} on {}",
         coupler.node().get(),
         socket.interface
     );
     let _ = std::io::stdout().flush();
     let error = canif_harness::canopen::on_bus::serve(&socket, coupler);
-    eprintln!("{error}");
+    errln!("{error}");
     ExitCode::from(2)
 }
 
 #[cfg(not(feature = "socketcan"))]
 fn coupler_on_bus(bus: &str, _: &mut canif_model::canopen::coupler::Coupler) -> ExitCode {
-    eprintln!("canif coupler --bus {bus}: this canif was built without SocketCAN (cargo feature `socketcan`)");
+    errln!("canif coupler --bus {bus}: this canif was built without SocketCAN (cargo feature `socketcan`)");
     ExitCode::from(2)
 }
 
@@ -255,7 +254,7 @@ pub(crate) fn canopen_suite(
         .is_some_and(|i| *i != crate::cli::IutArg::SoftDevice)
         || !iut.fault.is_empty()
     {
-        eprintln!("--suite canopen checks a CANopen node (the simulated coupler, or a node on --bus), not an interface IUT: --iut and --fault do not apply (--coupler-fault does)");
+        errln!("--suite canopen checks a CANopen node (the simulated coupler, or a node on --bus), not an interface IUT: --iut and --fault do not apply (--coupler-fault does)");
         return ExitCode::from(2);
     }
     let node = match node_id(run.node) {
@@ -283,14 +282,14 @@ pub(crate) fn canopen_suite(
         #[cfg(feature = "socketcan")]
         BusChoice::SocketCan(options) => {
             if run.fault.is_some() {
-                eprintln!("--coupler-fault applies to the simulated coupler; on a SocketCAN bus, start `canif coupler --bus … --fault …` instead");
+                errln!("--coupler-fault applies to the simulated coupler; on a SocketCAN bus, start `canif coupler --bus … --fault …` instead");
                 return ExitCode::from(2);
             }
             let mut remote =
                 match canif_harness::canopen::SocketCanNode::open(&options.spec.tester, node) {
                     Ok(remote) => remote,
                     Err(error) => {
-                        eprintln!("error: {error}");
+                        errln!("error: {error}");
                         return ExitCode::from(2);
                     }
                 };
@@ -311,7 +310,7 @@ pub(crate) fn canopen_suite(
         .filter(|c| selection.admits(c.name, c.requirements.iter().copied()))
         .collect();
     if selected.is_empty() {
-        eprintln!(
+        errln!(
             "{} matches no CANopen node check; `canif run --suite canopen` runs them all",
             selection.flags()
         );
@@ -319,8 +318,8 @@ pub(crate) fn canopen_suite(
     }
     for check in &selected {
         match &check.outcome {
-            Ok(()) => eprintln!("pass  {} ({})", check.name, check.requirements.join(", ")),
-            Err(why) => eprintln!(
+            Ok(()) => errln!("pass  {} ({})", check.name, check.requirements.join(", ")),
+            Err(why) => errln!(
                 "FAIL  {} ({}): {why}",
                 check.name,
                 check.requirements.join(", ")
@@ -329,7 +328,7 @@ pub(crate) fn canopen_suite(
     }
     // The node is judged against every requirement as one "profile" with every capability.
     let Some(mut profile) = catalogue.profiles.first().cloned() else {
-        eprintln!("the catalogue has no profile to judge the node against");
+        errln!("the catalogue has no profile to judge the node against");
         return ExitCode::from(2);
     };
     profile.name = format!("canopen-node-{}", node.get());
@@ -389,7 +388,7 @@ fn simulated_coupler(
 /// A CANopen node id from the command line, or the exit code of a usage error.
 fn node_id(node: u8) -> Result<canif_model::canopen::NodeId, ExitCode> {
     canif_model::canopen::NodeId::new(node).ok_or_else(|| {
-        eprintln!("node ids are 1..63, not {node}");
+        errln!("node ids are 1..63, not {node}");
         ExitCode::from(2)
     })
 }
@@ -403,7 +402,7 @@ fn coupler_fault(
         None => Ok(None),
         Some(name) => CouplerFault::from_name(name).map(Some).ok_or_else(|| {
             let known: Vec<&str> = CouplerFault::ALL.iter().map(|f| f.name()).collect();
-            eprintln!("unknown coupler fault `{name}`: {}", known.join(", "));
+            errln!("unknown coupler fault `{name}`: {}", known.join(", "));
             ExitCode::from(2)
         }),
     }
@@ -415,16 +414,16 @@ pub(crate) fn lib_host(role: crate::cli::LibRole, path: &std::path::Path) -> Exi
     let (input, output) = (std::io::stdin().lock(), std::io::stdout().lock());
     let served = match role {
         crate::cli::LibRole::Device => {
-            canif_harness::device::server::serve_library(path, input, output)
+            canif_harness::door::serve::device::serve_library(path, input, output)
         }
         crate::cli::LibRole::Client => {
-            canif_harness::client::server::serve_library(path, input, output)
+            canif_harness::door::serve::client::serve_library(path, input, output)
         }
     };
     match served {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("canif lib-host {}: {error}", path.display());
+            errln!("canif lib-host {}: {error}", path.display());
             ExitCode::from(2)
         }
     }

@@ -11,6 +11,8 @@ use std::process::ExitCode;
 use canif_harness::client::faulty::{ClientFault, ClientShape};
 use canif_harness::client::suite::ClientKind;
 use canif_harness::device::IutKind;
+use canif_harness::door::declaration::{self, choices::Declared};
+use canif_harness::door::{Door, LibHost, Role};
 use canif_softdevice::{Choice, Fault};
 
 use crate::cli::{IutArg, IutOptions};
@@ -21,7 +23,7 @@ pub(crate) fn soft_device_faults(names: &[String]) -> Result<Vec<Fault>, ExitCod
         .iter()
         .map(|name| {
             Fault::from_name(name).ok_or_else(|| {
-                eprintln!("unknown fault `{name}`; `canif faults` lists them");
+                errln!("unknown fault `{name}`; `canif faults` lists them");
                 ExitCode::from(2)
             })
         })
@@ -34,19 +36,48 @@ fn soft_device_choices(names: &[String]) -> Result<Vec<Choice>, ExitCode> {
         .iter()
         .map(|name| {
             Choice::from_name(name).ok_or_else(|| {
-                eprintln!("unknown choice `{name}`; `canif faults` lists them");
+                errln!("unknown choice `{name}`; `canif faults` lists them");
                 ExitCode::from(2)
             })
         })
         .collect()
 }
 
-/// The IUT named on the command line, or the exit code of a usage error.
+/// The IUT named on the command line, started once to see that it can
+/// start, or the exit code of a usage error.
 pub(crate) fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
+    let kind = iut_kind(iut)?;
+    if let IutKind::Door(door) = &kind {
+        starts(door, Role::Device)?;
+    }
+    Ok(kind)
+}
+
+/// The client named on the command line for `--side plc`, started once to
+/// see that it can start, or the exit code of a usage error.
+pub(crate) fn resolve_client(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
+    let kind = client_kind(iut)?;
+    if let ClientKind::Door(door) = &kind {
+        starts(door, Role::Client)?;
+    }
+    Ok(kind)
+}
+
+/// One line and exit 2 for an implementation that cannot start at all: a
+/// run of it would only repeat the shell's words for every requirement.
+fn starts(door: &Door, role: Role) -> Result<(), ExitCode> {
+    door.starts(role).map_err(|error| {
+        errln!("canif: {}", error.what);
+        ExitCode::from(2)
+    })
+}
+
+/// The device `--iut` names.
+fn iut_kind(iut: &IutOptions) -> Result<IutKind, ExitCode> {
     let choices = soft_device_choices(&iut.choice)?;
     let arg = iut.iut.clone().unwrap_or(IutArg::SoftDevice);
     if !choices.is_empty() && !matches!(arg, IutArg::SoftDevice | IutArg::Ethercat(_)) {
-        eprintln!("--choice applies to the soft device only");
+        errln!("--choice applies to the soft device only");
         return Err(ExitCode::from(2));
     }
     let chosen = soft_device_faults(&iut.fault)?;
@@ -54,25 +85,25 @@ pub(crate) fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
         if chosen.is_empty() {
             Ok(())
         } else {
-            eprintln!("--fault applies to the soft device only (pass it to the IUT's own command)");
+            errln!("--fault applies to the soft device only (pass it to the IUT's own command)");
             Err(ExitCode::from(2))
         }
     };
     Ok(match &arg {
         IutArg::Exec(command) => {
             only_soft(&chosen)?;
-            IutKind::Exec {
+            IutKind::Door(Door::Exec {
                 command: command.clone(),
-                timeout_ms: iut.timeout_ms,
+                timeouts: iut.timeouts(),
                 same_cpu: !iut.iut_cpu_free,
-            }
+            })
         }
         IutArg::Lib(path) => {
             only_soft(&chosen)?;
-            IutKind::Lib {
+            IutKind::Door(Door::Lib {
                 path: path.clone(),
                 host: lib_host(iut),
-            }
+            })
         }
         IutArg::SoftDevice => IutKind::SoftDevice {
             faults: chosen,
@@ -87,17 +118,17 @@ pub(crate) fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
                 }
                 None => only_soft(&chosen)?,
             }
-            IutKind::Ethercat {
+            IutKind::Door(Door::Ethercat {
                 identity: None,
                 link,
-            }
+            })
         }
         IutArg::Model => {
             only_soft(&chosen)?;
             IutKind::Model
         }
         IutArg::Reference | IutArg::SoftClient => {
-            eprintln!("--iut reference and softclient are PLC-side clients: add --side plc");
+            errln!("--iut reference and softclient are PLC-side clients: add --side plc");
             return Err(ExitCode::from(2));
         }
     })
@@ -114,19 +145,19 @@ fn named<T>(
         .iter()
         .map(|name| {
             from_name(name).ok_or_else(|| {
-                eprintln!("unknown {what} `{name}`; `canif faults` lists them");
+                errln!("unknown {what} `{name}`; `canif faults` lists them");
                 ExitCode::from(2)
             })
         })
         .collect()
 }
 
-/// The client named on the command line for `--side plc`, or the exit code
-/// of a usage error. A fault without `--iut` picks the soft client.
-pub(crate) fn resolve_client(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
+/// The client `--iut` names for `--side plc`. A fault without `--iut` picks
+/// the soft client.
+fn client_kind(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
     let faults = named(&iut.fault, ClientFault::from_name, "client fault")?;
     if faults.len() > 1 {
-        eprintln!("--side plc: one --fault at a time (the soft client has one defect)");
+        errln!("--side plc: one --fault at a time (the soft client has one defect)");
         return Err(ExitCode::from(2));
     }
     let shapes = named(&iut.choice, ClientShape::from_name, "soft-client choice")?;
@@ -139,7 +170,7 @@ pub(crate) fn resolve_client(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
             })
         }
         _ => {
-            eprintln!("--side plc: --choice takes the soft client (--iut softclient), one at a time, without --fault");
+            errln!("--side plc: --choice takes the soft client (--iut softclient), one at a time, without --fault");
             return Err(ExitCode::from(2));
         }
     }
@@ -149,23 +180,24 @@ pub(crate) fn resolve_client(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
         }
         (None | Some(IutArg::Reference), None) => Ok(ClientKind::Reference),
         (Some(IutArg::Reference), Some(_)) => {
-            eprintln!("--fault applies to the soft client (--iut softclient), not the reference");
+            errln!("--fault applies to the soft client (--iut softclient), not the reference");
             Err(ExitCode::from(2))
         }
-        (Some(IutArg::Exec(command)), None) => Ok(ClientKind::Exec {
+        (Some(IutArg::Exec(command)), None) => Ok(ClientKind::Door(Door::Exec {
             command: command.clone(),
-            timeout_ms: iut.timeout_ms,
-        }),
-        (Some(IutArg::Lib(path)), None) => Ok(ClientKind::Lib {
+            timeouts: iut.timeouts(),
+            same_cpu: true,
+        })),
+        (Some(IutArg::Lib(path)), None) => Ok(ClientKind::Door(Door::Lib {
             path: path.clone(),
             host: lib_host(iut),
-        }),
+        })),
         (Some(IutArg::Exec(_) | IutArg::Lib(_)), Some(_)) => {
-            eprintln!("--fault applies to the soft client (pass it to the client's own command)");
+            errln!("--fault applies to the soft client (pass it to the client's own command)");
             Err(ExitCode::from(2))
         }
         (Some(other), _) => {
-            eprintln!(
+            errln!(
                 "--side plc runs a client: --iut reference, softclient, exec:'COMMAND' or lib:PATH, not {other:?}"
             );
             Err(ExitCode::from(2))
@@ -174,88 +206,56 @@ pub(crate) fn resolve_client(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
     }
 }
 
-/// What `--declare` says of a client (NAME=VALUE lines, or @FILE of such
-/// lines, docs/plc-side.md), or the exit code of a usage error naming the
-/// line that cannot be taken.
+/// What `--declare` says of a client (docs/plc-side.md), or the exit code
+/// of a usage error naming the argument, file and line that cannot be taken.
 pub(crate) fn client_declaration(
     declare: &[String],
 ) -> Result<canif_harness::client::ClientDeclaration, ExitCode> {
     let mut declared = canif_harness::client::ClientDeclaration::default();
-    for argument in declare {
-        let (lines, origin) = match argument.strip_prefix('@') {
-            Some(path) => match std::fs::read_to_string(path) {
-                Ok(text) => (text.lines().map(String::from).collect(), path.to_string()),
-                Err(error) => {
-                    eprintln!("--declare @{path}: {error}");
-                    return Err(ExitCode::from(2));
-                }
-            },
-            None => (vec![argument.clone()], String::new()),
-        };
-        for (n, line) in lines.iter().enumerate() {
-            if let Err(error) = declared.declare(line) {
-                match origin.is_empty() {
-                    true => eprintln!("--declare {line}: {error}"),
-                    false => eprintln!("--declare @{origin}, line {}: {error}", n + 1),
-                }
-                return Err(ExitCode::from(2));
-            }
+    for line in declaration_lines(declare)? {
+        if let Err(error) = declared.declare(&line.text()) {
+            errln!("{}: {error}", line.origin);
+            return Err(ExitCode::from(2));
         }
     }
     Ok(declared)
 }
 
-/// The choices `--declare` names (NAME=VALUE, or @FILE as `canif probe`
-/// writes it: a JSON object of NAME: VALUE), or the exit code of a usage error.
-pub(crate) fn declared_choices(
-    declare: &[String],
-) -> Result<canif_harness::device::choices::Declared, ExitCode> {
-    let mut declared = canif_harness::device::choices::Declared::default();
-    for text in declare {
-        let lines: Vec<String> = match text.strip_prefix('@') {
-            None => vec![text.clone()],
-            Some(path) => {
-                let read = std::fs::read_to_string(path)
-                    .map_err(|e| e.to_string())
-                    .and_then(|json| {
-                        serde_json::from_str::<std::collections::BTreeMap<String, String>>(&json)
-                            .map_err(|e| {
-                                format!("not a JSON object of choice names and values: {e}")
-                            })
-                    });
-                match read {
-                    Ok(choices) => choices.iter().map(|(n, v)| format!("{n}={v}")).collect(),
-                    Err(error) => {
-                        eprintln!("--declare @{path}: {error}");
-                        return Err(ExitCode::from(2));
-                    }
-                }
-            }
-        };
-        for line in lines {
-            if let Err(error) = declared.declare(&line) {
-                eprintln!("--declare {text}: {error}");
-                return Err(ExitCode::from(2));
-            }
+/// The choices `--declare` names (docs/choices.md), or the exit code of a
+/// usage error naming the argument, file and line that cannot be taken.
+pub(crate) fn declared_choices(declare: &[String]) -> Result<Declared, ExitCode> {
+    let mut declared = Declared::default();
+    for line in declaration_lines(declare)? {
+        if let Err(error) = declared.declare(&line.text()) {
+            errln!("{}: `{}`: {error}", line.origin, line.text());
+            return Err(ExitCode::from(2));
         }
     }
     Ok(declared)
+}
+
+/// `--declare` read the one way both sides read it.
+fn declaration_lines(declare: &[String]) -> Result<Vec<declaration::Line>, ExitCode> {
+    declaration::read_arguments(declare).map_err(|error| {
+        errln!("{error}");
+        ExitCode::from(2)
+    })
 }
 
 /// Where a lib:PATH IUT runs: a `canif lib-host` of this executable, unless
 /// `--lib-in-process` (or this executable cannot be found: then in process,
 /// said on stderr).
-fn lib_host(iut: &crate::cli::IutOptions) -> Option<canif_harness::device::iut_kind::LibHost> {
+fn lib_host(iut: &crate::cli::IutOptions) -> Option<LibHost> {
     if iut.lib_in_process {
         return None;
     }
     match std::env::current_exe() {
-        Ok(canif) => Some(canif_harness::device::iut_kind::LibHost {
+        Ok(canif) => Some(LibHost {
             canif,
-            timeout_ms: iut.timeout_ms,
+            timeouts: iut.timeouts(),
         }),
         Err(error) => {
-            eprintln!("canif: cannot find its own executable ({error}); the library runs in canif's process");
+            errln!("canif: cannot find its own executable ({error}); the library runs in canif's process");
             None
         }
     }

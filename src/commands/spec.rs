@@ -26,7 +26,7 @@ pub(crate) fn spec(catalogue: &Catalogue, command: SpecCommand, out: &mut String
         }
         SpecCommand::Show { id } => {
             let Some(r) = catalogue.requirement(&id) else {
-                eprintln!("no requirement `{id}` (try `canif spec list`)");
+                errln!("no requirement `{id}` (try `canif spec list`)");
                 return ExitCode::from(2);
             };
             outln!(out, "{}  [{:?}]  {}:{}", r.id, r.status, r.file, r.line);
@@ -151,14 +151,14 @@ pub(crate) fn spec_coverage(
     let sources = match coverage::test_sources(root) {
         Ok(sources) if !sources.is_empty() => sources,
         Ok(_) => {
-            eprintln!(
+            errln!(
                 "no test sources under {} (run from the workspace root or pass --root)",
                 root.display()
             );
             return ExitCode::from(2);
         }
         Err(error) => {
-            eprintln!("cannot read tests under {}: {error}", root.display());
+            errln!("cannot read tests under {}: {error}", root.display());
             return ExitCode::from(2);
         }
     };

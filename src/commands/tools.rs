@@ -11,7 +11,7 @@ use canif_model::timing::{frame_bits, frame_duration, BitRates, Stuffing};
 pub(crate) fn size(bitrate: u32, cycle_us: u64, payload: u8, out: &mut String) -> ExitCode {
     let cycle = cycle_us * 1_000;
     let Some(advice) = sizing::advise(bitrate, cycle, payload) else {
-        eprintln!("cannot size: payload must be 0..=8 and the bit rate above 0");
+        errln!("cannot size: payload must be 0..=8 and the bit rate above 0");
         return ExitCode::from(2);
     };
     outln!(
@@ -81,7 +81,7 @@ pub(crate) fn frame_time(
     };
     let frame = if fd {
         let Some(size) = canif_model::dlc::fd_round_up(payload) else {
-            eprintln!("a CAN FD frame carries at most 64 bytes");
+            errln!("a CAN FD frame carries at most 64 bytes");
             return ExitCode::from(2);
         };
         Frame::fd(
@@ -96,7 +96,7 @@ pub(crate) fn frame_time(
     let frame = match frame {
         Ok(frame) => frame,
         Err(error) => {
-            eprintln!("{error}");
+            errln!("{error}");
             return ExitCode::from(2);
         }
     };
@@ -144,8 +144,8 @@ pub(crate) fn probe(
     profiles: &[&canif_spec::Profile],
     out: &std::path::Path,
 ) -> ExitCode {
-    use canif_harness::device::choices::Choice;
     use canif_harness::device::probe::{declaration, finding, probe, Finding};
+    use canif_harness::door::declaration::choices::Choice;
     let options = canif_harness::device::Options::quick(1);
     let mut probes = Vec::new();
     for profile in profiles {
@@ -155,9 +155,11 @@ pub(crate) fn probe(
                 passes => passes.join(", "),
             };
             let errors: String = probed.errors.iter().map(|e| format!("; {e}")).collect();
-            eprintln!(
+            errln!(
                 "{:<16} {:<22} {:<40} passes under: {passes}{errors}",
-                probed.profile, probed.choice, probed.scenario,
+                probed.profile,
+                probed.choice,
+                probed.scenario,
             );
             probes.push(probed);
         }
@@ -178,16 +180,16 @@ pub(crate) fn probe(
                 format!("{choice}: the scenarios disagree (one passed only under one value, another only under another)")
             }
         };
-        println!("{said}");
+        sayln!("{said}");
     }
     let declared = (code == ExitCode::SUCCESS).then(|| declaration(&probes));
     if let Some(declared) = declared {
         let text = serde_json::to_string_pretty(&declared.entries()).expect("a JSON object") + "\n";
         if let Err(error) = std::fs::write(out, text) {
-            eprintln!("cannot write {}: {error}", out.display());
+            errln!("cannot write {}: {error}", out.display());
             return ExitCode::from(2);
         }
-        eprintln!(
+        errln!(
             "written to {} (canif run --declare @{})",
             out.display(),
             out.display()

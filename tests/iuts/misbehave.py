@@ -7,9 +7,12 @@ cycle with an empty input image) except for one misbehaviour, chosen by argv[1]:
   lie-len      every poll_transmit answers a frame whose len says 15, data 8
   fork-hang    starts a child that sleeps, records both pids, then hangs
   setsid-hang  the same with a child in a session of its own (out of the process group)
+  daemon-hang  a daemon: double fork, setsid, stdio closed, exec with an empty
+               environment (nothing marks it as the IUT's), then hangs
 """
 import json
 import os
+import shutil
 import subprocess
 import sys
 
@@ -23,6 +26,21 @@ if mode in ("fork-hang", "setsid-hang"):
     if pids:
         with open(pids, "a") as f:
             f.write(f"{child.pid}\n")
+if mode == "daemon-hang":
+    sleep = shutil.which("sleep")
+    first = os.fork()
+    if first == 0:
+        os.setsid()
+        if os.fork() == 0:
+            if pids:
+                with open(pids, "a") as f:
+                    f.write(f"{os.getpid()}\n")
+            null = os.open(os.devnull, os.O_RDWR)
+            for fd in (0, 1, 2):
+                os.dup2(null, fd)
+            os.execve(sleep, ["sleep", "3600"], {})
+        os._exit(0)
+    os.waitpid(first, 0)
 input_size = 0
 for line in sys.stdin:
     request = json.loads(line)
@@ -31,7 +49,7 @@ for line in sys.stdin:
         input_size = request["config"]["input_size"]
         answer = {"type": "configured", "protocol": 1, "accepted": True}
     elif kind == "cycle":
-        if mode in ("fork-hang", "setsid-hang"):
+        if mode in ("fork-hang", "setsid-hang", "daemon-hang"):
             continue  # never answers: the harness's timeout must end both processes
         answer = {"type": "inputs", "inputs": "00" * input_size}
     elif kind == "poll_transmit":

@@ -175,7 +175,7 @@ impl SimBus {
         }
     }
 
-    /// Holds (or releases) the controller's frames: see [`SimBus::own_held`].
+    /// Holds (or releases) the controller's frames: see `SimBus::own_held`.
     pub fn hold_own(&mut self, held: bool) {
         self.own_held = held;
     }

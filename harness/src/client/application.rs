@@ -11,9 +11,9 @@ use canif_model::image::MessageRepr;
 use canif_model::timing::BitRates;
 use canif_spec::{req_ids, ReqId};
 
-use super::declaration::{Application, ClientDeclaration};
 use super::master::Master;
-use crate::device::scenario::Rng;
+use crate::door::declaration::client::{Application, ClientDeclaration};
+use crate::run::Rng;
 
 /// Something that happens at the start of a CAN interface cycle.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -372,7 +372,7 @@ pub fn counter_wrap(config: &InterfaceConfig, seed: u64) -> ClientScenario {
 /// The interfaces a profile offers a client: each frame format with the
 /// Buffered CAN Queue, and the Fast CAN Queue where there is one.
 pub fn interfaces(caps: &Capabilities) -> Vec<InterfaceConfig> {
-    let interface = crate::device::cases::interface;
+    let interface = crate::run::interface;
     let mut list = Vec::new();
     for (offered, format) in [
         (caps.base11, FrameFormat::Base11),

@@ -17,7 +17,7 @@ use super::judge::{self, Breach, Judge, TaskSeen, SENT_REPORTS, TRANSACTION_NUMB
 use super::master::{Master, MasterRun};
 use super::{Client, ClientDeclaration, IutError, TaskIo};
 use crate::client::played_device::{DeviceSide, PlayedDevice};
-use crate::device::iut::BuildError;
+use crate::door::iut::BuildError;
 use crate::error::{HarnessError, IutCause, Refusal, RunError};
 use crate::outcome::{BusFrame, Failure, Outcome, ScenarioRun, TaskView, Timeline};
 use crate::run::Ring;

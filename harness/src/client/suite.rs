@@ -10,14 +10,13 @@ use canif_model::timing::BitRates;
 use canif_spec::{Profile, ReqId, Scope, Side, Suite};
 
 use super::application::{self, ClientScenario};
-use super::declaration::ClientDeclaration;
-use super::exec::ExecClient;
 use super::faulty::{ClientFault, ClientShape, FaultyClient};
-use super::lib_client::LibClient;
 use super::master::Master;
 use super::{judge, rig, Client, ReferenceClient};
 use crate::client::played_device::PlayedDevice;
-use crate::device::iut::BuildError;
+use crate::door::declaration::client::ClientDeclaration;
+use crate::door::iut::BuildError;
+use crate::door::Door;
 use crate::error::{IutCause, IutError, Refusal, RunError};
 use crate::outcome::{Outcome, ScenarioRun};
 
@@ -34,14 +33,9 @@ pub enum ClientKind {
     /// The independent client taking a way of working the documents allow
     /// only where declared, declaring it or not.
     Shaped { shape: ClientShape, declared: bool },
-    /// A process speaking the adapter protocol's client role.
-    Exec { command: String, timeout_ms: u64 },
-    /// A shared library of the C ABI's client role: in canif's process, or
-    /// with `host` in a `canif lib-host` of its own.
-    Lib {
-        path: std::path::PathBuf,
-        host: Option<crate::device::iut_kind::LibHost>,
-    },
+    /// A client behind a door: a process speaking the adapter protocol's
+    /// client role, or a library of the C ABI's client role.
+    Door(Door),
 }
 
 impl ClientKind {
@@ -59,8 +53,7 @@ impl ClientKind {
                     ", undeclared"
                 }
             ),
-            ClientKind::Exec { command, .. } => format!("exec:{command}"),
-            ClientKind::Lib { path, .. } => format!("lib:{}", path.display()),
+            ClientKind::Door(door) => door.name(),
         }
     }
 
@@ -85,28 +78,7 @@ impl ClientKind {
             ClientKind::Shaped { shape, declared } => {
                 Box::new(FaultyClient::new(layout, config.queue, None).shaped(*shape, *declared))
             }
-            ClientKind::Lib { path, host: None } => {
-                Box::new(LibClient::start(path, config, layout).map_err(BuildError::Failed)?)
-            }
-            ClientKind::Lib {
-                path,
-                host: Some(host),
-            } => Box::new(
-                ExecClient::start(
-                    &host.command("client", path),
-                    Duration::from_millis(host.timeout_ms),
-                    config,
-                    layout,
-                )
-                .map_err(BuildError::Failed)?,
-            ),
-            ClientKind::Exec {
-                command,
-                timeout_ms,
-            } => Box::new(
-                ExecClient::start(command, Duration::from_millis(*timeout_ms), config, layout)
-                    .map_err(BuildError::Failed)?,
-            ),
+            ClientKind::Door(door) => return door.client(config, layout),
         })
     }
 }

@@ -107,6 +107,14 @@ pub const CONFIRMATION: &[ReqId] = req_ids!["PDX-001", "PDX-002"];
 pub const OUTSIDE_IMAGE: &[ReqId] = req_ids!["HS-TX-010", "LAY-GEN-008"];
 /// With Distributed Clocks the cycle ran on a telegram, not on SYNC0.
 pub const SYNC0_STARTS_THE_CYCLE: &[ReqId] = req_ids!["PDX-005"];
+/// What a door saw the device do where the lockstep does not look.
+pub fn deviated(kind: crate::door::iut::Deviated) -> &'static [ReqId] {
+    use crate::door::iut::Deviated;
+    match kind {
+        Deviated::Sync0StartsTheCycle => SYNC0_STARTS_THE_CYCLE,
+        Deviated::Confirmation => CONFIRMATION,
+    }
+}
 /// A batch of nothing was not acknowledged.
 pub const TX_EMPTY_BATCH: &[ReqId] = req_ids!["HS-TX-009"];
 /// A Tx identifier decoded from the wrong bits of the COB ID.

@@ -12,7 +12,7 @@ use canif_spec::{req_ids, ReqId};
 
 use crate::device::blame;
 use crate::device::diff::{image_size, Difference};
-use crate::device::iut::Transmit;
+use crate::door::iut::Transmit;
 
 /// More frames than the acknowledged slots, or no acknowledge at the end.
 const BEYOND_THE_SLOTS: &[ReqId] = req_ids!["HS-TX-010"];

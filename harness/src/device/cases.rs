@@ -5,22 +5,22 @@ use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig, QueueMode,
 use canif_model::filter::FilterRow;
 
 use super::scenario::{self, Scenario};
-use super::suite::Options;
+use crate::run::interface;
 
-pub fn interface(format: FrameFormat, queue: QueueMode, caps: &Capabilities) -> InterfaceConfig {
-    let mut config = InterfaceConfig::new(format, 8.min(caps.max_slots));
-    config.queue = queue;
-    let tn_allowed = caps.transaction_number
-        && queue == QueueMode::Standard
-        && !(caps.transaction_number_only_ext29 && format == FrameFormat::Base11);
-    config.transaction_number = format == FrameFormat::Fd || tn_allowed;
-    config.time_stamp = format == FrameFormat::Fd
-        || (config.transaction_number && caps.time_stamp && format == FrameFormat::Extended29);
-    config
+/// What the generated part of a profile's scenarios is made of.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Generation {
+    pub seed: u64,
+    /// Generated scenarios per interface.
+    pub cases: u64,
+    /// Cycles of each generated scenario.
+    pub generated_cycles: u64,
+    /// Include the 65,540-cycle RxCounter wrap.
+    pub counter_wrap: bool,
 }
 
 /// The scenarios for a profile: each interface it offers with what fits it.
-pub fn scenarios(caps: &Capabilities, options: &Options) -> Vec<Scenario> {
+pub fn scenarios(caps: &Capabilities, options: &Generation) -> Vec<Scenario> {
     let mut list = Vec::new();
     let seed = options.seed;
     let generated = |list: &mut Vec<Scenario>, config: &InterfaceConfig, salt: u64| {

@@ -15,13 +15,13 @@ use crate::device::blame;
 use crate::device::bounds::Bounds;
 use crate::device::bus::Bus;
 use crate::device::diff::{DeclaredRx, Difference, InputCheck, RxState};
-use crate::device::iut::BuildError;
 use crate::device::iut_kind::IutKind;
 use crate::device::pair::Pair;
 use crate::device::played_plc::{PlcSide, TaskReport, TaskStimulus};
 use crate::device::protocol_order::Ordered;
 use crate::device::scenario::{Judgement, Scenario, Step};
 use crate::device::sync1_window::Sync1Window;
+use crate::door::iut::BuildError;
 use crate::error::{HarnessError, IutCause, IutError, Refusal, RunError};
 use crate::outcome::{Outcome, ScenarioRun};
 use crate::trace::TraceWriter;
@@ -132,9 +132,19 @@ impl<B: Bus + ?Sized> Lockstep<B> {
             }
             Err(BuildError::Failed(error)) => return Err(error.into()),
         };
-        // What the IUT declares itself counts where canif was told nothing.
+        // What the IUT declares itself counts where canif was told nothing;
+        // where both speak, they must say the same.
         let own = iut.declared();
         let told = scenario.declared;
+        if let Some((choice, said, declares)) = told.contradiction(&own) {
+            return Err(IutError::new(
+                IutCause::Protocol,
+                format!(
+                    "declares `{choice}={declares}` itself, where canif was told `{choice}={said}` (--declare): one of them is wrong"
+                ),
+            )
+            .into());
+        }
         let declared = told.or(own);
         let caps = &declared.apply(caps);
         let iut_declares = own.except(&told).lines();
@@ -298,7 +308,7 @@ impl<B: Bus + ?Sized> Lockstep<B> {
         if let Some(deviation) = self.pair.iut.take_deviation() {
             return Err(self.pair.fail(Difference {
                 frames: None,
-                candidates: deviation.candidates,
+                candidates: blame::deviated(deviation.kind),
                 what: deviation.what,
                 expected: deviation.expected,
                 actual: deviation.actual,

@@ -14,8 +14,8 @@ use crate::device::blame;
 use crate::device::bounds::Bounds;
 use crate::device::diff::{frame_difference, read_with_another_structure, Difference};
 use crate::device::history::History;
-use crate::device::iut::{InvalidFrame, Iut};
 use crate::device::sync1_window::{Held, Moment, Sync1Window};
+use crate::door::iut::{InvalidFrame, Iut};
 use crate::outcome::{Failure, FrameDiff, Outcome};
 use crate::run::Ring;
 use crate::trace::TraceWriter;
@@ -402,7 +402,7 @@ mod tests {
     use canif_model::image::MessageRepr;
 
     use super::*;
-    use crate::device::iut::Transmit;
+    use crate::door::iut::Transmit;
 
     /// A device that offers one frame to its controller whenever polled.
     struct Babbler(Frame);

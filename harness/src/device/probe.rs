@@ -5,10 +5,10 @@
 
 use canif_spec::Profile;
 
-use super::choices::{Choice, Declared};
 use super::iut_kind::IutKind;
 use super::scenario::Scenario;
 use super::suite::{DeviceCase, Options};
+use crate::door::declaration::choices::{Choice, Declared};
 use crate::outcome::Outcome;
 use crate::run::Side;
 

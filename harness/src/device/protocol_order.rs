@@ -10,7 +10,7 @@ use canif_model::frame::Frame;
 use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 
-use crate::device::iut::{Iut, Planned, Transmit};
+use crate::door::iut::{Iut, Planned, Transmit};
 use crate::error::{IutCause, IutError};
 
 /// An IUT whose requests are checked against the protocol's promises before
@@ -99,10 +99,10 @@ impl Iut for Ordered {
     fn exchange_with(&mut self, mode: canif_model::exchange::ExchangeMode) {
         self.inner.exchange_with(mode);
     }
-    fn take_deviation(&mut self) -> Option<crate::device::iut::Deviation> {
+    fn take_deviation(&mut self) -> Option<crate::door::iut::Deviation> {
         self.inner.take_deviation()
     }
-    fn declared(&self) -> crate::device::choices::Declared {
+    fn declared(&self) -> crate::door::declaration::choices::Declared {
         self.inner.declared()
     }
 }

@@ -21,7 +21,7 @@ type Exchange<'a> = dyn FnMut(Option<Frame>, Option<CanId>, u32) -> Result<(Nano
 /// and every answer comes back as an Rx message of `iut`. `cycle` runs one
 /// interface cycle (it waits for real time on a real bus) and gives its time.
 pub fn quick_start(
-    iut: &mut dyn crate::device::iut::Iut,
+    iut: &mut dyn crate::door::iut::Iut,
     layout: canif_model::image::ImageLayout,
     node: NodeId,
     cycle: &mut dyn FnMut() -> Nanos,

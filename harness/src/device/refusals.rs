@@ -9,8 +9,8 @@ use canif_model::filter::FilterRow;
 use canif_spec::{req_ids, ReqId};
 
 use super::cases::describe;
-use super::iut::BuildError;
 use super::iut_kind::IutKind;
+use crate::door::iut::BuildError;
 use crate::outcome::{Failure, Outcome, ScenarioRun};
 use crate::verdict::{NotRunReason, Rest};
 

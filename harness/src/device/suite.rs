@@ -9,15 +9,15 @@ use canif_model::freedoms::Named;
 use canif_model::Nanos;
 use canif_spec::{Profile, ReqId, Scope, Side as SideName, Suite};
 
-use super::cases::scenarios;
-use super::choices::{
-    Choice, Declared, Observed, TX_QUEUE_ACCOUNTING_IDS, TX_QUEUE_ACCOUNTING_SETTLED_BY,
-};
+use super::cases::{scenarios, Generation};
 use super::iut_kind::IutKind;
 use super::lockstep::run_scenario;
 use super::refusals::{check_refusals, refused, REFUSALS, REFUSAL_IDS};
 use super::scenario::{Judgement, Scenario};
 use crate::device::bus::BusChoice;
+use crate::door::declaration::choices::{
+    Choice, Declared, Observed, TX_QUEUE_ACCOUNTING_IDS, TX_QUEUE_ACCOUNTING_SETTLED_BY,
+};
 use crate::error::{Refusal, RunError};
 use crate::outcome::{Outcome, ScenarioRun};
 use crate::run::{Selection, SelfCheck, Side};
@@ -55,6 +55,16 @@ pub struct Options {
 }
 
 impl Options {
+    /// What the generated scenarios are made of.
+    pub fn generation(&self) -> Generation {
+        Generation {
+            seed: self.seed,
+            cases: self.cases,
+            generated_cycles: self.generated_cycles,
+            counter_wrap: self.counter_wrap,
+        }
+    }
+
     /// A short run for tests: one generated case of 100 cycles, no counter wrap.
     pub fn quick(seed: u64) -> Self {
         Options {
@@ -270,7 +280,7 @@ impl Side for Options {
     const SIDE: SideName = SideName::Device;
 
     fn cases(&self, profile: &Profile) -> Vec<DeviceCase> {
-        let scenarios = scenarios(&profile.model_capabilities(), self);
+        let scenarios = scenarios(&profile.model_capabilities(), &self.generation());
         std::iter::once(DeviceCase::Refusals)
             .chain(
                 scenarios
@@ -351,14 +361,14 @@ impl Side for Options {
 }
 
 /// Every requirement the scenarios and checks of a run exercise on a device
-/// with these capabilities: exactly what [`judge`] can call pass or fail,
+/// with these capabilities: exactly what `judge` can call pass or fail,
 /// whatever the selection.
 pub fn checked_ids(caps: &Capabilities, options: &Options) -> Vec<String> {
     let everything = Options {
         cases: options.cases.max(1),
         ..options.clone()
     };
-    let mut ids: Vec<String> = scenarios(caps, &everything)
+    let mut ids: Vec<String> = scenarios(caps, &everything.generation())
         .into_iter()
         .flat_map(|s| s.covers)
         .map(|id| id.to_string())

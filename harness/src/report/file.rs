@@ -99,28 +99,7 @@ impl std::fmt::Display for ChoiceEntry {
     }
 }
 
-/// An EtherCAT terminal as canif's master found it.
-#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct TerminalEntry {
-    pub profile: String,
-    pub name: String,
-    pub vendor_id: u32,
-    pub product_code: u32,
-    pub revision: u32,
-    pub serial: u32,
-    /// `0x1C32:05` read back after setting `0x1C32:08` (000 §5); none where it did not answer.
-    pub local_cycle_ns: Option<u32>,
-    /// Idle cycles timed after bring-up, and one cycle's exchange (LRW and input read), wall clock.
-    pub cycles: u64,
-    pub mean_cycle_ns: u64,
-    pub worst_cycle_ns: u64,
-    /// A soak's real-time period (`--ethercat-soak-s`), and the cycles that
-    /// ended after the next one was due; none when the cycles were not paced.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub period_ns: Option<u64>,
-    #[serde(default)]
-    pub missed_cycles: u64,
-}
+pub use crate::door::ethercat::TerminalFacts as TerminalEntry;
 
 impl RunMeta {
     /// A complete run of the interface suite on the device side, started now,

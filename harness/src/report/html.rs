@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 
 use canif_spec::Catalogue;
 
-use super::diagram::esc;
+use super::canvas::esc;
 pub(super) use super::diagram::timing_diagram;
 use super::summary::utc;
 use super::RunReport;

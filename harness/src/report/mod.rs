@@ -2,6 +2,7 @@
 //! Markdown and HTML for people (`summary`, `html`). Every one of them is
 //! written from the same [`RunReport`], so they cannot disagree.
 
+mod canvas;
 mod diagram;
 mod file;
 mod html;

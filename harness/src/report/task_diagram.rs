@@ -6,7 +6,7 @@
 
 use std::fmt::Write as _;
 
-use super::diagram::{bus_frames, canvas, column_head, esc, CELL, LABEL_WIDTH, ROW};
+use super::canvas::{bus_frames, canvas, column_head, esc, CELL, LABEL_WIDTH, ROW};
 use crate::outcome::{Failure, TaskRow, TaskView};
 
 const ROWS: [(&str, Option<TaskRow>); 6] = [

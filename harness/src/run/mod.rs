@@ -6,12 +6,16 @@
 //! case — selection, fail-fast, interrupts, progress, the reach of the
 //! verdicts — is written once here.
 
+mod interface;
 mod kill;
 mod profile;
 mod ring;
+mod rng;
 mod selection;
 
+pub use interface::interface;
 pub use kill::{kill_matrix, KillRow, SelfCheck};
 pub use profile::{run_profile, ProfileRun, Side};
 pub use ring::{Ring, CONTEXT};
+pub use rng::Rng;
 pub use selection::Selection;

@@ -4,11 +4,12 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use canif_harness::device::bus::BusChoice;
-use canif_harness::device::ethercat::Pace;
 #[cfg(feature = "socketcan")]
-use canif_harness::device::kernel_bus::KernelBusOptions;
+use canif_harness::device::bus::kernel::KernelBusOptions;
+use canif_harness::device::bus::BusChoice;
 use canif_harness::device::{IutKind, Options};
+use canif_harness::door::ethercat::Pace;
+use canif_harness::door::Door;
 use canif_harness::report::{ChoiceEntry, ChoiceSource, RunMeta, RunReport};
 use canif_harness::{Outcome, RunError};
 use canif_spec::Catalogue;
@@ -31,20 +32,20 @@ pub(crate) fn run(
     if let Err(code) = plan.check_selection(catalogue) {
         return code;
     }
-    if let IutKind::Ethercat {
-        link: canif_harness::device::ethercat::EthercatLink::Interface { name, .. },
+    if let IutKind::Door(Door::Ethercat {
+        link: canif_harness::door::ethercat::EthercatLink::Interface { name, .. },
         ..
-    } = &kind
+    }) = &kind
     {
         if plan.options.bus.is_sim() {
-            eprintln!(
+            errln!(
                 "--iut ethercat:{name}: a terminal on a network interface has its CAN port on a real bus; \
                  add --bus socketcan:IFACE (the CAN adapter cabled to it), or use ethercat:emulated"
             );
             return ExitCode::from(2);
         }
     }
-    if let IutKind::Ethercat { .. } = kind {
+    if let IutKind::Door(Door::Ethercat { .. }) = kind {
         let not_terminals: Vec<&str> = plan
             .profiles
             .iter()
@@ -58,7 +59,7 @@ pub(crate) fn run(
                 .filter(|p| p.ethercat.is_some())
                 .map(|p| p.name.as_str())
                 .collect();
-            eprintln!(
+            errln!(
                 "--iut ethercat: {} {} no EtherCAT terminal; name terminal profiles with --profile ({})",
                 not_terminals.join(", "),
                 if not_terminals.len() == 1 { "is" } else { "are" },
@@ -75,7 +76,7 @@ pub(crate) fn run(
             canif_kernel::KernelSocket::open(&kernel.spec.tester, false).map(|_| ())
         });
         if let Err(error) = opened {
-            eprintln!("error: --bus {}: {error}", kernel.spec.describe());
+            errln!("error: --bus {}: {error}", kernel.spec.describe());
             return ExitCode::from(2);
         }
     }
@@ -93,7 +94,7 @@ fn survey_terminals(
     plan: &Plan<Options>,
     pace: Pace,
 ) -> Vec<canif_harness::report::TerminalEntry> {
-    let IutKind::Ethercat { link, .. } = kind else {
+    let IutKind::Door(Door::Ethercat { link, .. }) = kind else {
         return Vec::new();
     };
     let mut terminals = Vec::new();
@@ -101,9 +102,9 @@ fn survey_terminals(
         if profile.ethercat.is_none() {
             continue;
         }
-        match canif_harness::device::ethercat::survey(profile, link, pace) {
+        match canif_harness::door::ethercat::survey(profile, link, pace) {
             Ok(facts) => {
-                eprintln!(
+                errln!(
                     "{}: {} vendor {:#010x} product {:#010x} revision {:#010x}, 0x1C32:05 {}, an idle cycle {} µs (worst {} µs)",
                     profile.name,
                     facts.name,
@@ -115,7 +116,7 @@ fn survey_terminals(
                     facts.worst_cycle_ns / 1_000
                 );
                 if let Some(period) = facts.period_ns {
-                    eprintln!(
+                    errln!(
                         "{}: soak of {} cycles every {} µs: {} missed their deadline",
                         profile.name,
                         facts.cycles,
@@ -126,7 +127,7 @@ fn survey_terminals(
                 terminals.push(facts);
             }
             // The run itself meets the same terminal and reports what broke.
-            Err(error) => eprintln!(
+            Err(error) => errln!(
                 "{}: the terminal could not be surveyed: {error}",
                 profile.name
             ),

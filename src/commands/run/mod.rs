@@ -37,7 +37,7 @@ impl<'c, S: Side> Plan<'c, S> {
         product: Option<Product>,
     ) -> Result<Self, ExitCode> {
         let scenarios = canif_features::scenarios().map_err(|error| {
-            eprintln!("the feature files do not parse: {error}");
+            errln!("the feature files do not parse: {error}");
             ExitCode::from(2)
         })?;
         let gherkin = canif_features::schedule::targets(&scenarios, &profiles, S::SIDE);
@@ -73,7 +73,7 @@ impl<'c, S: Side> Plan<'c, S> {
         let selection = self.options.selection();
         for id in &selection.requirements {
             if catalogue.requirement(id).is_none() {
-                eprintln!("--requirement {id}: no such requirement; `canif spec list` lists them");
+                errln!("--requirement {id}: no such requirement; `canif spec list` lists them");
                 return Err(ExitCode::from(2));
             }
         }
@@ -85,7 +85,7 @@ impl<'c, S: Side> Plan<'c, S> {
         {
             return Ok(());
         }
-        eprintln!(
+        errln!(
             "{} matches no check on {}; `canif list scenarios` lists them",
             selection.flags(),
             self.profiles
@@ -108,7 +108,7 @@ impl<'c, S: Side> Plan<'c, S> {
         let mut runs = Vec::new();
         for (n, profile) in self.profiles.iter().enumerate() {
             if canif_harness::interrupt::requested() {
-                eprintln!("interrupted: the remaining profiles are not run");
+                errln!("interrupted: the remaining profiles are not run");
                 break;
             }
             let mut progress = Progress::new(n, count, &profile.name);
@@ -142,7 +142,7 @@ impl<'c, S: Side> Plan<'c, S> {
             results.push((profile_name.clone(), run));
         }
         let count = |f: fn(&GherkinRun) -> bool| results.iter().filter(|(_, r)| f(r)).count();
-        eprintln!(
+        errln!(
             "Gherkin scenarios: {} run, {} failed, {} error",
             results.len(),
             count(|r| matches!(r.outcome, canif_harness::GherkinOutcome::Fail { .. })),
@@ -162,7 +162,7 @@ impl<'c, S: Side> Plan<'c, S> {
         started: std::time::Instant,
     ) -> RunReport {
         for line in &left_out {
-            eprintln!("left out: {line}");
+            errln!("left out: {line}");
         }
         let interrupted = canif_harness::interrupt::requested();
         let profiles = lockstep
@@ -249,7 +249,7 @@ pub(crate) fn profiles<'c>(
             Some(_) => {}
             None => {
                 let known: Vec<_> = catalogue.profiles.iter().map(|p| p.name.as_str()).collect();
-                eprintln!("unknown profile `{name}`; known: {}", known.join(", "));
+                errln!("unknown profile `{name}`; known: {}", known.join(", "));
                 return Err(ExitCode::from(2));
             }
         }
@@ -260,27 +260,27 @@ pub(crate) fn profiles<'c>(
 /// Writes the reports and says the verdict: each failing requirement in one line.
 pub(crate) fn finish(catalogue: &Catalogue, report: &RunReport, report_dir: &Path) -> ExitCode {
     if let Err(error) = report.write(catalogue, report_dir) {
-        eprintln!(
+        errln!(
             "cannot write the reports to {}: {error}",
             report_dir.display()
         );
         return ExitCode::from(2);
     }
     if report.interrupted {
-        eprintln!("interrupted: the reports hold what ran before the signal");
+        errln!("interrupted: the reports hold what ran before the signal");
     }
     let problems = report.problems();
     for line in problems.iter().take(40) {
-        eprintln!("{line}");
+        errln!("{line}");
     }
     if problems.len() > 40 {
-        eprintln!(
+        errln!(
             "… and {} more in {}",
             problems.len() - 40,
             report_dir.join("summary.md").display()
         );
     }
-    println!(
+    sayln!(
         "{} {}: {} — reports in {}",
         report.meta.iut,
         report.headline(),
@@ -298,7 +298,7 @@ pub(crate) fn self_check(catalogue: &Catalogue, seed: u64) -> ExitCode {
         ..canif_harness::device::Options::quick(seed)
     };
     let devices = canif_harness::run::kill_matrix(catalogue, &options, |fault| {
-        eprintln!("running {fault} on every profile")
+        errln!("running {fault} on every profile")
     });
     let uncaught = print_kill_table("device fault", &devices, |f| f.name());
     let clients = canif_harness::run::kill_matrix(
@@ -307,9 +307,9 @@ pub(crate) fn self_check(catalogue: &Catalogue, seed: u64) -> ExitCode {
             counter_wrap: false,
             ..canif_harness::client::suite::ClientOptions::new(seed)
         },
-        |fault| eprintln!("running client fault {fault} on every profile"),
+        |fault| errln!("running client fault {fault} on every profile"),
     );
-    println!();
+    sayln!();
     let clients_uncaught = print_kill_table("client fault", &clients, |f| f.name());
     ExitCode::from(u8::from(uncaught + clients_uncaught > 0))
 }
@@ -322,7 +322,7 @@ fn print_kill_table<F: Copy>(
     name: impl Fn(F) -> &'static str,
 ) -> usize {
     let mut uncaught = 0;
-    println!("| {what} | caught on | requirements that failed |\n|---|---|---|");
+    sayln!("| {what} | caught on | requirements that failed |\n|---|---|---|");
     for row in rows {
         let on = row.caught.iter().filter(|(_, ids)| !ids.is_empty()).count();
         let ids: std::collections::BTreeSet<&str> = row
@@ -333,7 +333,7 @@ fn print_kill_table<F: Copy>(
         if on == 0 {
             uncaught += 1;
         }
-        println!(
+        sayln!(
             "| {} | {on}/{} profiles | {} |",
             name(row.fault),
             row.caught.len(),
@@ -344,7 +344,7 @@ fn print_kill_table<F: Copy>(
             }
         );
     }
-    println!(
+    sayln!(
         "\n{} of {} {what}s caught",
         rows.len() - uncaught,
         rows.len()

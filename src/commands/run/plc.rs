@@ -24,7 +24,7 @@ pub(crate) fn masters(names: &[String]) -> Result<Vec<Master>, ExitCode> {
         .map(|name| {
             Master::by_name(name).ok_or_else(|| {
                 let known: Vec<&str> = Master::ALL.iter().map(|m| m.name).collect();
-                eprintln!("unknown master `{name}`; known: {}", known.join(", "));
+                errln!("unknown master `{name}`; known: {}", known.join(", "));
                 ExitCode::from(2)
             })
         })
@@ -40,13 +40,13 @@ pub(crate) fn client_bus(bus: &BusChoice) -> Result<ClientBus, ExitCode> {
         BusChoice::SocketCan(options) => {
             let spec = &options.spec;
             if spec.iut != spec.tester {
-                eprintln!("--side plc: one interface (socketcan:IFACE); the device and the other nodes share it");
+                errln!("--side plc: one interface (socketcan:IFACE); the device and the other nodes share it");
                 return Err(ExitCode::from(2));
             }
             if let Err(error) = canif_kernel::probe()
                 .and_then(|()| canif_kernel::KernelSocket::open(&spec.iut, false).map(|_| ()))
             {
-                eprintln!("error: --bus {}: {error}", spec.describe());
+                errln!("error: --bus {}: {error}", spec.describe());
                 return Err(ExitCode::from(2));
             }
             Ok(ClientBus::SocketCan {

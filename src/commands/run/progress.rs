@@ -29,7 +29,7 @@ impl<'a> Progress<'a> {
     pub(crate) fn scenario(&mut self, run: &ScenarioRun) {
         self.done += 1;
         if self.terminal {
-            eprint!(
+            err!(
                 "\r\x1b[2K[{}/{}] {}: {} ({} scenarios)",
                 self.n + 1,
                 self.count,
@@ -50,7 +50,7 @@ impl<'a> Progress<'a> {
         unit: &str,
     ) {
         if self.terminal {
-            eprint!("\r\x1b[2K");
+            err!("\r\x1b[2K");
         }
         let count = |error: bool| {
             result
@@ -63,7 +63,7 @@ impl<'a> Progress<'a> {
                 })
                 .count()
         };
-        eprintln!(
+        errln!(
             "[{}/{}] {:<22} {} scenarios, {} {unit}, {} frames checked: {}",
             self.n + 1,
             self.count,

@@ -12,8 +12,8 @@ use canif_model::handshake;
 use canif_model::image::{ImageLayout, InputImage, MessageRepr, OutputImage};
 use canif_spec::{req_ids, ReqId};
 
-use super::declaration::{Application, ClientDeclaration, RestartChoice};
 use super::master::NEIGHBOUR_PATTERN;
+use crate::door::declaration::client::{Application, ClientDeclaration, RestartChoice};
 
 mod rx;
 mod tx;

@@ -19,7 +19,7 @@ use crate::error::{BusCause, BusError};
 
 /// The device as the harness plays it for a client: on the simulated bus
 /// ([`DeviceSide`]) or with its controller on a SocketCAN interface
-/// ([`crate::client::played_device::kernel::KernelDeviceSide`]).
+/// (`crate::client::played_device::kernel::KernelDeviceSide`).
 pub trait PlayedDevice {
     fn layout(&self) -> ImageLayout;
     /// Another node's frame, ready to send from `at`.
@@ -153,9 +153,8 @@ impl PlayedDevice for DeviceSide {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::device::played_plc::{PlcSide, TaskStimulus};
+    use canif_model::client::PlcClient;
     use canif_model::config::FrameFormat;
-    use canif_model::exchange::ExchangeMode;
     use canif_model::frame::CanId;
     use canif_model::image::MessageRepr;
 
@@ -168,7 +167,8 @@ mod tests {
             BitRates::classic(500_000),
         )
         .unwrap();
-        let mut plc = PlcSide::new(device.layout(), ExchangeMode::SeparateInputUpdate);
+        let mut plc = PlcClient::new(device.layout());
+        let mut inputs = vec![0; device.layout().input_size()];
         let sent = Frame::classic(CanId::Standard(0x123), &[1, 2, 3]).unwrap();
         let arriving = Frame::classic(CanId::Standard(0x456), &[9]).unwrap();
         plc.send(MessageRepr {
@@ -181,9 +181,8 @@ mod tests {
         let (mut on_bus, mut read) = (Vec::new(), Vec::new());
         for k in 0..5u64 {
             on_bus.extend(device.run_until(k * 1_000_000).unwrap());
-            plc.task(k, TaskStimulus::default()).unwrap();
-            let inputs = device.cycle(plc.outputs()).unwrap().to_vec();
-            plc.device_cycle_done(&inputs);
+            let outputs = plc.task(&inputs).unwrap().to_vec();
+            inputs = device.cycle(&outputs).unwrap().to_vec();
             read.extend(plc.take_received().into_iter().map(|m| m.frame));
         }
         let from_device: Vec<Frame> = on_bus

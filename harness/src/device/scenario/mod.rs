@@ -11,6 +11,7 @@ pub use generated::generated;
 pub use scripted::*;
 pub use untrusted::*;
 
+pub use crate::run::Rng;
 use canif_model::config::{FrameFormat, InterfaceConfig, QueueMode};
 use canif_model::exchange::ExchangeMode;
 use canif_model::frame::{CanId, Frame};
@@ -55,34 +56,8 @@ pub enum Judgement {
     /// Where the device declared each of `decided_by` (and there is one),
     /// the model judges it taking those choices, exactly.
     Bounds {
-        decided_by: &'static [crate::device::choices::Choice],
+        decided_by: &'static [crate::door::declaration::choices::Choice],
     },
-}
-
-/// A small deterministic generator (xorshift64*), so a seed gives the same run byte for byte.
-#[derive(Debug, Clone)]
-pub struct Rng(u64);
-
-impl Rng {
-    pub fn new(seed: u64) -> Self {
-        Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
-    }
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    pub fn below(&mut self, n: u64) -> u64 {
-        if n == 0 {
-            0
-        } else {
-            self.next_u64() % n
-        }
-    }
-    pub fn chance(&mut self, percent: u64) -> bool {
-        self.below(100) < percent
-    }
 }
 
 /// How a scenario's steps come about.
@@ -125,7 +100,7 @@ pub struct Scenario {
     pub judgement: Judgement,
     /// What the command line or the IUT's kind declared of the device's
     /// choices; where it says nothing, the IUT's own declaration counts.
-    pub declared: crate::device::choices::Declared,
+    pub declared: crate::door::declaration::choices::Declared,
     pub steps: Steps,
 }
 

@@ -21,8 +21,7 @@ use ethercrab::{Command, Reads};
 
 use super::start_up::master_error;
 use super::{EthercatIut, LRW_WORKING_COUNTER, SM3, SYNC0_CYCLE_NS};
-use crate::device::blame;
-use crate::device::iut::Deviation;
+use crate::door::iut::{Deviated, Deviation};
 use crate::error::{IutCause, IutError};
 
 /// FMMUs an ESC may have; the terminal's SII says 4.
@@ -119,7 +118,7 @@ impl EthercatIut {
             let between = between.as_deref().unwrap_or_default();
             let head = |bytes: &[u8]| format!("{:02X?}", &bytes[..bytes.len().min(8)]);
             self.deviation = Some(Deviation {
-                candidates: blame::SYNC0_STARTS_THE_CYCLE,
+                kind: Deviated::Sync0StartsTheCycle,
                 what: "the inputs half a cycle before SYNC0, after the outputs' telegram (Distributed Clocks: SYNC0 starts the cycle, not the SyncManager 2 event)".into(),
                 expected: head(previous),
                 actual: head(between),
@@ -187,7 +186,7 @@ impl EthercatIut {
             if &confirmed != previous {
                 let head = |bytes: &[u8]| format!("{:02X?}", &bytes[..bytes.len().min(8)]);
                 self.deviation = Some(Deviation {
-                    candidates: blame::CONFIRMATION,
+                    kind: Deviated::Confirmation,
                     what: "the inputs the LRW read (the previous cycle's SyncManager 2 event)"
                         .into(),
                     expected: head(previous),
@@ -252,7 +251,7 @@ mod tests {
     use canif_spec::Catalogue;
 
     use super::super::{build, lock, EthercatLink};
-    use crate::device::iut::Iut;
+    use crate::door::iut::Iut;
 
     /// The played master's exchange reaches the terminal as its telegrams:
     /// LWR then LRD for separate input update, one LRW otherwise, and the

@@ -4,7 +4,9 @@
 //!
 //! Whatever the process does — exit, hang, print garbage, answer out of
 //! turn — becomes an error naming what happened and the last lines of its
-//! stderr; the harness never waits longer than the per-exchange timeout.
+//! stderr; the harness never waits longer than the per-exchange timeout,
+//! nor, for the first answer (the process, an interpreter, a library
+//! loading), longer than the start timeout: a slow start is not a hang.
 
 use std::collections::VecDeque;
 use std::io::{BufRead, BufReader, Write};
@@ -13,6 +15,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use super::protocol::{Answer, Expected, Request};
+use crate::door::Timeouts;
 use crate::error::{IutCause, IutError};
 
 /// How many lines of the IUT's stderr an error shows.
@@ -123,63 +126,21 @@ fn share_cpu() {
     }
 }
 
-/// The environment variable that marks every process an IUT starts: its
-/// value is this IUT's own, and outlives a child's `setsid`.
-const TOKEN: &str = "CANIF_IUT_TOKEN";
-
-/// A value of [`TOKEN`] no other IUT of any canif has: this process's id and
-/// a count.
-fn new_token() -> String {
-    static COUNT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-    let n = COUNT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    format!("{}-{n}", std::process::id())
-}
-
-/// Ends every process whose environment carries `token`: what an IUT
-/// started and took out of its process group (a new session, a daemon's
-/// double fork). Rounds until none is left, as one may fork while another
-/// is killed. Processes of other users cannot be read, nor killed.
-fn kill_marked(token: &str) {
-    use nix::sys::signal::{kill, Signal};
-    use nix::unistd::Pid;
-    let marker = format!("{TOKEN}={token}");
-    for _ in 0..10 {
-        let Ok(entries) = std::fs::read_dir("/proc") else {
-            return;
-        };
-        let marked: Vec<i32> = entries
-            .filter_map(|e| e.ok()?.file_name().to_str()?.parse::<i32>().ok())
-            .filter(|pid| {
-                std::fs::read(format!("/proc/{pid}/environ")).is_ok_and(|environ| {
-                    environ
-                        .split(|b| *b == 0)
-                        .any(|variable| variable == marker.as_bytes())
-                })
-            })
-            .collect();
-        if marked.is_empty() {
-            return;
-        }
-        for pid in marked {
-            let _ = kill(Pid::from_raw(pid), Signal::SIGKILL);
-        }
-        std::thread::sleep(Duration::from_millis(5));
-    }
-}
-
-/// An implementation under test in another process, in a process group of
-/// its own (whatever it starts ends with it, and what leaves the group is
-/// found by its [`TOKEN`]), in either role: a device (`device::exec_iut`)
+/// An implementation under test in another process, the subreaper of
+/// whatever it starts (`canif_cabi::isolation`: a process that leaves its
+/// group or session, a daemon's double fork, still ends with it), in either role: a device (`device::exec_iut`)
 /// or a client (`client::exec`).
 pub(crate) struct AdapterProcess {
     command: String,
-    /// Marks every process the IUT starts (see [`TOKEN`]).
-    token: String,
     child: Child,
     stdin: Option<ChildStdin>,
     lines: LineReader,
     stderr: Arc<Mutex<VecDeque<String>>>,
-    timeout: Duration,
+    /// Reads `stderr` until the IUT's tree closes it.
+    stderr_reader: Option<std::thread::JoinHandle<()>>,
+    timeouts: Timeouts,
+    /// It has answered once: it started, and the per-request limit holds.
+    started: bool,
     /// The first failure; every later call reports it.
     failed: Option<IutError>,
 }
@@ -189,18 +150,18 @@ impl AdapterProcess {
     /// `same_cpu`, the calling thread and the IUT share the CPU the thread is on.
     pub(crate) fn spawn(
         command: &str,
-        timeout: Duration,
+        timeouts: Timeouts,
         same_cpu: bool,
     ) -> Result<Self, IutError> {
         use std::os::unix::process::CommandExt;
         if same_cpu {
             share_cpu();
         }
-        let token = new_token();
-        let mut child = Command::new("sh")
+        canif_cabi::isolation::adopt_orphans();
+        let mut sh = Command::new("sh");
+        let mut child = canif_cabi::isolation::as_subreaper(&mut sh)
             .arg("-c")
             .arg(command)
-            .env(TOKEN, &token)
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
@@ -223,7 +184,7 @@ impl AdapterProcess {
         let lines = LineReader::new(stdout);
         let log = Arc::new(Mutex::new(VecDeque::new()));
         let log_writer = log.clone();
-        std::thread::spawn(move || {
+        let stderr_reader = std::thread::spawn(move || {
             let mut reader = BufReader::new(stderr);
             let mut line = Vec::new();
             loop {
@@ -244,24 +205,26 @@ impl AdapterProcess {
         let stdin = child.stdin.take();
         Ok(AdapterProcess {
             command: command.to_string(),
-            token,
             child,
             stdin,
             lines,
             stderr: log,
-            timeout,
+            stderr_reader: Some(stderr_reader),
+            timeouts,
+            started: false,
             failed: None,
         })
     }
 
-    /// Ends the IUT and everything it started (its process group).
+    /// Ends the IUT and everything it started: the tree below it (see
+    /// `canif_cabi::isolation`), and its process group.
     fn kill(&mut self) {
         use nix::sys::signal::{killpg, Signal};
         use nix::unistd::Pid;
+        canif_cabi::isolation::end_tree(self.child.id());
         let _ = killpg(Pid::from_raw(self.child.id() as i32), Signal::SIGKILL);
         let _ = self.child.kill();
         let _ = self.child.wait();
-        kill_marked(&self.token);
     }
 
     /// The IUT's exit status, waiting a moment for it; `None` if it still runs.
@@ -288,6 +251,32 @@ impl AdapterProcess {
         } else {
             format!("last lines of its stderr:\n  {}", log.join("\n  "))
         }
+    }
+
+    /// A process that ended before its first answer with the shell's "not
+    /// found" (127) or "cannot execute" (126) never started: one error, the
+    /// shell's own words.
+    fn not_started(&mut self, status: Option<std::process::ExitStatus>) -> Option<IutError> {
+        let code = status?.code()?;
+        if self.started || !(code == 126 || code == 127) {
+            return None;
+        }
+        // Its whole tree has ended: its stderr reaches its end, all of it read.
+        self.kill();
+        if let Some(reader) = self.stderr_reader.take() {
+            let _ = reader.join();
+        }
+        let said = self
+            .stderr
+            .lock()
+            .ok()
+            .and_then(|log| log.back().cloned())
+            .unwrap_or_else(|| format!("exit status {code}"));
+        let error = IutError::new(
+            IutCause::NotStarted,
+            format!("cannot start `{}`: {said}", self.command),
+        );
+        Some(self.failed.get_or_insert(error).clone())
     }
 
     /// What broke, with the last lines of its stderr; every later call reports it too.
@@ -372,7 +361,11 @@ impl AdapterProcess {
             None => Err(std::io::Error::other("stdin closed")),
         };
         if let Err(error) = written {
-            let what = match self.exit_status() {
+            let status = self.exit_status();
+            if let Some(error) = self.not_started(status) {
+                return Err(error);
+            }
+            let what = match status {
                 Some(status) => {
                     format!("exited ({status}) before the `{}` request", request.name())
                 }
@@ -381,8 +374,21 @@ impl AdapterProcess {
             self.kill();
             return Err(self.fail(IutCause::Gone, what));
         }
-        let line = match self.lines.next(self.timeout) {
-            Line::Text(line) => line,
+        let (limit, which) = match self.started {
+            true => (
+                self.timeouts.request,
+                "the per-request limit (--timeout-ms)",
+            ),
+            false => (
+                self.timeouts.start,
+                "the start limit (--start-timeout-ms, CANIF_START_TIMEOUT_MS)",
+            ),
+        };
+        let line = match self.lines.next(limit) {
+            Line::Text(line) => {
+                self.started = true;
+                line
+            }
             Line::Broken(what) => {
                 self.kill();
                 return Err(self.fail(
@@ -395,14 +401,18 @@ impl AdapterProcess {
                 return Err(self.fail(
                     IutCause::Silent,
                     format!(
-                        "no answer to `{}` within {} ms (hung; killed)",
+                        "no answer to `{}` within {} ms, {which} (hung; killed)",
                         request.name(),
-                        self.timeout.as_millis()
+                        limit.as_millis()
                     ),
                 ));
             }
             Line::Closed => {
-                let what = match self.exit_status() {
+                let status = self.exit_status();
+                if let Some(error) = self.not_started(status) {
+                    return Err(error);
+                }
+                let what = match status {
                     Some(status) => format!("exited ({status})"),
                     None => "closed its stdout (still running; killed)".to_string(),
                 };
@@ -459,6 +469,9 @@ impl Drop for AdapterProcess {
     /// `bye` and end of input tell a well-behaved IUT to leave; then its
     /// whole process group ends, whatever it started.
     fn drop(&mut self) {
+        // What it started, taken while it still stands over them: when it
+        // leaves, they come to canif (a subreaper) and are found by this.
+        let below = canif_cabi::isolation::Snapshot::below(self.child.id());
         if self.failed.is_none() {
             if let Some(stdin) = self.stdin.as_mut() {
                 let bye = serde_json::to_string(&Request::Bye {}).expect("requests serialize");
@@ -468,6 +481,7 @@ impl Drop for AdapterProcess {
         self.stdin = None;
         let _ = self.exit_status();
         self.kill();
+        below.end();
     }
 }
 
@@ -490,7 +504,7 @@ mod tests {
     fn a_broken_line_before_a_request_is_an_error_at_that_request() {
         let mut iut = AdapterProcess::spawn(
             r"printf '\377\n'; cat >/dev/null",
-            Duration::from_secs(5),
+            Timeouts::default(),
             false,
         )
         .unwrap();

@@ -9,9 +9,9 @@ use std::path::Path;
 use canif_model::config::InterfaceConfig;
 use canif_model::image::{ImageLayout, MessageRepr};
 
-use super::lib_client::LibClient;
-use super::{Client, TaskIo};
-use crate::adapter::protocol::{Answer, Config, Hex, Request, WireFrame, WireMessage};
+use crate::door::adapter::protocol::{Answer, Config, Hex, Request, WireFrame, WireMessage};
+use crate::door::client::{Client, TaskIo};
+use crate::door::lib::client::LibClient;
 use crate::error::IutError;
 
 /// The client role's protocol version this server speaks.

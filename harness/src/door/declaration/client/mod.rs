@@ -7,7 +7,7 @@
 //!
 //! Declarations are `name=value` lines (docs/plc-side.md), from the command
 //! line (`--declare`), the protocol's `started` answer (`declares`), a
-//! library's `canif_client_declares` or an in-process [`super::Client`].
+//! library's `canif_client_declares` or an in-process [`crate::door::client::Client`].
 
 use std::fmt;
 

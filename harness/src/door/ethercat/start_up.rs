@@ -8,7 +8,7 @@ use ethercrab::Command;
 
 use super::coe::{CoeError, Mailboxes};
 use super::objects;
-use crate::device::iut::BuildError;
+use crate::door::iut::BuildError;
 use crate::error::{IutCause, IutError};
 
 /// The AL status's error flag.

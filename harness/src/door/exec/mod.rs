@@ -1,10 +1,9 @@
 //! The harness's side of the adapter protocol's device role: an IUT in
-//! another process ([`AdapterProcess`]) behind the [`crate::device::Iut`] trait.
+//! another process (`AdapterProcess`) behind the [`crate::door::iut::Iut`] trait.
 //! An image of the wrong size or a frame no controller can send is an error
 //! naming it, as is anything the process itself does wrong.
 
 use std::collections::VecDeque;
-use std::time::Duration;
 
 use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_model::frame::Frame;
@@ -12,14 +11,17 @@ use canif_model::image::ImageLayout;
 use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 
-use crate::adapter::process::AdapterProcess;
-use crate::adapter::protocol::{
+use crate::door::adapter::process::AdapterProcess;
+use crate::door::adapter::protocol::{
     Answer, BusEvent, Caps, Config, Hex, OwnedBus, PlannedFrame, Request, SteppedLine, Transmitted,
     WireFrame, PROTOCOL_VERSION,
 };
-use crate::device::choices::Declared;
-use crate::device::iut::{InvalidFrame, Iut, Planned, Transmit};
+use crate::door::declaration::choices::Declared;
+use crate::door::iut::{InvalidFrame, Iut, Planned, Transmit};
+use crate::door::Timeouts;
 use crate::error::{IutCause, IutError};
+
+pub(crate) mod client;
 
 /// How an IUT answered a configuration.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -48,10 +50,10 @@ pub struct ExecIut {
 }
 
 impl ExecIut {
-    /// Starts `command` (see [`AdapterProcess::spawn`]).
-    pub fn spawn(command: &str, timeout: Duration, same_cpu: bool) -> Result<Self, IutError> {
+    /// Starts `command` (see `AdapterProcess::spawn`).
+    pub fn spawn(command: &str, timeouts: Timeouts, same_cpu: bool) -> Result<Self, IutError> {
         Ok(ExecIut {
-            process: AdapterProcess::spawn(command, timeout, same_cpu)?,
+            process: AdapterProcess::spawn(command, timeouts, same_cpu)?,
             input_size: 0,
             next_release: None,
             version: 1,

@@ -18,11 +18,11 @@ use canif_kernel::{BusSpec, KernelSocket, Received};
 use canif_model::frame::{Frame, FrameKind};
 use canif_model::Nanos;
 
-use super::bus::Bus;
-use crate::adapter::protocol::OwnedBus;
+use super::Bus;
 use crate::device::blame;
 use crate::device::diff::{hex, Difference};
 use crate::device::pair::Pair;
+use crate::door::adapter::protocol::OwnedBus;
 use crate::error::{BusCause, BusError};
 use crate::outcome::Outcome;
 
@@ -118,7 +118,7 @@ fn synchronize(iut: &KernelSocket, tester: &KernelSocket, timeout: Duration) -> 
     ))
 }
 
-/// The frame [`synchronize`] sends; one that a driver held back and delivers
+/// The frame `synchronize` sends; one that a driver held back and delivers
 /// late is dropped by the harness too.
 pub fn marker() -> Frame {
     Frame::classic(canif_model::frame::CanId::Standard(0x7FF), b"canif-sy").expect("8 bytes")

@@ -14,8 +14,8 @@ use canif_ethercat::SubDevice;
 use canif_kernel::{KernelError, PacketSocket};
 use canif_softdevice::ethercat::Terminal;
 
-use crate::device::iut::SoftDeviceIut;
-use crate::device::server_bus::DeviceBus;
+use crate::door::iut::SoftDeviceIut;
+use crate::door::serve::bus::DeviceBus;
 use crate::error::BusError;
 
 /// How long one wait for a frame lasts: a batch's next CAN frame goes out
@@ -165,7 +165,7 @@ pub fn serve(
 /// One frame in candump's format (the trace's own line); a frame that is
 /// none is said as what it is.
 fn log_frame(log: &mut dyn Write, interface: &str, now: u64, frame: &canif_softdevice::CanFrame) {
-    let line = match crate::device::iut::from_soft(frame) {
+    let line = match crate::door::iut::from_soft(frame) {
         Ok(frame) => crate::trace::candump_line(now, interface, &frame),
         Err(invalid) => format!("{interface}: an invalid frame: {invalid}"),
     };

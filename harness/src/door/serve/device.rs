@@ -7,11 +7,11 @@ use canif_model::config::{Capabilities, InterfaceConfig};
 
 use canif_model::Nanos;
 
-use crate::adapter::protocol::{
+use crate::door::adapter::protocol::{
     Answer, BusEvent, Hex, InvalidWireFrame, PlannedFrame, Request, StepLine, Transmitted,
     WireFrame, PROTOCOL_VERSION,
 };
-use crate::device::iut::{BuildError, Iut, Planned};
+use crate::door::iut::{BuildError, Iut, Planned};
 use crate::error::{IutCause, IutError};
 
 /// Builds the IUT a `configure` asks for.
@@ -296,7 +296,7 @@ pub fn serve_library(
     let build = |caps: &Capabilities, config: &InterfaceConfig| {
         let output_size =
             canif_model::image::ImageLayout::new(config, caps.info_data).output_size();
-        crate::device::lib_iut::build(path, caps, config)?
+        crate::door::lib::build(path, caps, config)?
             .guarded(output_size)
             .map(|iut| Box::new(iut) as Box<dyn Iut>)
     };

@@ -60,8 +60,8 @@ pub trait Iut {
     }
     /// What the device itself declares where the documents leave a choice
     /// (the adapter protocol's `configured` answer).
-    fn declared(&self) -> crate::device::choices::Declared {
-        crate::device::choices::Declared::default()
+    fn declared(&self) -> crate::door::declaration::choices::Declared {
+        crate::door::declaration::choices::Declared::default()
     }
 }
 
@@ -160,11 +160,20 @@ impl Iut for ModelIut {
 /// where the lockstep does not look (see [`Iut::take_deviation`]).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Deviation {
-    /// The requirements it may break (narrowed to what the scenario covers).
-    pub candidates: &'static [canif_spec::ReqId],
+    /// What the device did; the device side blames it on its requirements.
+    pub kind: Deviated,
     pub what: String,
     pub expected: String,
     pub actual: String,
+}
+
+/// What a door saw a device do where the lockstep does not look.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Deviated {
+    /// With Distributed Clocks the cycle ran on a telegram, not on SYNC0.
+    Sync0StartsTheCycle,
+    /// What an LRW read was not the previous SyncManager 2 event's inputs.
+    Confirmation,
 }
 
 /// The soft device behind the IUT interface; frames are translated here, so the

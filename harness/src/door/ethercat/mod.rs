@@ -32,7 +32,7 @@ use canif_spec::EthercatIdentity;
 use ethercrab::subdevice_group::Op;
 use ethercrab::{DefaultLock, SubDeviceGroup};
 
-use crate::device::iut::{soft_controller, soft_settings, BuildError, Iut, Planned, Transmit};
+use crate::door::iut::{soft_controller, soft_settings, BuildError, Iut, Planned, Transmit};
 use crate::error::{IutCause, IutError};
 use coe::Mailboxes;
 pub use link::LinkFault;
@@ -171,8 +171,28 @@ impl Master {
     }
 }
 
-/// What a run learns of the terminal it met: the report's own entry.
-pub use crate::report::TerminalEntry as TerminalFacts;
+/// An EtherCAT terminal as canif's master found it: the report's own entry.
+#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct TerminalFacts {
+    pub profile: String,
+    pub name: String,
+    pub vendor_id: u32,
+    pub product_code: u32,
+    pub revision: u32,
+    pub serial: u32,
+    /// `0x1C32:05` read back after setting `0x1C32:08` (000 §5); none where it did not answer.
+    pub local_cycle_ns: Option<u32>,
+    /// Idle cycles timed after bring-up, and one cycle's exchange (LRW and input read), wall clock.
+    pub cycles: u64,
+    pub mean_cycle_ns: u64,
+    pub worst_cycle_ns: u64,
+    /// A soak's real-time period (`--ethercat-soak-s`), and the cycles that
+    /// ended after the next one was due; none when the cycles were not paced.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub period_ns: Option<u64>,
+    #[serde(default)]
+    pub missed_cycles: u64,
+}
 
 /// How a survey exchanges its idle cycles.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -268,7 +288,7 @@ pub struct EthercatIut {
     /// How the played master exchanges the process data (LRW by default).
     telegrams: ExchangeMode,
     /// What the last LRW showed the terminal doing wrong, for the lockstep.
-    deviation: Option<crate::device::iut::Deviation>,
+    deviation: Option<crate::door::iut::Deviation>,
     /// Where the logical image maps the terminal (read once, for LWR and LRD).
     windows: Option<exchange::Windows>,
     /// With Distributed Clocks: the master's telegrams around each SYNC0.
@@ -557,7 +577,7 @@ impl Iut for EthercatIut {
         self.telegrams = mode;
     }
 
-    fn take_deviation(&mut self) -> Option<crate::device::iut::Deviation> {
+    fn take_deviation(&mut self) -> Option<crate::door::iut::Deviation> {
         self.deviation.take()
     }
 }

@@ -1,16 +1,19 @@
 //! The bus under a device's scenario: it carries the other nodes' frames and
-//! the IUT's, decides when each ends, and tells the [`Pair`] — the lockstep
+//! the IUT's, decides when each ends, and tells the `Pair` — the lockstep
 //! never knows which bus it runs on: the simulated bus in virtual time
 //! ([`crate::bus::sim`], the default), or a Linux SocketCAN interface in real
-//! time ([`super::kernel_bus`], cargo feature `socketcan`, on by default).
+//! time ([`kernel`], cargo feature `socketcan`, on by default).
+
+#[cfg(feature = "socketcan")]
+pub mod kernel;
 
 use canif_model::frame::Frame;
 use canif_model::timing::BitRates;
 use canif_model::Nanos;
 
-use crate::adapter::protocol::OwnedBus;
 use crate::bus::sim::SimBus;
 use crate::device::pair::Pair;
+use crate::door::adapter::protocol::OwnedBus;
 use crate::error::RunError;
 use crate::outcome::Outcome;
 
@@ -62,7 +65,7 @@ pub enum BusChoice {
     Sim,
     /// A SocketCAN interface, in real time.
     #[cfg(feature = "socketcan")]
-    SocketCan(super::kernel_bus::KernelBusOptions),
+    SocketCan(kernel::KernelBusOptions),
 }
 
 impl BusChoice {
@@ -73,10 +76,9 @@ impl BusChoice {
         match self {
             BusChoice::Sim => Ok(Box::new(SimBus::new(bit_rates))),
             #[cfg(feature = "socketcan")]
-            BusChoice::SocketCan(options) => Ok(Box::new(super::kernel_bus::KernelBus::open(
-                options,
-                external_iut,
-            )?)),
+            BusChoice::SocketCan(options) => {
+                Ok(Box::new(kernel::KernelBus::open(options, external_iut)?))
+            }
         }
     }
 

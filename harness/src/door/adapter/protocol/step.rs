@@ -115,7 +115,7 @@ pub struct PlannedFrame {
 
 /// `step` and `stepped` as plain structs: protocol 2's hot path reads them
 /// without the buffering an internally tagged enum needs (the general
-/// [`Request`] / [`Answer`] read everything else, and say what is wrong).
+/// `Request` / `Answer` read everything else, and say what is wrong).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StepLine {

@@ -11,11 +11,13 @@ use canif_model::image::ImageLayout;
 use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 
-use crate::device::choices::Declared;
+use crate::door::declaration::choices::Declared;
 use canif_cabi::guard::GuardedImage;
 
-use crate::device::iut::{BuildError, InvalidFrame, Iut, Transmit};
+use crate::door::iut::{BuildError, InvalidFrame, Iut, Transmit};
 use crate::error::{IutCause, IutError};
+
+pub(crate) mod client;
 
 /// A library's device behind the [`Iut`] trait.
 pub(crate) struct LibIut {

@@ -3,20 +3,21 @@
 //! a PLC restart starts a new one. Whatever it does wrong — exit, hang,
 //! garbage, an image of the wrong size — is an error, never a failure.
 
-use std::time::Duration;
-
 use canif_model::config::InterfaceConfig;
 use canif_model::image::{ImageLayout, MessageRepr};
 
-use super::{Client, ClientDeclaration, IutError, TaskAnswer, TaskIo};
-use crate::adapter::process::AdapterProcess;
-use crate::adapter::protocol::{Answer, Config, Hex, Request, Tasked, WireMessage};
+use crate::door::adapter::process::AdapterProcess;
+use crate::door::adapter::protocol::{Answer, Config, Hex, Request, Tasked, WireMessage};
+use crate::door::client::{Client, TaskAnswer, TaskIo};
+use crate::door::declaration::client::ClientDeclaration;
+use crate::door::Timeouts;
 use crate::error::IutCause;
+use crate::error::IutError;
 
 /// The client role's protocol version.
 pub(super) const CLIENT_PROTOCOL: u64 = 1;
 
-pub(super) struct ExecClient {
+pub(crate) struct ExecClient {
     process: AdapterProcess,
     layout: ImageLayout,
     /// What its `started` answer declared.
@@ -25,13 +26,13 @@ pub(super) struct ExecClient {
 
 impl ExecClient {
     /// Starts `command` as the program of an interface configured as `config`.
-    pub(super) fn start(
+    pub(crate) fn start(
         command: &str,
-        timeout: Duration,
+        timeouts: Timeouts,
         config: &InterfaceConfig,
         layout: ImageLayout,
     ) -> Result<Self, IutError> {
-        let mut process = AdapterProcess::spawn(command, timeout, true)?;
+        let mut process = AdapterProcess::spawn(command, timeouts, true)?;
         let request = Request::Start {
             protocol: CLIENT_PROTOCOL,
             config: Config::new(config, &layout),

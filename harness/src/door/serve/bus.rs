@@ -7,9 +7,9 @@ use canif_kernel::{KernelSocket, Received};
 use canif_model::frame::Frame;
 use canif_model::Nanos;
 
-use super::server::{write_answer, Build, Server};
-use crate::adapter::protocol::{Answer, Request};
-use crate::device::iut::Iut;
+use super::device::{write_answer, Build, Server};
+use crate::door::adapter::protocol::{Answer, Request};
+use crate::door::iut::Iut;
 use crate::error::{BusCause, BusError};
 
 /// The device's controller on a SocketCAN interface (also the CAN side of

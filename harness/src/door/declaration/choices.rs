@@ -268,8 +268,17 @@ impl Declared {
         both
     }
 
+    /// The first choice these and `other` both declare, with different
+    /// values: this one's and the other's.
+    pub fn contradiction(&self, other: &Declared) -> Option<(Choice, String, String)> {
+        Choice::ALL.into_iter().find_map(|choice| {
+            let (mine, theirs) = (self.value(choice)?, other.value(choice)?);
+            (mine != theirs).then_some((choice, mine, theirs))
+        })
+    }
+
     /// These declarations, less those `told` makes (what an IUT declared that
-    /// the command line did not overrule).
+    /// the command line did not declare already).
     pub fn except(self, told: &Declared) -> Declared {
         let mut left = self;
         for choice in Choice::ALL {

@@ -1,0 +1,329 @@
+//! Doors: how an implementation under test is reached, below both sides.
+//!
+//! A door is a transport — a process over the adapter protocol, a shared
+//! library (in canif's process or hosted in a `canif lib-host` of its own),
+//! a terminal over EtherCAT — and serves whichever role the implementation
+//! plays: a device ([`iut::Iut`]) or a PLC-side client ([`client::Client`]).
+//! The sides above (`crate::device`, `crate::client`) import doors, never
+//! each other; no door imports a side.
+//!
+//! - [`iut`], [`client`]: the two roles' traits, and the in-process devices.
+//! - [`declaration`]: what an implementation declares (the choices the
+//!   documents leave, what a client serves), read one way for both roles.
+//! - [`adapter`]: the adapter protocol and the process that speaks it.
+//! - [`exec`], `lib`, [`ethercat`]: one module per transport, each with
+//!   both roles it serves.
+//! - [`serve`]: the other end of the protocol, canif serving an in-process
+//!   implementation to another process (`canif device --stdio`, `canif lib-host`).
+//!
+//! A new transport is one module here and one arm of [`Door`] (CONTRIBUTING.md).
+
+pub mod adapter;
+pub mod client;
+pub mod declaration;
+pub mod ethercat;
+pub mod exec;
+pub mod iut;
+pub(crate) mod lib;
+pub mod serve;
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use canif_model::config::{Capabilities, InterfaceConfig};
+use canif_model::image::ImageLayout;
+
+use adapter::protocol::OwnedBus;
+use client::Client;
+use ethercat::EthercatLink;
+use exec::{Configured, ExecIut};
+use iut::{BuildError, Iut};
+
+use crate::error::{IutCause, IutError};
+
+/// How long an implementation in another process may take: to start (the
+/// process, an interpreter, a library's load, up to its first answer), and
+/// to answer each request after that. Only the second says it hung: a slow
+/// start on a busy machine is not a hang.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Timeouts {
+    pub start: Duration,
+    pub request: Duration,
+}
+
+impl Timeouts {
+    /// The environment variable that sets the start limit in ms, for every
+    /// run and test that does not set it on the command line.
+    pub const START_VARIABLE: &'static str = "CANIF_START_TIMEOUT_MS";
+    /// The start limit when nothing sets it.
+    pub const DEFAULT_START_MS: u64 = 60_000;
+    /// The per-request limit when nothing sets it.
+    pub const DEFAULT_REQUEST_MS: u64 = 5_000;
+
+    /// `request` per request, and the start limit of [`Self::START_VARIABLE`]
+    /// (or [`Self::DEFAULT_START_MS`]); never less than `request`.
+    pub fn with_request(request: Duration) -> Self {
+        let start = std::env::var(Self::START_VARIABLE)
+            .ok()
+            .and_then(|ms| ms.trim().parse::<u64>().ok())
+            .filter(|ms| *ms > 0)
+            .unwrap_or(Self::DEFAULT_START_MS);
+        Timeouts {
+            start: Duration::from_millis(start).max(request),
+            request,
+        }
+    }
+}
+
+impl Default for Timeouts {
+    fn default() -> Self {
+        Timeouts::with_request(Duration::from_millis(Self::DEFAULT_REQUEST_MS))
+    }
+}
+
+/// The role an implementation plays behind a door.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Role {
+    Device,
+    Client,
+}
+
+impl Role {
+    /// The name `canif lib-host --role` takes.
+    pub fn name(self) -> &'static str {
+        match self {
+            Role::Device => "device",
+            Role::Client => "client",
+        }
+    }
+}
+
+/// The canif executable that hosts a library (`canif lib-host`), and how
+/// long the host may take.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct LibHost {
+    pub canif: PathBuf,
+    pub timeouts: Timeouts,
+}
+
+impl LibHost {
+    /// The host of the library at `path` in `role`, as a command for `sh`.
+    pub fn command(&self, role: Role, path: &Path) -> String {
+        let quoted = |p: &Path| format!("'{}'", p.display().to_string().replace('\'', "'\\''"));
+        format!(
+            "exec {} lib-host --role {} {}",
+            quoted(&self.canif),
+            role.name(),
+            quoted(path)
+        )
+    }
+}
+
+/// How an implementation outside canif's own code is reached.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Door {
+    /// Another process speaking the adapter protocol (docs/adapter-protocol.md).
+    Exec {
+        command: String,
+        timeouts: Timeouts,
+        /// Run the IUT on the CPU of the harness's thread: the exchange strictly
+        /// alternates, and a wake-up across CPUs costs ten times one on the same
+        /// CPU on a virtual machine (measured in benches/external_iut.rs).
+        same_cpu: bool,
+    },
+    /// A shared library built against include/canif.h (the C ABI): in
+    /// canif's process, or with `host` in a `canif lib-host` of its own,
+    /// where a crash or an access past its images ends that process only.
+    Lib {
+        path: PathBuf,
+        host: Option<LibHost>,
+    },
+    /// A terminal over EtherCAT (a device): canif's master (ethercrab) and,
+    /// in memory or on a veth pair, the soft device behind an emulated ESC.
+    Ethercat {
+        /// The identity the profile gives (set per profile by the suite).
+        identity: Option<canif_spec::EthercatIdentity>,
+        link: EthercatLink,
+    },
+}
+
+/// Asks a device, configuration after configuration, whether it accepts.
+pub type Configurer = Box<dyn FnMut(&Capabilities, &InterfaceConfig) -> Result<(), BuildError>>;
+
+impl Door {
+    pub fn name(&self) -> String {
+        match self {
+            Door::Exec { command, .. } => format!("exec:{command}"),
+            Door::Lib { path, .. } => format!("lib:{}", path.display()),
+            Door::Ethercat { link, .. } => link.name(),
+        }
+    }
+
+    /// A hosted library as the process it runs in.
+    fn hosted(&self, role: Role) -> Option<Door> {
+        let Door::Lib {
+            path,
+            host: Some(host),
+        } = self
+        else {
+            return None;
+        };
+        Some(Door::Exec {
+            command: host.command(role, path),
+            timeouts: host.timeouts,
+            same_cpu: true,
+        })
+    }
+
+    /// Whether the device's CAN controller is out of the harness's reach: it
+    /// opens its own socket, or it is a terminal on a real bus.
+    pub fn owns_its_bus(&self) -> bool {
+        matches!(
+            self,
+            Door::Exec { .. }
+                | Door::Ethercat {
+                    link: EthercatLink::Interface { .. },
+                    ..
+                }
+        )
+    }
+
+    /// The device behind the door for a configuration; with `bus`, an
+    /// external device is told to open that interface itself.
+    pub fn device(
+        &self,
+        caps: &Capabilities,
+        config: &InterfaceConfig,
+        bus: Option<&OwnedBus>,
+    ) -> Result<Box<dyn Iut>, BuildError> {
+        if let Some(hosted) = self.hosted(Role::Device) {
+            // The harness drives the host's CAN side through the protocol.
+            return hosted.device(caps, config, None);
+        }
+        match self {
+            Door::Lib { path, .. } => Ok(Box::new(lib::build(path, caps, config)?)),
+            Door::Ethercat { identity, link } => {
+                let identity = identity.as_ref().ok_or_else(|| {
+                    BuildError::Failed(IutError::new(
+                        IutCause::NotStarted,
+                        "this profile is no EtherCAT terminal: it gives no identity to check",
+                    ))
+                })?;
+                Ok(Box::new(ethercat::build(caps, config, identity, link)?))
+            }
+            Door::Exec {
+                command,
+                timeouts,
+                same_cpu,
+            } => {
+                let mut iut =
+                    ExecIut::spawn(command, *timeouts, *same_cpu).map_err(BuildError::Failed)?;
+                match iut
+                    .configure(caps, config, bus)
+                    .map_err(BuildError::Failed)?
+                {
+                    Configured::Accepted => Ok(Box::new(iut)),
+                    Configured::Refused(reason) => Err(BuildError::Refused(reason)),
+                }
+            }
+        }
+    }
+
+    /// Something that answers configuration after configuration; for an
+    /// external process, one process answers them all.
+    pub fn configurer(&self) -> Configurer {
+        if let Some(hosted) = self.hosted(Role::Device) {
+            return hosted.configurer();
+        }
+        match self {
+            Door::Exec {
+                command,
+                timeouts,
+                same_cpu,
+            } => {
+                let (command, timeouts, same_cpu) = (command.clone(), *timeouts, *same_cpu);
+                let mut process: Option<ExecIut> = None;
+                Box::new(move |caps, config| {
+                    let iut = match process.as_mut() {
+                        Some(iut) => iut,
+                        None => process.insert(
+                            ExecIut::spawn(&command, timeouts, same_cpu)
+                                .map_err(BuildError::Failed)?,
+                        ),
+                    };
+                    match iut
+                        .configure(caps, config, None)
+                        .map_err(BuildError::Failed)?
+                    {
+                        Configured::Accepted => Ok(()),
+                        Configured::Refused(reason) => Err(BuildError::Refused(reason)),
+                    }
+                })
+            }
+            other => {
+                let door = other.clone();
+                Box::new(move |caps, config| door.device(caps, config, None).map(|_| ()))
+            }
+        }
+    }
+
+    /// Starts the implementation once in `role`, on an 11-bit interface of
+    /// 8 slots, and ends it. `Err` only where it cannot start at all — its
+    /// command is not found or cannot run, its library is no file — which
+    /// no run could judge; whatever else it does is the run's to judge.
+    pub fn starts(&self, role: Role) -> Result<(), IutError> {
+        match self {
+            Door::Ethercat { .. } => return Ok(()),
+            // Loading it here would run its code in canif's process: a
+            // hosted library is only looked for.
+            Door::Lib { path, .. } if !path.is_file() => {
+                return Err(IutError::new(
+                    IutCause::NotStarted,
+                    format!("cannot load `{}`: no such file", path.display()),
+                ))
+            }
+            Door::Lib { host: Some(_), .. } => return Ok(()),
+            Door::Lib { .. } | Door::Exec { .. } => {}
+        }
+        let caps = Capabilities::everything();
+        let config = InterfaceConfig::new(canif_model::config::FrameFormat::Base11, 8);
+        let failed = match role {
+            Role::Device => self.device(&caps, &config, None).err(),
+            Role::Client => self
+                .client(&config, ImageLayout::new(&config, caps.info_data))
+                .err(),
+        };
+        match failed {
+            Some(BuildError::Failed(error)) if error.cause == IutCause::NotStarted => Err(error),
+            _ => Ok(()),
+        }
+    }
+
+    /// A fresh client (a new PLC program) behind the door for an interface.
+    pub fn client(
+        &self,
+        config: &InterfaceConfig,
+        layout: ImageLayout,
+    ) -> Result<Box<dyn Client>, BuildError> {
+        if let Some(hosted) = self.hosted(Role::Client) {
+            return hosted.client(config, layout);
+        }
+        Ok(match self {
+            Door::Lib { path, .. } => Box::new(
+                lib::client::LibClient::start(path, config, layout).map_err(BuildError::Failed)?,
+            ),
+            Door::Exec {
+                command, timeouts, ..
+            } => Box::new(
+                exec::client::ExecClient::start(command, *timeouts, config, layout)
+                    .map_err(BuildError::Failed)?,
+            ),
+            Door::Ethercat { .. } => {
+                return Err(BuildError::Failed(IutError::new(
+                    IutCause::NotStarted,
+                    "an EtherCAT terminal is a device: it cannot be a PLC-side client",
+                )))
+            }
+        })
+    }
+}
