@@ -5,6 +5,9 @@
  * process of its own (`canif lib-host`), whose images end at a guard page:
  * an access past one is reported with its offset and judged, and a crash
  * ends that process, not the run (`--lib-in-process` loads it into canif).
+ * The host speaks to canif on descriptors of its own: the library may print
+ * to stdout and stderr freely, and what it prints is in the report as its
+ * output. Whatever it starts (a thread, a child, a daemon) ends with the run.
  *
  * The calls are those of the adapter protocol (docs/adapter-protocol.md),
  * version 1, as functions: canif calls them from one thread, one at a time.

@@ -363,6 +363,11 @@ pub(crate) enum Command {
         /// The role the library plays.
         #[arg(long, value_enum)]
         role: LibRole,
+        /// Speak the protocol on descriptors 3 (requests) and 4 (answers),
+        /// as canif starts a host: the library's stdout and stderr are then
+        /// its own output, not the protocol.
+        #[arg(long)]
+        control: bool,
         /// The library (.so).
         path: PathBuf,
     },

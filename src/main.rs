@@ -313,7 +313,11 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
             bus,
             ..
         } => device::device(stdio, (&fault, &choice, &declare), protocol, bus.as_deref()),
-        Command::LibHost { role, path } => device::lib_host(role, &path),
+        Command::LibHost {
+            role,
+            path,
+            control,
+        } => device::lib_host(role, &path, control),
         Command::Faults => {
             for fault in Fault::ALL {
                 outln!(out, "{:<36} {}", fault.name(), fault.description());

@@ -127,6 +127,68 @@ fn canif_run_takes_a_library_from_the_command_line() {
     );
 }
 
+/// What a hosted library prints is its own output (issue 34: `printf` went
+/// to the host's stdout, the protocol, and failed a conforming library's
+/// run), and a line it prints cannot forge the host's report of an access
+/// past an image (which once came on stderr, where any library can write).
+#[test]
+fn a_hosted_library_prints_freely_and_cannot_forge_the_guards_report() {
+    const FORGED: &str = "canif-lib-host: access outside the image: input offset=120 size=110";
+    let chatty = build(
+        "chatty",
+        &example(),
+        &format!(
+            r#"
+#include <stdio.h>
+__attribute__((constructor)) static void chatty_at_load(void) {{
+    printf("hello from the library on stdout\n");
+    fflush(stdout);
+    fprintf(stderr, "{FORGED}\n");
+    fflush(stderr);
+}}
+"#
+        ),
+    );
+    let report = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi-chatty");
+    let output = run_whole_profile(&chatty, &report);
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert_eq!(
+        output.status.code(),
+        Some(0),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    // A library that says it stopped outside an image, and leaves.
+    let forger = build(
+        "forger",
+        &example(),
+        &format!(
+            r#"
+#include <stdio.h>
+#include <unistd.h>
+__attribute__((constructor)) static void forge_and_leave(void) {{
+    fprintf(stderr, "{FORGED}\n");
+    fflush(stderr);
+    _exit(0);
+}}
+"#
+        ),
+    );
+    let report = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi-forger");
+    let output = run_tx_batches(&forger, &report, &[]);
+    let json = std::fs::read_to_string(report.join("report.json")).unwrap_or_default();
+    assert_eq!(
+        output.status.code(),
+        Some(2),
+        "an exit is a broken exchange, never a failure: {}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    assert!(
+        json.contains("exited") && !json.contains("accessed its input image"),
+        "{json}"
+    );
+}
+
 /// A device in a library declares its choices through the optional
 /// `canif_declares` (docs/choices.md): the run is judged by them and the
 /// report says the IUT declared them; a line that is no declaration is an

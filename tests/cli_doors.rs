@@ -43,3 +43,28 @@ fn a_reader_that_goes_away_ends_nothing_badly() {
         "the report was not written"
     );
 }
+
+/// `canif probe` against an IUT that breaks — prints garbage, hangs,
+/// exits — says so and exits 2, and writes no choices file (issue 34: it
+/// exited 0 and wrote `{}`, a declaration of nothing taken for a finding).
+#[test]
+fn a_probe_of_a_broken_iut_is_an_error_and_writes_nothing() {
+    for (case, iut) in [
+        ("garbage", "exec:echo not json; cat > /dev/null"),
+        ("hangs", "exec:exec sleep 3600"),
+        ("exits", "exec:exit 3"),
+    ] {
+        let dir = scratch(&format!("probe-{case}"));
+        let out = dir.join("choices.json");
+        let output = Command::new(CANIF)
+            .args(["probe", "--profile", "fc510x", "--timeout-ms", "500"])
+            .args(["--start-timeout-ms", "500", "--iut", iut, "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{case}: {stderr}");
+        assert!(stderr.contains("the IUT broke"), "{case}: {stderr}");
+        assert!(!out.exists(), "{case}: a choices file was written");
+    }
+}

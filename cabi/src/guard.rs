@@ -1,11 +1,13 @@
 //! Process images with a guard page behind them, for a library run in a
 //! process of its own (`canif lib-host`): a read or write past the image's
-//! end stops at the guard page, and the fault handler says, on stderr, which
-//! image was touched and at which offset before the process dies of the
-//! signal. canif reads that line back ([`OutsideImage::parse`]) and judges
-//! the access (CL-IMG-001 for a client) instead of dying with the library.
+//! end stops at the guard page, and the fault handler says which image was
+//! touched and at which offset before the process dies of the signal: on
+//! the host's control channel ([`report_to`]), where the library's own
+//! printing does not go, or else on stderr. canif reads that line back
+//! ([`OutsideImage::parse`]) and judges the access (CL-IMG-001 for a client)
+//! instead of dying with the library.
 
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicI32, AtomicUsize, Ordering};
 use std::sync::Once;
 
 /// The line's start: what canif looks for in a dead host's stderr.
@@ -119,8 +121,17 @@ impl std::fmt::Display for OutsideImage {
     }
 }
 
+/// Where the fault handler writes its line: stderr until told otherwise.
+static REPORT_FD: AtomicI32 = AtomicI32::new(2);
+
+/// The fault handler writes its line to `fd` (the host's control channel,
+/// which the library is not given and does not print to).
+pub fn report_to(fd: &impl std::os::fd::AsRawFd) {
+    REPORT_FD.store(fd.as_raw_fd(), Ordering::SeqCst);
+}
+
 /// From now on a fault in the guard page behind `inputs` or `outputs` is
-/// reported on stderr before the process dies of it.
+/// reported (see [`report_to`]) before the process dies of it.
 pub fn watch(inputs: &GuardedImage, outputs: &GuardedImage) {
     for (slot, image) in IMAGES.iter().zip([inputs, outputs]) {
         slot.0.store(image.address(), Ordering::SeqCst);
@@ -188,7 +199,7 @@ extern "C" fn on_fault(_signal: libc::c_int, info: *mut libc::siginfo_t, _: *mut
     put(decimal(len, &mut [0u8; 20]));
     put(b"\n");
     // SAFETY: write(2) of an initialised buffer; async-signal-safe.
-    unsafe { libc::write(2, line.as_ptr().cast(), at) };
+    unsafe { libc::write(REPORT_FD.load(Ordering::SeqCst), line.as_ptr().cast(), at) };
 }
 
 /// How far past an image a fault is still taken for an access to it (a

@@ -29,6 +29,35 @@ pub fn as_subreaper(command: &mut Command) -> &mut Command {
     }
 }
 
+/// Hands the process `command` starts each `(fd, number)`: the file `fd`
+/// as descriptor `number` (a control channel apart from stdin and stdout).
+/// The caller keeps each `fd` open until the process is started.
+pub fn hand_over(command: &mut Command, fds: &[(std::os::fd::BorrowedFd<'_>, i32)]) {
+    use std::os::fd::AsRawFd;
+    let fds: Vec<(i32, i32)> = fds.iter().map(|(fd, to)| (fd.as_raw_fd(), *to)).collect();
+    // SAFETY: between fork and exec only dup2(2), async-signal-safe; the
+    // vector was allocated before the fork and is only read.
+    unsafe {
+        command.pre_exec(move || {
+            // Out of the way first: a source may be numbered like a target.
+            let mut high = [0; 8];
+            for (at, (from, _)) in fds.iter().enumerate().take(high.len()) {
+                high[at] = libc::fcntl(*from, libc::F_DUPFD, 100);
+                if high[at] < 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+            }
+            for (at, (_, to)) in fds.iter().enumerate().take(high.len()) {
+                if libc::dup2(high[at], *to) < 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                libc::close(high[at]);
+            }
+            Ok(())
+        });
+    }
+}
+
 /// Makes this process a child subreaper: an orphan of a process it started
 /// comes to it instead of to init.
 pub fn adopt_orphans() {

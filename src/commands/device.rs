@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 use canif_harness::device::bus::BusChoice;
 use canif_harness::device::IutKind;
+use canif_harness::door::adapter::CONTROL_FDS;
 use canif_harness::door::serve::device::{self as server, Build};
 
 use super::{soft_device_choices, soft_device_faults};
@@ -410,8 +411,31 @@ fn coupler_fault(
 
 /// `canif lib-host --role ROLE PATH`: the library in this process, served
 /// over the adapter protocol (what `--iut lib:PATH` starts).
-pub(crate) fn lib_host(role: crate::cli::LibRole, path: &std::path::Path) -> ExitCode {
-    let (input, output) = (std::io::stdin().lock(), std::io::stdout().lock());
+pub(crate) fn lib_host(
+    role: crate::cli::LibRole,
+    path: &std::path::Path,
+    control: bool,
+) -> ExitCode {
+    use std::io::{BufRead, Write};
+    // With --control the protocol runs on descriptors 3 and 4, and the
+    // library's stdout and stderr are its own to print on.
+    let (input, output): (Box<dyn BufRead>, Box<dyn Write>) = match control {
+        false => (
+            Box::new(std::io::stdin().lock()),
+            Box::new(std::io::stdout().lock()),
+        ),
+        true => match canif_harness::door::serve::control_channel() {
+            Ok((requests, answers)) => (Box::new(requests), Box::new(answers)),
+            Err(error) => {
+                errln!(
+                    "canif lib-host --control: descriptors {} and {} are not open: {error}",
+                    CONTROL_FDS.0,
+                    CONTROL_FDS.1
+                );
+                return ExitCode::from(2);
+            }
+        },
+    };
     let served = match role {
         crate::cli::LibRole::Device => {
             canif_harness::door::serve::device::serve_library(path, input, output)

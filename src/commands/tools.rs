@@ -164,6 +164,20 @@ pub(crate) fn probe(
             probes.push(probed);
         }
     }
+    // A device that broke showed no choice: what it would have shown is
+    // unknown, so nothing is found and nothing written.
+    let broke: std::collections::BTreeSet<&String> = probes.iter().flat_map(|p| &p.broke).collect();
+    if let Some(first) = broke.first() {
+        errln!(
+            "canif probe: the IUT broke, so no choice was found and {} was not written: {first}{}",
+            out.display(),
+            match broke.len() {
+                1 => String::new(),
+                n => format!(" (and {} other errors, above)", n - 1),
+            }
+        );
+        return ExitCode::from(2);
+    }
     let mut code = ExitCode::SUCCESS;
     for choice in Choice::ALL.into_iter().filter(|c| c.settled_by().is_some()) {
         let said = match finding(&probes, choice) {

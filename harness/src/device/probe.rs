@@ -9,6 +9,7 @@ use super::iut_kind::IutKind;
 use super::scenario::Scenario;
 use super::suite::{DeviceCase, Options};
 use crate::door::declaration::choices::{Choice, Declared};
+use crate::error::RunError;
 use crate::outcome::Outcome;
 use crate::run::Side;
 
@@ -23,6 +24,9 @@ pub struct Probed {
     /// Why a run under some value neither passed nor failed (the IUT
     /// broke, refused the interface, …): then nothing is concluded from it.
     pub errors: Vec<String>,
+    /// Of those, where the IUT itself broke (it exited, hung, answered
+    /// garbage) or the bus did: nothing can be concluded from the whole probe.
+    pub broke: Vec<String>,
 }
 
 /// What the probes of one choice show.
@@ -61,6 +65,7 @@ pub fn probe(kind: &IutKind, profile: &Profile, options: &Options) -> Vec<Probed
                 scenario: Options::name(case),
                 passes: Vec::new(),
                 errors: Vec::new(),
+                broke: Vec::new(),
             };
             for value in choice.named_values() {
                 let mut declared = options.declared;
@@ -75,7 +80,18 @@ pub fn probe(kind: &IutKind, profile: &Profile, options: &Options) -> Vec<Probed
                 match under.run(kind, profile, case.clone()).outcome {
                     Outcome::Pass => probed.passes.push(value),
                     Outcome::Fail(_) => {}
-                    Outcome::Error(error) => probed.errors.push(format!("under {value}: {error}")),
+                    Outcome::Error(error) => {
+                        if matches!(
+                            error,
+                            RunError::Iut(_)
+                                | RunError::Bus(_)
+                                | RunError::Harness(_)
+                                | RunError::Skipped(_)
+                        ) {
+                            probed.broke.push(error.to_string());
+                        }
+                        probed.errors.push(format!("under {value}: {error}"));
+                    }
                 }
             }
             probes.push(probed);
@@ -144,6 +160,7 @@ mod tests {
             scenario: "s".into(),
             passes: passes.to_vec(),
             errors: Vec::new(),
+            broke: Vec::new(),
         }
     }
 

@@ -33,6 +33,7 @@ use std::time::Duration;
 use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_model::image::ImageLayout;
 
+use adapter::process::Channel;
 use adapter::protocol::OwnedBus;
 use client::Client;
 use ethercat::EthercatLink;
@@ -111,7 +112,7 @@ impl LibHost {
     pub fn command(&self, role: Role, path: &Path) -> String {
         let quoted = |p: &Path| format!("'{}'", p.display().to_string().replace('\'', "'\\''"));
         format!(
-            "exec {} lib-host --role {} {}",
+            "exec {} lib-host --control --role {} {}",
             quoted(&self.canif),
             role.name(),
             quoted(path)
@@ -159,8 +160,10 @@ impl Door {
         }
     }
 
-    /// A hosted library as the process it runs in.
-    fn hosted(&self, role: Role) -> Option<Door> {
+    /// A hosted library as the process it runs in: its command, and how
+    /// long it may take. The host speaks on its control channel, so that
+    /// what the library prints is its output, never a broken exchange.
+    fn hosted(&self, role: Role) -> Option<(String, Timeouts)> {
         let Door::Lib {
             path,
             host: Some(host),
@@ -168,11 +171,7 @@ impl Door {
         else {
             return None;
         };
-        Some(Door::Exec {
-            command: host.command(role, path),
-            timeouts: host.timeouts,
-            same_cpu: true,
-        })
+        Some((host.command(role, path), host.timeouts))
     }
 
     /// Whether the device's CAN controller is out of the harness's reach: it
@@ -196,9 +195,17 @@ impl Door {
         config: &InterfaceConfig,
         bus: Option<&OwnedBus>,
     ) -> Result<Box<dyn Iut>, BuildError> {
-        if let Some(hosted) = self.hosted(Role::Device) {
+        if let Some((command, timeouts)) = self.hosted(Role::Device) {
             // The harness drives the host's CAN side through the protocol.
-            return hosted.device(caps, config, None);
+            let mut iut = ExecIut::spawn_on(&command, timeouts, true, Channel::Control)
+                .map_err(BuildError::Failed)?;
+            return match iut
+                .configure(caps, config, None)
+                .map_err(BuildError::Failed)?
+            {
+                Configured::Accepted => Ok(Box::new(iut)),
+                Configured::Refused(reason) => Err(BuildError::Refused(reason)),
+            };
         }
         match self {
             Door::Lib { path, .. } => Ok(Box::new(lib::build(path, caps, config)?)),
@@ -232,22 +239,26 @@ impl Door {
     /// Something that answers configuration after configuration; for an
     /// external process, one process answers them all.
     pub fn configurer(&self) -> Configurer {
-        if let Some(hosted) = self.hosted(Role::Device) {
-            return hosted.configurer();
-        }
-        match self {
-            Door::Exec {
-                command,
-                timeouts,
-                same_cpu,
-            } => {
-                let (command, timeouts, same_cpu) = (command.clone(), *timeouts, *same_cpu);
+        let one_process = match (self.hosted(Role::Device), self) {
+            (Some((command, timeouts)), _) => Some((command, timeouts, true, Channel::Control)),
+            (
+                None,
+                Door::Exec {
+                    command,
+                    timeouts,
+                    same_cpu,
+                },
+            ) => Some((command.clone(), *timeouts, *same_cpu, Channel::Stdio)),
+            _ => None,
+        };
+        match one_process {
+            Some((command, timeouts, same_cpu, channel)) => {
                 let mut process: Option<ExecIut> = None;
                 Box::new(move |caps, config| {
                     let iut = match process.as_mut() {
                         Some(iut) => iut,
                         None => process.insert(
-                            ExecIut::spawn(&command, timeouts, same_cpu)
+                            ExecIut::spawn_on(&command, timeouts, same_cpu, channel)
                                 .map_err(BuildError::Failed)?,
                         ),
                     };
@@ -260,8 +271,8 @@ impl Door {
                     }
                 })
             }
-            other => {
-                let door = other.clone();
+            None => {
+                let door = self.clone();
                 Box::new(move |caps, config| door.device(caps, config, None).map(|_| ()))
             }
         }
@@ -305,8 +316,17 @@ impl Door {
         config: &InterfaceConfig,
         layout: ImageLayout,
     ) -> Result<Box<dyn Client>, BuildError> {
-        if let Some(hosted) = self.hosted(Role::Client) {
-            return hosted.client(config, layout);
+        if let Some((command, timeouts)) = self.hosted(Role::Client) {
+            return Ok(Box::new(
+                exec::client::ExecClient::start(
+                    &command,
+                    timeouts,
+                    Channel::Control,
+                    config,
+                    layout,
+                )
+                .map_err(BuildError::Failed)?,
+            ));
         }
         Ok(match self {
             Door::Lib { path, .. } => Box::new(
@@ -315,7 +335,7 @@ impl Door {
             Door::Exec {
                 command, timeouts, ..
             } => Box::new(
-                exec::client::ExecClient::start(command, *timeouts, config, layout)
+                exec::client::ExecClient::start(command, *timeouts, Channel::Stdio, config, layout)
                     .map_err(BuildError::Failed)?,
             ),
             Door::Ethercat { .. } => {

@@ -4,9 +4,14 @@
 //! - [`protocol`]: the messages, as serde types, written once.
 //! - `process`: an implementation in another process, in either role.
 //!
-//! Each side's use of it is the side's own: `device::exec_iut` (a device
-//! process), `device::server` (an in-process device served over stdin and
-//! stdout), `client::exec` (a client process).
+//! Its users are the doors: `door::exec` (a device or client process, and
+//! a hosted library on its control channel), and `door::serve` (canif
+//! serving an in-process implementation: `canif device --stdio`, `canif lib-host`).
 
 pub(crate) mod process;
 pub mod protocol;
+
+/// The descriptors a `canif lib-host --control` reads requests from and
+/// writes answers to: its control channel, apart from the library's own
+/// stdin, stdout and stderr.
+pub const CONTROL_FDS: (i32, i32) = (3, 4);

@@ -9,12 +9,15 @@
 //! loading), longer than the start timeout: a slow start is not a hang.
 
 use std::collections::VecDeque;
+use std::fs::File;
 use std::io::{BufRead, BufReader, Write};
-use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
+use std::os::fd::{AsFd, OwnedFd};
+use std::process::{Child, Command, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use super::protocol::{Answer, Expected, Request};
+use super::CONTROL_FDS;
 use crate::door::Timeouts;
 use crate::error::{IutCause, IutError};
 
@@ -41,7 +44,7 @@ enum Line {
 /// instead of handing lines over from a reader thread saves a context switch
 /// per exchange, which is most of an exchange's cost.
 struct LineReader {
-    source: ChildStdout,
+    source: std::fs::File,
     buffer: Vec<u8>,
     /// What one read fills, allocated once (not zeroed again per read).
     chunk: Box<[u8]>,
@@ -50,7 +53,7 @@ struct LineReader {
 }
 
 impl LineReader {
-    fn new(source: ChildStdout) -> Self {
+    fn new(source: std::fs::File) -> Self {
         LineReader {
             source,
             buffer: Vec::with_capacity(1 << 16),
@@ -113,6 +116,43 @@ impl LineReader {
     }
 }
 
+/// Where the protocol runs between canif and the process.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Channel {
+    /// Its stdin and stdout (any language: docs/adapter-protocol.md).
+    Stdio,
+    /// Descriptors [`CONTROL_FDS`], apart from stdin, stdout and stderr,
+    /// which stay the library's own: a `canif lib-host`. What the library
+    /// prints is its output, and the host's report of an access past an
+    /// image comes on the channel, where printing cannot forge it.
+    Control,
+}
+
+/// Reads `stream` line by line into `log`, keeping the last [`STDERR_LINES`].
+fn read_log(
+    stream: impl std::io::Read + Send + 'static,
+    log: Arc<Mutex<VecDeque<String>>>,
+) -> std::thread::JoinHandle<()> {
+    std::thread::spawn(move || {
+        let mut reader = BufReader::new(stream);
+        let mut line = Vec::new();
+        loop {
+            line.clear();
+            match std::io::Read::take(&mut reader, 4096).read_until(b'\n', &mut line) {
+                Ok(0) | Err(_) => break,
+                Ok(_) => {}
+            }
+            let text = String::from_utf8_lossy(&line).trim_end().to_string();
+            if let Ok(mut log) = log.lock() {
+                log.push_back(text);
+                if log.len() > STDERR_LINES {
+                    log.pop_front();
+                }
+            }
+        }
+    })
+}
+
 /// Pins the calling thread to the CPU it runs on; a child started from it
 /// inherits that. Where the system says no, nothing changes.
 fn share_cpu() {
@@ -133,11 +173,17 @@ fn share_cpu() {
 pub(crate) struct AdapterProcess {
     command: String,
     child: Child,
-    stdin: Option<ChildStdin>,
+    /// Where requests go (its stdin, or its control channel).
+    requests: Option<File>,
+    /// Where answers come from.
     lines: LineReader,
+    channel: Channel,
+    /// Where the library stopped, as a hosting `canif lib-host` reported it.
+    outside: Option<canif_cabi::guard::OutsideImage>,
     stderr: Arc<Mutex<VecDeque<String>>>,
-    /// Reads `stderr` until the IUT's tree closes it.
-    stderr_reader: Option<std::thread::JoinHandle<()>>,
+    /// Read its log (stderr; and stdout, where that is no channel) until
+    /// the IUT's tree closes them.
+    log_readers: Vec<std::thread::JoinHandle<()>>,
     timeouts: Timeouts,
     /// It has answered once: it started, and the per-request limit holds.
     started: bool,
@@ -152,27 +198,59 @@ impl AdapterProcess {
         command: &str,
         timeouts: Timeouts,
         same_cpu: bool,
+        channel: Channel,
     ) -> Result<Self, IutError> {
         use std::os::unix::process::CommandExt;
         if same_cpu {
             share_cpu();
         }
+        let broken = |what: &str, e: std::io::Error| {
+            IutError::new(
+                IutCause::NotStarted,
+                format!("cannot start `{command}`: {what}: {e}"),
+            )
+        };
         canif_cabi::isolation::adopt_orphans();
         let mut sh = Command::new("sh");
-        let mut child = canif_cabi::isolation::as_subreaper(&mut sh)
+        canif_cabi::isolation::as_subreaper(&mut sh)
             .arg("-c")
             .arg(command)
-            .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
-            .process_group(0)
-            .spawn()
-            .map_err(|e| {
-                IutError::new(
-                    IutCause::NotStarted,
-                    format!("cannot start `{command}`: {e}"),
-                )
-            })?;
+            .process_group(0);
+        // The control channel's far ends, kept open until the host has them.
+        let mut far_ends: Vec<OwnedFd> = Vec::new();
+        let control = match channel {
+            Channel::Stdio => {
+                sh.stdin(Stdio::piped());
+                None
+            }
+            Channel::Control => {
+                let (host_reads, requests) = std::io::pipe().map_err(|e| broken("pipe", e))?;
+                let (answers, host_writes) = std::io::pipe().map_err(|e| broken("pipe", e))?;
+                far_ends.push(host_reads.into());
+                far_ends.push(host_writes.into());
+                canif_cabi::isolation::hand_over(
+                    &mut sh,
+                    &[
+                        (far_ends[0].as_fd(), CONTROL_FDS.0),
+                        (far_ends[1].as_fd(), CONTROL_FDS.1),
+                    ],
+                );
+                sh.stdin(Stdio::null());
+                Some((
+                    File::from(OwnedFd::from(requests)),
+                    File::from(OwnedFd::from(answers)),
+                ))
+            }
+        };
+        let mut child = sh.spawn().map_err(|e| {
+            IutError::new(
+                IutCause::NotStarted,
+                format!("cannot start `{command}`: {e}"),
+            )
+        })?;
+        drop(far_ends);
         let stdout = child
             .stdout
             .take()
@@ -181,35 +259,28 @@ impl AdapterProcess {
             .stderr
             .take()
             .ok_or(IutError::new(IutCause::NotStarted, "no stderr"))?;
-        let lines = LineReader::new(stdout);
         let log = Arc::new(Mutex::new(VecDeque::new()));
-        let log_writer = log.clone();
-        let stderr_reader = std::thread::spawn(move || {
-            let mut reader = BufReader::new(stderr);
-            let mut line = Vec::new();
-            loop {
-                line.clear();
-                match std::io::Read::take(&mut reader, 4096).read_until(b'\n', &mut line) {
-                    Ok(0) | Err(_) => break,
-                    Ok(_) => {}
-                }
-                let text = String::from_utf8_lossy(&line).trim_end().to_string();
-                if let Ok(mut log) = log_writer.lock() {
-                    log.push_back(text);
-                    if log.len() > STDERR_LINES {
-                        log.pop_front();
-                    }
-                }
+        let mut log_readers = vec![read_log(stderr, log.clone())];
+        let (requests, answers) = match control {
+            Some((requests, answers)) => {
+                // What the library prints is its output, not the protocol.
+                log_readers.push(read_log(stdout, log.clone()));
+                (Some(requests), answers)
             }
-        });
-        let stdin = child.stdin.take();
+            None => {
+                let stdin = child.stdin.take().map(|s| File::from(OwnedFd::from(s)));
+                (stdin, File::from(OwnedFd::from(stdout)))
+            }
+        };
         Ok(AdapterProcess {
             command: command.to_string(),
             child,
-            stdin,
-            lines,
+            requests,
+            lines: LineReader::new(answers),
+            channel,
+            outside: None,
             stderr: log,
-            stderr_reader: Some(stderr_reader),
+            log_readers,
             timeouts,
             started: false,
             failed: None,
@@ -253,6 +324,15 @@ impl AdapterProcess {
         }
     }
 
+    /// A line on a host's control channel saying where the library it hosts
+    /// stopped (kept for [`Self::fail`]); never taken from a plain IUT.
+    fn reports_outside(&mut self, line: &str) -> bool {
+        if self.channel == Channel::Control {
+            self.outside = canif_cabi::guard::OutsideImage::parse(line);
+        }
+        self.outside.is_some()
+    }
+
     /// A process that ended before its first answer with the shell's "not
     /// found" (127) or "cannot execute" (126) never started: one error, the
     /// shell's own words.
@@ -261,9 +341,9 @@ impl AdapterProcess {
         if self.started || !(code == 126 || code == 127) {
             return None;
         }
-        // Its whole tree has ended: its stderr reaches its end, all of it read.
+        // Its whole tree has ended: its log reaches its end, all of it read.
         self.kill();
-        if let Some(reader) = self.stderr_reader.take() {
+        for reader in self.log_readers.drain(..) {
             let _ = reader.join();
         }
         let said = self
@@ -279,14 +359,12 @@ impl AdapterProcess {
         Some(self.failed.get_or_insert(error).clone())
     }
 
-    /// What broke, with the last lines of its stderr; every later call reports it too.
+    /// What broke, with the last lines of its log; every later call reports it too.
     /// A `canif lib-host` that died of an access past an image said where on
-    /// its stderr: that is what the library did, not a broken exchange.
+    /// its control channel: that is what the library did, not a broken exchange.
     pub(crate) fn fail(&mut self, cause: IutCause, what: String) -> IutError {
         let log = self.stderr_tail();
-        let outside = (cause == IutCause::Gone)
-            .then(|| log.lines().find_map(canif_cabi::guard::OutsideImage::parse))
-            .flatten();
+        let outside = self.outside.clone();
         let error = match outside {
             Some(outside) => IutError {
                 cause: IutCause::OutsideImage,
@@ -356,8 +434,8 @@ impl AdapterProcess {
         let mut line = serde_json::to_vec(request).expect("requests serialize");
         line.push(b'\n');
         // One write per request: the IUT wakes once.
-        let written = match self.stdin.as_mut() {
-            Some(stdin) => stdin.write_all(&line).and_then(|_| stdin.flush()),
+        let written = match self.requests.as_mut() {
+            Some(requests) => requests.write_all(&line).and_then(|_| requests.flush()),
             None => Err(std::io::Error::other("stdin closed")),
         };
         if let Err(error) = written {
@@ -385,6 +463,13 @@ impl AdapterProcess {
             ),
         };
         let line = match self.lines.next(limit) {
+            Line::Text(line) if self.reports_outside(&line) => {
+                self.kill();
+                return Err(self.fail(
+                    IutCause::Gone,
+                    format!("while answering `{}`", request.name()),
+                ));
+            }
             Line::Text(line) => {
                 self.started = true;
                 line
@@ -473,12 +558,12 @@ impl Drop for AdapterProcess {
         // leaves, they come to canif (a subreaper) and are found by this.
         let below = canif_cabi::isolation::Snapshot::below(self.child.id());
         if self.failed.is_none() {
-            if let Some(stdin) = self.stdin.as_mut() {
+            if let Some(requests) = self.requests.as_mut() {
                 let bye = serde_json::to_string(&Request::Bye {}).expect("requests serialize");
-                let _ = writeln!(stdin, "{bye}");
+                let _ = writeln!(requests, "{bye}");
             }
         }
-        self.stdin = None;
+        self.requests = None;
         let _ = self.exit_status();
         self.kill();
         below.end();
@@ -506,6 +591,7 @@ mod tests {
             r"printf '\377\n'; cat >/dev/null",
             Timeouts::default(),
             false,
+            Channel::Stdio,
         )
         .unwrap();
         // Let the line arrive before the request, as a slow harness would.

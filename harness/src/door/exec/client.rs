@@ -6,7 +6,7 @@
 use canif_model::config::InterfaceConfig;
 use canif_model::image::{ImageLayout, MessageRepr};
 
-use crate::door::adapter::process::AdapterProcess;
+use crate::door::adapter::process::{AdapterProcess, Channel};
 use crate::door::adapter::protocol::{Answer, Config, Hex, Request, Tasked, WireMessage};
 use crate::door::client::{Client, TaskAnswer, TaskIo};
 use crate::door::declaration::client::ClientDeclaration;
@@ -29,10 +29,11 @@ impl ExecClient {
     pub(crate) fn start(
         command: &str,
         timeouts: Timeouts,
+        channel: Channel,
         config: &InterfaceConfig,
         layout: ImageLayout,
     ) -> Result<Self, IutError> {
-        let mut process = AdapterProcess::spawn(command, timeouts, true)?;
+        let mut process = AdapterProcess::spawn(command, timeouts, true, channel)?;
         let request = Request::Start {
             protocol: CLIENT_PROTOCOL,
             config: Config::new(config, &layout),

@@ -11,7 +11,7 @@ use canif_model::image::ImageLayout;
 use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 
-use crate::door::adapter::process::AdapterProcess;
+use crate::door::adapter::process::{AdapterProcess, Channel};
 use crate::door::adapter::protocol::{
     Answer, BusEvent, Caps, Config, Hex, OwnedBus, PlannedFrame, Request, SteppedLine, Transmitted,
     WireFrame, PROTOCOL_VERSION,
@@ -50,10 +50,21 @@ pub struct ExecIut {
 }
 
 impl ExecIut {
-    /// Starts `command` (see `AdapterProcess::spawn`).
+    /// Starts `command`, speaking the protocol on its stdin and stdout (see
+    /// `AdapterProcess::spawn`).
     pub fn spawn(command: &str, timeouts: Timeouts, same_cpu: bool) -> Result<Self, IutError> {
+        Self::spawn_on(command, timeouts, same_cpu, Channel::Stdio)
+    }
+
+    /// Starts `command`, speaking the protocol on `channel`.
+    pub(crate) fn spawn_on(
+        command: &str,
+        timeouts: Timeouts,
+        same_cpu: bool,
+        channel: Channel,
+    ) -> Result<Self, IutError> {
         Ok(ExecIut {
-            process: AdapterProcess::spawn(command, timeouts, same_cpu)?,
+            process: AdapterProcess::spawn(command, timeouts, same_cpu, channel)?,
             input_size: 0,
             next_release: None,
             version: 1,

@@ -92,7 +92,14 @@ impl<'a> Server<'a> {
                 },
                 _,
             ) => {
-                self.version = (*protocol).min(self.most).max(1);
+                // The versions the schema names: a harness that offers
+                // another has misread the protocol, and is told so.
+                if !(1..=PROTOCOL_VERSION).contains(protocol) {
+                    return Some(Answer::error(format!(
+                        "protocol {protocol} is no version of the adapter protocol (1 to {PROTOCOL_VERSION})"
+                    )));
+                }
+                self.version = (*protocol).min(self.most);
                 return Some(self.configure(&capabilities.into(), &config.interface()));
             }
             (_, None) => return Some(Answer::error("configure first")),

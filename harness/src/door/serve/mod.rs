@@ -10,3 +10,21 @@
 pub mod bus;
 pub mod client;
 pub mod device;
+
+use crate::door::adapter::CONTROL_FDS;
+
+/// A `canif lib-host --control`'s channel: requests on descriptor 3,
+/// answers on 4, as canif hands them over. The guard pages' fault report
+/// goes there too, where what the library prints cannot forge it.
+pub fn control_channel() -> std::io::Result<(std::io::BufReader<std::fs::File>, std::fs::File)> {
+    let open = |fd: i32, write: bool| {
+        std::fs::OpenOptions::new()
+            .read(!write)
+            .write(write)
+            .open(format!("/proc/self/fd/{fd}"))
+    };
+    let requests = open(CONTROL_FDS.0, false)?;
+    let answers = open(CONTROL_FDS.1, true)?;
+    canif_cabi::guard::report_to(&answers);
+    Ok((std::io::BufReader::new(requests), answers))
+}

@@ -18,18 +18,23 @@ pub struct Config {
     pub time_stamp: bool,
     pub tx_slots: u8,
     pub rx_slots: u8,
-    #[serde(default)]
+    // Every field is required, as the schema says: a default here once took
+    // a `configure` without its data bit timing as one with 0.
     pub filters: Vec<Filter>,
-    #[serde(default)]
+    #[serde(deserialize_with = "present")]
     pub sync1_shift_ns: Option<Nanos>,
-    #[serde(default)]
     pub nominal_timing: u32,
-    #[serde(default)]
     pub data_timing: u32,
-    #[serde(default)]
     pub output_size: usize,
-    #[serde(default)]
     pub input_size: usize,
+}
+
+/// An `Option` field that must be there, `null` or not (serde would take a
+/// missing one as `None`).
+fn present<'de, D: serde::Deserializer<'de>, T: Deserialize<'de>>(
+    deserializer: D,
+) -> Result<Option<T>, D::Error> {
+    Option::<T>::deserialize(deserializer)
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -83,27 +88,17 @@ pub struct Caps(#[serde(with = "CapsFields")] pub Capabilities);
 #[derive(Serialize, Deserialize)]
 #[serde(remote = "Capabilities", deny_unknown_fields)]
 struct CapsFields {
-    #[serde(default)]
     base11: bool,
-    #[serde(default)]
     ext29: bool,
-    #[serde(default)]
     fd: bool,
-    #[serde(default)]
     fast_queue: bool,
-    #[serde(default)]
     optimized_queue: bool,
-    #[serde(default)]
     transaction_number: bool,
-    #[serde(default)]
     transaction_number_only_ext29: bool,
-    #[serde(default, rename = "timestamp")]
+    #[serde(rename = "timestamp")]
     time_stamp: bool,
-    #[serde(default)]
     filters: bool,
-    #[serde(default)]
     info_data: bool,
-    #[serde(default)]
     distributed_clocks: bool,
     max_slots: u8,
     rx_queue_depth: usize,
@@ -129,9 +124,20 @@ pub struct OwnedBus {
 
 /// `controller_status.status`: the model's [`ControllerStatus`] on the wire,
 /// field for field (serde's remote derive lists the fields once, in `StatusFields`).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
 #[serde(transparent)]
 pub struct Status(#[serde(with = "StatusFields")] pub ControllerStatus);
+
+impl<'de> Deserialize<'de> for Status {
+    /// From an object only: serde's derive also takes a struct from an
+    /// array of its fields, and an empty one (`"status": []`) as all defaults.
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let object = serde_json::Map::deserialize(deserializer)?;
+        StatusFields::deserialize(serde_json::Value::Object(object))
+            .map(Status)
+            .map_err(serde::de::Error::custom)
+    }
+}
 
 #[derive(Serialize, Deserialize)]
 #[serde(
