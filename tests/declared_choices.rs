@@ -329,7 +329,15 @@ fn probe_finds_every_freedom_and_a_declaration_against_it_fails_on_its_requireme
         ("rx-idle-count=keeps-the-last", "HS-RX-009"),
         ("stale-rx-slots=zeroed", "HS-RX-008"),
     ] {
-        let (out, report_dir) = run(line, &[&at_file, line]);
+        // Against the file, the line contradicts it: refused, naming both.
+        let (out, _) = run(line, &[&at_file, line]);
+        assert_eq!(out.status.code(), Some(2), "{line}: {}", stderr(&out));
+        assert!(
+            stderr(&out).contains("declared twice, two ways") && stderr(&out).contains(line),
+            "{line}: {}",
+            stderr(&out)
+        );
+        let (out, report_dir) = run(line, &[line]);
         assert_eq!(out.status.code(), Some(1), "{line}: {}", stderr(&out));
         let verdicts = &report(&report_dir)["profiles"][0]["verdicts"];
         assert_eq!(

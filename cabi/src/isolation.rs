@@ -65,6 +65,14 @@ pub fn adopt_orphans() {
     unsafe { libc::prctl(libc::PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0) };
 }
 
+/// Whether `pid` is a process that has not ended (a zombie has).
+fn running(pid: i32) -> bool {
+    std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|stat| {
+        let state = stat.rfind(')').map(|at| stat[at + 1..].trim_start());
+        state.is_some_and(|state| !state.starts_with('Z') && !state.starts_with('X'))
+    })
+}
+
 /// A process's start time in clock ticks since boot (`/proc/PID/stat`
 /// field 22): with the pid, it names one process, never a later one that
 /// reuses the pid.
@@ -164,6 +172,15 @@ pub fn end_tree(root: u32) {
     }
     for pid in tree.iter().rev() {
         signal(*pid, libc::SIGKILL);
+    }
+    // SIGKILL is sure, but not at once: on a busy machine a process may
+    // still run a moment after it. Wait until each is gone or a zombie, so
+    // that nothing of the tree outlives this call.
+    for _ in 0..5_000 {
+        if tree.iter().all(|pid| !running(*pid)) {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(1));
     }
     // What was re-parented to this process (see `adopt_orphans`) is reaped
     // here, the root by whoever started it.

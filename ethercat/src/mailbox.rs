@@ -118,8 +118,9 @@ fn u16_at(b: &[u8], at: usize) -> u16 {
     u16::from_le_bytes([b[at], b[at + 1]])
 }
 
-/// The SDO body of a mailbox message (from the command byte), after its headers are checked.
-fn body(bytes: &[u8], service: u16) -> Result<&[u8], MailboxError> {
+/// The SDO body of a mailbox message (from the command byte), after its
+/// headers are checked, and the CoE service it came as (one of `services`).
+fn body<'a>(bytes: &'a [u8], services: &[u16]) -> Result<(u16, &'a [u8]), MailboxError> {
     let truncated = |needed| MailboxError::Truncated {
         needed,
         have: bytes.len(),
@@ -135,10 +136,10 @@ fn body(bytes: &[u8], service: u16) -> Result<&[u8], MailboxError> {
         return Err(MailboxError::NotCoe(bytes[5] & 0x0F));
     }
     let coe = u16_at(bytes, 6) >> 12;
-    if coe != service {
+    if !services.contains(&coe) {
         return Err(MailboxError::NotSdo(coe));
     }
-    Ok(&bytes[HEADERS..6 + length])
+    Ok((coe, &bytes[HEADERS..6 + length]))
 }
 
 /// A message: mailbox header (with `counter`), CoE header, `sdo`, padded to `mailbox_size`.
@@ -209,7 +210,7 @@ fn addressed(body: &[u8]) -> Result<(u16, u8, [u8; 4]), MailboxError> {
 
 impl SdoRequest {
     pub fn parse(bytes: &[u8]) -> Result<SdoRequest, MailboxError> {
-        let body = body(bytes, SERVICE_SDO_REQUEST)?;
+        let (_, body) = body(bytes, &[SERVICE_SDO_REQUEST])?;
         let command = body[0];
         let complete_access = command & 0x10 != 0;
         Ok(match command >> 5 {
@@ -316,8 +317,14 @@ impl SdoRequest {
 
 impl SdoResponse {
     pub fn parse(bytes: &[u8]) -> Result<SdoResponse, MailboxError> {
-        let body = body(bytes, SERVICE_SDO_RESPONSE)?;
+        // An abort comes as an SDO request (ETG.1000.6 §5.6.2.7: "Abort SDO
+        // Transfer Request", as SOES and a real terminal send it); older
+        // stacks send it as a response. Both are the terminal's refusal.
+        let (service, body) = body(bytes, &[SERVICE_SDO_RESPONSE, SERVICE_SDO_REQUEST])?;
         let command = body[0];
+        if service == SERVICE_SDO_REQUEST && command >> 5 != 4 {
+            return Err(MailboxError::NotSdo(service));
+        }
         Ok(match command >> 5 {
             0 => SdoResponse::UploadSegment {
                 toggle: command & 0x10 != 0,
@@ -399,7 +406,14 @@ impl SdoResponse {
                 initiate(0x80, *index, *sub, code.to_le_bytes())
             }
         };
-        message(SERVICE_SDO_RESPONSE, counter, &sdo, mailbox_size)
+        // "Abort SDO Transfer" is a request, whichever end sends it
+        // (ETG.1000.6 §5.6.2.7): a master reading service 3 only (SOEM)
+        // took a refused download for a success.
+        let service = match self {
+            SdoResponse::Abort { .. } => SERVICE_SDO_REQUEST,
+            _ => SERVICE_SDO_RESPONSE,
+        };
+        message(service, counter, &sdo, mailbox_size)
     }
 }
 
@@ -436,6 +450,34 @@ mod tests {
         let emitted = SdoRequest::parse(&EXPEDITED_DOWNLOAD).unwrap().emit(1, 128);
         assert_eq!(&emitted[..16], EXPEDITED_DOWNLOAD);
         assert_eq!(emitted.len(), 128);
+    }
+
+    /// The terminal refusing 0x8000:21 with 0x06090011 (no such
+    /// sub-index), as SOES and a real terminal send it: CoE service 2.
+    static ABORT: [u8; 16] = [
+        0x0A, 0x00, 0x00, 0x00, 0x00, 0x23, // 10 bytes, CoE, counter 2
+        0x00, 0x20, // SDO request: "Abort SDO Transfer Request"
+        0x80, 0x00, 0x80, 0x21, // abort; 0x8000:21
+        0x11, 0x00, 0x09, 0x06, // 0x06090011
+    ];
+
+    #[test]
+    fn an_abort_is_sent_as_an_sdo_request_and_read_as_either() {
+        let refusal = SdoResponse::Abort {
+            index: 0x8000,
+            sub: 0x21,
+            code: abort::NO_SUBINDEX,
+        };
+        assert_eq!(refusal.emit(2, 16), ABORT);
+        assert_eq!(SdoResponse::parse(&ABORT), Ok(refusal.clone()));
+        // An older stack's abort, as a response (service 3), is a refusal too.
+        let mut as_response = ABORT;
+        as_response[7] = 0x30;
+        assert_eq!(SdoResponse::parse(&as_response), Ok(refusal));
+        // A service-2 message that is no abort is no answer.
+        let mut upload = ABORT;
+        upload[8] = 0x40;
+        assert!(SdoResponse::parse(&upload).is_err());
     }
 
     #[test]

@@ -8,6 +8,7 @@
 //! a hosted library on its control channel), and `door::serve` (canif
 //! serving an in-process implementation: `canif device --stdio`, `canif lib-host`).
 
+mod lines;
 pub(crate) mod process;
 pub mod protocol;
 
