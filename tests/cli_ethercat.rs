@@ -192,6 +192,67 @@ fn an_independent_master_drives_the_terminal() {
     );
 }
 
+/// A master whose source address is locally administered (a veth's, a
+/// VM's, a USB NIC's) is answered: an ESC processes every EtherCAT frame
+/// (issue 35: such frames were ignored). A BRD of the ESC type register
+/// from 02:00:00:00:00:01 comes back with working counter 1.
+#[test]
+fn a_master_on_a_locally_administered_address_is_answered() {
+    let required = std::env::var("CANIF_VETH").as_deref() == Ok("required");
+    let skip = |why: String| {
+        assert!(!required, "CANIF_VETH=required, but {why}");
+        eprintln!("SKIP a_master_on_a_locally_administered_address_is_answered: {why}");
+    };
+    let pair = match canif_kernel::VethPair::create(&format!("{}", std::process::id() % 10_000 + 2))
+    {
+        Ok(pair) => pair,
+        Err(why) => return skip(format!("no veth pair here ({why})")),
+    };
+    let mut terminal = Command::new(env!("CARGO_BIN_EXE_canif"))
+        .args(["device", "--ethercat", &pair.terminal])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("canif device starts");
+    let master = canif_kernel::PacketSocket::open(&pair.master, 0x88A4).unwrap();
+    #[rustfmt::skip]
+    let mut frame = vec![
+        0xFF, 0xFF, 0xFF, 0xFF, 0xFF, 0xFF, // to everyone
+        0x02, 0x00, 0x00, 0x00, 0x00, 0x01, // from a locally administered address
+        0x88, 0xA4, // EtherCAT
+        0x0E, 0x10, // 14 bytes of datagrams, type 1
+        0x07, 0x00, // BRD, index 0
+        0x00, 0x00, 0x00, 0x00, // position 0, register 0x0000 (type)
+        0x02, 0x00, 0x00, 0x00, // 2 bytes, last datagram; no IRQ
+        0x00, 0x00, // data
+        0x00, 0x00, // working counter
+    ];
+    frame.resize(60, 0);
+    let mut answer = vec![0u8; 2048];
+    let mut answered = None;
+    // Until the terminal has opened its socket (a readiness wait, not a
+    // speed: it ends at the first answer).
+    for _ in 0..200 {
+        master.send(&frame).unwrap();
+        if let Some(n) = master
+            .recv(&mut answer, std::time::Duration::from_millis(100))
+            .unwrap()
+        {
+            answered = Some(n);
+            break;
+        }
+    }
+    let _ = Command::new("kill")
+        .args(["-INT", &terminal.id().to_string()])
+        .status();
+    wait_at_most(&mut terminal, std::time::Duration::from_secs(10));
+    let n = answered.expect("the terminal never answered a frame from 02:00:00:00:00:01");
+    assert!(n >= 30, "{:02X?}", &answer[..n]);
+    assert_eq!(&answer[12..14], [0x88, 0xA4], "{:02X?}", &answer[..n]);
+    let working_counter = u16::from_le_bytes([answer[28], answer[29]]);
+    assert_eq!(working_counter, 1, "{:02X?}", &answer[..n]);
+}
+
 /// The child's stdout once it ended; killed if it does not end in time.
 fn wait_at_most(child: &mut std::process::Child, limit: std::time::Duration) -> String {
     let began = std::time::Instant::now();

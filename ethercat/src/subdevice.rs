@@ -218,8 +218,9 @@ impl<A: Application> SubDevice<A> {
             && touched.completed(&outputs.range())
         {
             self.outputs_buffer.clear();
-            self.outputs_buffer
-                .extend_from_slice(&self.esc.memory[outputs.range()]);
+            // A SyncManager a master moved past the ESC's memory maps nothing.
+            let written = self.esc.memory.get(outputs.range()).unwrap_or_default();
+            self.outputs_buffer.extend_from_slice(written);
             // With Distributed Clocks the buffer waits for SYNC0 (003).
             if self.sync0.is_none() || self.cycles_on_frames {
                 self.sync_manager_event(now);
@@ -357,7 +358,10 @@ impl<A: Application> SubDevice<A> {
 
     fn mailbox(&mut self, mailbox_out: &register::SyncManager) {
         let size = usize::from(self.layout.mailbox_size);
-        let request = &self.esc.memory[mailbox_out.range()];
+        // A mailbox a master moved past the ESC's memory holds no request.
+        let Some(request) = self.esc.memory.get(mailbox_out.range()) else {
+            return;
+        };
         let counter = request.get(5).map_or(0, |b| b >> 4 & 7);
         let answer = match SdoRequest::parse(request) {
             Ok(request) => self.sdo.handle(&mut self.application, request, size),
@@ -370,8 +374,15 @@ impl<A: Application> SubDevice<A> {
         };
         if let Some(answer) = answer {
             let bytes = answer.emit(counter, size);
+            // The answer fills the mailbox as the master set it now, as far
+            // as it lies in the ESC's memory (a master may have moved or
+            // shrunk it since PREOP).
             let range = self.esc.sync_manager(MAILBOX_IN).range();
-            self.esc.memory[range].copy_from_slice(&bytes[..size]);
+            let end = range.end.min(self.esc.memory.len());
+            if let Some(mailbox) = self.esc.memory.get_mut(range.start..end.max(range.start)) {
+                let n = mailbox.len().min(bytes.len());
+                mailbox[..n].copy_from_slice(&bytes[..n]);
+            }
             self.esc
                 .set_sync_manager_status(MAILBOX_IN, register::SyncManager::STATUS_MAILBOX_FULL);
         }
@@ -384,8 +395,11 @@ impl<A: Application> SubDevice<A> {
         self.outputs_buffer.resize(length, 0);
         let inputs = self.application.cycle(&self.outputs_buffer, now);
         let range = self.esc.sync_manager(INPUTS).range();
-        let n = inputs.len().min(range.len());
-        self.esc.memory[range.start..range.start + n].copy_from_slice(&inputs[..n]);
+        let end = range.end.min(self.esc.memory.len()).max(range.start);
+        if let Some(image) = self.esc.memory.get_mut(range.start..end) {
+            let n = inputs.len().min(image.len());
+            image[..n].copy_from_slice(&inputs[..n]);
+        }
         self.cycles += 1;
     }
 }

@@ -54,13 +54,14 @@ impl Sync0Schedule {
         if !due {
             return None;
         }
-        let mut at = self.next;
-        self.next += self.cycle;
-        while self.next < before || (inclusive && self.next == before) {
-            self.missed += 1;
-            at = self.next;
-            self.next += self.cycle;
-        }
+        // The last event due, counted, not walked to: a master may set the
+        // clock so far off (an offset of 2^62 ns) that walking event by
+        // event never ends.
+        let span = before - self.next - u64::from(!inclusive);
+        let skipped = span / self.cycle;
+        self.missed = self.missed.saturating_add(skipped);
+        let at = self.next + skipped * self.cycle;
+        self.next = at.saturating_add(self.cycle);
         Some(at)
     }
 }
@@ -90,6 +91,24 @@ mod tests {
         assert_eq!(schedule.take_due(4_500, false), Some(4_000));
         assert_eq!(schedule.missed, 3);
         assert_eq!(schedule.next(), 5_000);
+    }
+
+    /// A master that set the system time 2^62 ns ahead, with SYNC0 at 1 ms:
+    /// 4.6e12 events overdue are counted in one step (they were walked one
+    /// by one, and `canif device --ethercat` hung at 100 % CPU).
+    #[test]
+    fn a_clock_set_far_ahead_is_one_step_however_many_events_it_skips() {
+        let mut schedule = Sync0Schedule::new(0, 1_000_000, 0).unwrap();
+        let far = 1u64 << 62;
+        let last = far / 1_000_000;
+        assert_eq!(schedule.take_due(far, true), Some(last * 1_000_000));
+        assert_eq!(schedule.missed, last);
+        assert_eq!(schedule.next(), (last + 1) * 1_000_000);
+        // At the very end of time the schedule stops instead of wrapping.
+        let mut schedule = Sync0Schedule::new(0, 1_000, 0).unwrap();
+        assert!(schedule.take_due(u64::MAX, false).is_some());
+        assert_eq!(schedule.next(), u64::MAX);
+        assert_eq!(schedule.take_due(u64::MAX, false), None);
     }
 
     #[test]

@@ -56,8 +56,11 @@ pub fn answer_frames(
             between();
             continue;
         };
-        // An answer of another ESC (source address marked on its way back) is no request.
-        if n < 12 || buffer[6] & 0x02 != 0 {
+        // An ESC processes every EtherCAT frame, whatever its source address:
+        // a master on a veth, a VM or a USB NIC sends from a locally
+        // administered one (those were ignored here once). Its own answers
+        // never come back: the socket leaves out what this machine sent.
+        if n < 14 {
             continue;
         }
         // What the kernel delivered before this frame happened before it:
