@@ -80,7 +80,6 @@ pub struct SubDevice<A> {
     pub esc: Esc,
     pub application: A,
     eeprom: Vec<u8>,
-    layout: Layout,
     state: AlState,
     sdo: SdoServer,
     /// How many SyncManager 2 events ran (for a report).
@@ -113,14 +112,28 @@ const OUTPUTS: u16 = 2;
 const INPUTS: u16 = 3;
 const AL_ERROR: u16 = 0x10;
 
+/// The smallest mailbox that holds an SDO message: the mailbox and CoE
+/// headers and an expedited SDO (6 + 2 + 8 bytes).
+const MIN_MAILBOX: usize = 16;
+
+/// A SyncManager inside the ESC's process memory (0x1000 up to its end).
+fn in_process_memory(sm: &register::SyncManager) -> bool {
+    let range = sm.range();
+    range.start >= 0x1000 && range.end <= crate::esc::MEMORY
+}
+
+/// Whether two enabled SyncManagers share a byte.
+fn overlap(a: &register::SyncManager, b: &register::SyncManager) -> bool {
+    let (a, b) = (a.range(), b.range());
+    a.start < b.end && b.start < a.end
+}
+
 impl<A: Application> SubDevice<A> {
     pub fn new(identity: &Identity, application: A) -> SubDevice<A> {
-        let layout = Layout::TERMINAL;
         let mut device = SubDevice {
             esc: Esc::new(),
             application,
-            eeprom: crate::sii::image(identity, &layout),
-            layout,
+            eeprom: crate::sii::image(identity, &Layout::TERMINAL),
             state: AlState::Init,
             sdo: SdoServer::default(),
             cycles: 0,
@@ -292,35 +305,56 @@ impl<A: Application> SubDevice<A> {
         }
     }
 
-    /// INIT → PREOP: the mailbox SyncManagers as the SII describes them.
+    /// INIT → PREOP: two mailbox SyncManagers, the master's (SM0) and the
+    /// terminal's (SM1), wherever a master put them in process memory: the
+    /// SII's layout or another, such as the real EL6751's (0x1000 and
+    /// 0x1400, 1024 bytes each). What no ESC could hold is refused with
+    /// 0x0016, as a real one refuses it.
     fn check_mailbox(&self) -> Result<(), u16> {
-        let expected = self.layout.sync_managers();
-        for n in [MAILBOX_OUT, MAILBOX_IN] {
-            let sm = self.esc.sync_manager(n);
-            let (start, length, control, _) = expected[usize::from(n)];
-            if !sm.enabled() || sm.start != start || sm.length != length || sm.control != control {
-                return Err(al_status::INVALID_MAILBOX_CONFIGURATION);
-            }
+        let out = self.esc.sync_manager(MAILBOX_OUT);
+        let inn = self.esc.sync_manager(MAILBOX_IN);
+        let sane = |sm: &register::SyncManager, by_master: bool| {
+            sm.enabled()
+                && sm.mailbox()
+                && sm.written_by_master() == by_master
+                && usize::from(sm.length) >= MIN_MAILBOX
+                && in_process_memory(sm)
+        };
+        if !sane(&out, true) || !sane(&inn, false) || overlap(&out, &inn) {
+            return Err(al_status::INVALID_MAILBOX_CONFIGURATION);
         }
         Ok(())
     }
 
-    /// PREOP → SAFEOP: process-data SyncManagers of the lengths the configuration needs.
+    /// PREOP → SAFEOP: process-data SyncManagers of the lengths the
+    /// configuration needs, anywhere in process memory clear of the
+    /// mailboxes, in 3-buffer or 1-buffer mode (the EL6751 runs its buffered
+    /// queues in 1-buffer mode, 000 §5.1.2, the Fast CAN Queue in 3-buffer).
     fn start(&mut self) -> Result<(), u16> {
         let (outputs, inputs) = self.application.process_data();
-        let expected = self.layout.sync_managers();
-        let fits = |n: u16, needed: usize| {
+        let mailboxes = [
+            self.esc.sync_manager(MAILBOX_OUT),
+            self.esc.sync_manager(MAILBOX_IN),
+        ];
+        let fits = |n: u16, needed: usize, by_master: bool| {
             let sm = self.esc.sync_manager(n);
-            let (start, _, control, _) = expected[usize::from(n)];
             sm.enabled()
-                && sm.start == start
-                && sm.control & 0x0F == control & 0x0F
+                && sm.control & 0b11 != 0b11
+                && sm.control & 0b11 != 0b01
+                && sm.written_by_master() == by_master
                 && usize::from(sm.length) == needed
+                && in_process_memory(&sm)
+                && !mailboxes.iter().any(|mailbox| overlap(&sm, mailbox))
         };
-        if !fits(OUTPUTS, outputs) {
+        if !fits(OUTPUTS, outputs, true) {
             return Err(al_status::INVALID_OUTPUT_CONFIGURATION);
         }
-        if !fits(INPUTS, inputs) {
+        if !fits(INPUTS, inputs, false)
+            || overlap(
+                &self.esc.sync_manager(OUTPUTS),
+                &self.esc.sync_manager(INPUTS),
+            )
+        {
             return Err(al_status::INVALID_INPUT_CONFIGURATION);
         }
         let activation = self.esc.memory[usize::from(register::DC_SYNC_ACTIVATION)];
@@ -357,7 +391,12 @@ impl<A: Application> SubDevice<A> {
     }
 
     fn mailbox(&mut self, mailbox_out: &register::SyncManager) {
-        let size = usize::from(self.layout.mailbox_size);
+        // An answer fills the terminal's mailbox as the master set it up;
+        // one shrunk below any message since PREOP is answered nothing.
+        let size = usize::from(self.esc.sync_manager(MAILBOX_IN).length);
+        if size < MIN_MAILBOX {
+            return;
+        }
         // A mailbox a master moved past the ESC's memory holds no request.
         let Some(request) = self.esc.memory.get(mailbox_out.range()) else {
             return;

@@ -1,14 +1,127 @@
-//! A hostile or simply different master is bad input (issue 35): canif's
-//! emulated EL6751 is driven with random frames — register writes, moved and
+//! canif's EL6751 as masters canif did not write see it (issue 35): in the
+//! real terminal's layout, and against a hostile or simply different
+//! master, which is bad input. The emulated EL6751 is driven with random frames — register writes, moved and
 //! resized SyncManagers and FMMUs, AL state requests, Distributed Clocks
 //! settings, mailbox bytes, clock jumps — and must answer every EtherCAT
 //! frame with a frame of the same length, never panic, and keep answering.
 //! (Moving SM1 or SM3 past the ESC's memory and then sending a request once
 //! panicked `canif device --ethercat`; a system time 2^62 ns off hung it.)
 
+use canif_ethercat::mailbox::{SdoRequest, SdoResponse};
+use canif_ethercat::subdevice::{Application, SubDevice};
 use canif_harness::door::ethercat::{emulated_terminal, Emulated};
+use canif_softdevice::ethercat::Terminal;
 use canif_spec::Catalogue;
 use proptest::prelude::*;
+
+fn terminal() -> SubDevice<Terminal> {
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("el6751-mdp").unwrap();
+    emulated_terminal(
+        &profile.model_capabilities(),
+        profile.ethercat.as_ref().unwrap(),
+        &Emulated {
+            faults: vec![],
+            choices: vec![],
+            link_fault: None,
+        },
+    )
+}
+
+/// One datagram through the terminal; its data and working counter back.
+fn one(
+    terminal: &mut SubDevice<Terminal>,
+    command: u8,
+    offset: u16,
+    data: Vec<u8>,
+) -> (Vec<u8>, u16) {
+    let length = data.len();
+    let answer = terminal
+        .process(&frame(&[(command, 0, offset, data)]), 0)
+        .expect("an answer");
+    let at = 14 + 2 + 10;
+    let wkc = u16::from_le_bytes([answer[at + length], answer[at + length + 1]]);
+    (answer[at..at + length].to_vec(), wkc)
+}
+
+/// A SyncManager's eight register bytes.
+fn sync_manager(start: u16, length: u16, control: u8) -> Vec<u8> {
+    let mut bytes = start.to_le_bytes().to_vec();
+    bytes.extend(length.to_le_bytes());
+    bytes.extend([control, 0, 1, 0]);
+    bytes
+}
+
+const BWR: u8 = 8;
+const BRD: u8 = 7;
+
+/// The real EL6751's layout (mailboxes at 0x1000 and 0x1400 of 1024 bytes,
+/// process data at 0x1800 and 0x2400 in 1-buffer mode, 000 §5.1.2) takes
+/// the terminal through PREOP, an SDO upload, to SAFEOP; a master that
+/// wrote it got AL status 0x0016 before.
+#[test]
+fn the_real_el6751_layout_is_taken() {
+    let mut terminal = terminal();
+    one(&mut terminal, BWR, 0x0800, sync_manager(0x1000, 1024, 0x26));
+    one(&mut terminal, BWR, 0x0808, sync_manager(0x1400, 1024, 0x22));
+    one(&mut terminal, BWR, 0x0120, vec![0x02, 0x00]);
+    assert_eq!(format!("{:?}", terminal.state()), "PreOp");
+    let upload = SdoRequest::Upload {
+        index: 0x1018,
+        sub: 1,
+        complete_access: false,
+    };
+    let (_, wkc) = one(&mut terminal, BWR, 0x1000, upload.emit(1, 1024));
+    assert_eq!(wkc, 1);
+    let (answer, _) = one(&mut terminal, BRD, 0x1400, vec![0; 1024]);
+    let vendor = match SdoResponse::parse(&answer) {
+        Ok(SdoResponse::Upload { data, .. }) => u32::from_le_bytes(data[..4].try_into().unwrap()),
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(vendor, 2, "Beckhoff's vendor id");
+    let (outputs, inputs) = terminal.application.process_data();
+    one(
+        &mut terminal,
+        BWR,
+        0x0810,
+        sync_manager(0x1800, outputs as u16, 0x26),
+    );
+    one(
+        &mut terminal,
+        BWR,
+        0x0818,
+        sync_manager(0x2400, inputs as u16, 0x22),
+    );
+    one(&mut terminal, BWR, 0x0120, vec![0x04, 0x00]);
+    let (status, _) = one(&mut terminal, BRD, 0x0134, vec![0; 2]);
+    assert_eq!(
+        format!("{:?}", terminal.state()),
+        "SafeOp",
+        "AL status code {status:02X?}"
+    );
+}
+
+/// What no ESC could hold is refused with the code a real one gives: a
+/// mailbox past the ESC's memory, or one over the other.
+#[test]
+fn a_mailbox_no_esc_could_hold_is_refused_with_0x0016() {
+    for (out, inn) in [
+        ((0x1000, 1024), (0x2F00, 1024)),
+        ((0x1000, 1024), (0x1200, 128)),
+    ] {
+        let mut terminal = terminal();
+        one(&mut terminal, BWR, 0x0800, sync_manager(out.0, out.1, 0x26));
+        one(&mut terminal, BWR, 0x0808, sync_manager(inn.0, inn.1, 0x22));
+        one(&mut terminal, BWR, 0x0120, vec![0x02, 0x00]);
+        let (code, _) = one(&mut terminal, BRD, 0x0134, vec![0; 2]);
+        assert_eq!(format!("{:?}", terminal.state()), "Init", "{out:?} {inn:?}");
+        assert_eq!(
+            u16::from_le_bytes([code[0], code[1]]),
+            0x0016,
+            "{out:?} {inn:?}"
+        );
+    }
+}
 
 /// Where a master's datagram lands: the registers that steer the ESC more
 /// often than the rest of its 64 KiB address space.
@@ -92,13 +205,7 @@ proptest! {
             1..40,
         )
     ) {
-        let catalogue = Catalogue::embedded().unwrap();
-        let profile = catalogue.profile("el6751-mdp").unwrap();
-        let mut terminal = emulated_terminal(
-            &profile.model_capabilities(),
-            profile.ethercat.as_ref().unwrap(),
-            &Emulated { faults: vec![], choices: vec![], link_fault: None },
-        );
+        let mut terminal = terminal();
         // From PREOP, where the mailbox is served: most of what a master can
         // break is reachable only from there.
         prop_assert!(terminal.process(&frame(&to_preop()), 0).is_some());
