@@ -450,6 +450,13 @@ pub(crate) enum Command {
     },
     /// The device profiles and what each offers.
     Profiles,
+    /// The emulated terminal's ESI file (ETG.2000 EtherCATInfo XML), for a
+    /// configurator to add canif's EL6751 offline; written to stdout.
+    Esi {
+        /// An EtherCAT terminal profile (see `canif profiles`).
+        #[arg(long)]
+        profile: String,
+    },
     /// Message slots a cycle time needs (the manual's §4, ruling R4).
     Size {
         /// Bit rate in bit/s, e.g. 500000.

@@ -351,6 +351,7 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, canif_spec::SpecErrors> {
         }
         Command::Spec { command } => spec::spec(&catalogue, command, out),
         Command::Profiles => spec::profiles(&catalogue, out),
+        Command::Esi { profile } => tools::esi(&catalogue, &profile, out),
         Command::Size {
             bitrate,
             cycle_us,

@@ -85,6 +85,31 @@ fn a_profile_that_is_no_terminal_is_a_usage_error_naming_the_terminals() {
     assert!(stderr.contains("el6751-legacy, el6751-mdp"), "{stderr}");
 }
 
+/// `canif esi` writes the terminal's ESI file for each terminal profile
+/// (harness/tests/ethercat_esc.rs holds its content to the terminal), and
+/// names the terminals for a profile that is none.
+#[test]
+fn esi_writes_an_ethercat_info_document_for_a_terminal_profile() {
+    for profile in ["el6751-legacy", "el6751-mdp"] {
+        let out = canif(&["esi", "--profile", profile]);
+        let xml = String::from_utf8_lossy(&out.stdout);
+        assert_eq!(
+            out.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(
+            xml.starts_with("<?xml") && xml.contains("<EtherCATInfo"),
+            "{xml}"
+        );
+    }
+    let out = canif(&["esi", "--profile", "fc510x"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("el6751-legacy, el6751-mdp"), "{stderr}");
+}
+
 /// The same run across the kernel's packet path: the emulated terminal on one
 /// end of a veth pair, canif's master on the other. Needs root (CI runs as
 /// root and must not skip it: CANIF_VETH=required).

@@ -146,6 +146,11 @@ impl<A: Application> SubDevice<A> {
         device
     }
 
+    /// The SII's content, as the ESC serves it.
+    pub fn sii(&self) -> &[u8] {
+        &self.eeprom
+    }
+
     pub fn state(&self) -> AlState {
         self.state
     }

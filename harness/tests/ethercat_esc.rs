@@ -101,6 +101,147 @@ fn the_real_el6751_layout_is_taken() {
     );
 }
 
+/// The reads of an SII word address, 8 bytes at a time, through the ESC's
+/// SII registers (0x0502 control, 0x0504 address, 0x0508 data), as a
+/// master reads the EEPROM.
+fn read_sii(terminal: &mut SubDevice<Terminal>, bytes: usize) -> Vec<u8> {
+    let mut out = Vec::new();
+    for word in (0..bytes / 2).step_by(4) {
+        let mut command = vec![0x00, 0x01]; // read
+        command.extend((word as u32).to_le_bytes());
+        one(terminal, BWR, 0x0502, command);
+        let (data, _) = one(terminal, BRD, 0x0508, vec![0; 8]);
+        out.extend(data);
+    }
+    out.truncate(bytes);
+    out
+}
+
+/// An XML element: its name, attributes and text.
+type Element = (String, Vec<(String, String)>, String);
+
+/// Every element of an XML text with its attributes and text, in order.
+fn elements(xml: &str) -> Vec<Element> {
+    use quick_xml::events::Event;
+    let mut reader = quick_xml::Reader::from_str(xml);
+    let mut out: Vec<Element> = Vec::new();
+    loop {
+        match reader.read_event().expect("well-formed XML") {
+            Event::Start(e) | Event::Empty(e) => {
+                let attributes = e
+                    .attributes()
+                    .map(|a| {
+                        let a = a.unwrap();
+                        let key = String::from_utf8(a.key.as_ref().to_vec()).unwrap();
+                        let value = a.normalized_value(quick_xml::XmlVersion::Implicit1_0);
+                        (key, value.unwrap().into_owned())
+                    })
+                    .collect();
+                let name = String::from_utf8(e.name().as_ref().to_vec()).unwrap();
+                out.push((name, attributes, String::new()));
+            }
+            Event::Text(t) => {
+                let text = t.decode().unwrap();
+                if let (Some(last), false) = (out.last_mut(), text.trim().is_empty()) {
+                    last.2 = text.trim().to_string();
+                }
+            }
+            Event::Eof => break,
+            _ => {}
+        }
+    }
+    out
+}
+
+fn number(text: &str) -> u32 {
+    match text.strip_prefix("#x") {
+        Some(hex) => u32::from_str_radix(hex, 16).unwrap(),
+        None => text.parse().unwrap(),
+    }
+}
+
+/// `canif esi`'s document describes the terminal that serves it: its
+/// identity, its SII byte for byte as read through the ESC, and a layout
+/// and PDOs that, written as a configurator derives them from the file,
+/// take the terminal to SAFEOP (issue 35).
+#[test]
+fn the_esi_file_is_the_terminal_it_describes() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("el6751-mdp").unwrap();
+    let identity = profile.ethercat.unwrap();
+    let mut terminal = terminal();
+    let document = canif_harness::door::ethercat::esi::esi(&identity, &terminal);
+    let elements = elements(&document);
+    let first = |name: &str| {
+        elements
+            .iter()
+            .find(|(n, _, _)| n == name)
+            .unwrap_or_else(|| panic!("no <{name}>"))
+    };
+    let attribute = |element: &Element, name: &str| {
+        element.1.iter().find(|(k, _)| k == name).unwrap().1.clone()
+    };
+    assert_eq!(number(&first("Id").2), identity.vendor_id);
+    let device_type = elements
+        .iter()
+        .find(|(n, a, _)| n == "Type" && !a.is_empty())
+        .unwrap();
+    assert_eq!(
+        number(&attribute(device_type, "ProductCode")),
+        identity.product_code
+    );
+    assert_eq!(
+        number(&attribute(device_type, "RevisionNo")),
+        identity.revision
+    );
+    // The EEPROM as the ESC serves it.
+    let size: usize = first("ByteSize").2.parse().unwrap();
+    let data = &first("Data").2;
+    let served: String = read_sii(&mut terminal, size)
+        .iter()
+        .map(|b| format!("{b:02X}"))
+        .collect();
+    assert_eq!(data, &served);
+    // The layout and process data a configurator writes from the file.
+    let sms: Vec<_> = elements.iter().filter(|(n, _, _)| n == "Sm").collect();
+    assert_eq!(sms.len(), 4);
+    let bits = |kind: &str| -> u32 {
+        let mut inside = false;
+        let mut total = 0;
+        for (name, _, text) in &elements {
+            match name.as_str() {
+                "RxPdo" | "TxPdo" => inside = name == kind,
+                "BitLen" if inside => total += number(text),
+                _ => {}
+            }
+        }
+        total
+    };
+    let sizes = [None, None, Some(bits("RxPdo") / 8), Some(bits("TxPdo") / 8)];
+    for (n, (sm, size)) in sms.iter().zip(sizes).enumerate() {
+        let start = number(&attribute(sm, "StartAddress")) as u16;
+        let length = size.unwrap_or_else(|| number(&attribute(sm, "DefaultSize"))) as u16;
+        let control = number(&attribute(sm, "ControlByte")) as u8;
+        one(
+            &mut terminal,
+            BWR,
+            0x0800 + 8 * n as u16,
+            sync_manager(start, length, control),
+        );
+        if n == 1 {
+            one(&mut terminal, BWR, 0x0120, vec![0x02, 0x00]);
+            assert_eq!(format!("{:?}", terminal.state()), "PreOp", "{sm:?}");
+        }
+    }
+    one(&mut terminal, BWR, 0x0120, vec![0x04, 0x00]);
+    let (code, _) = one(&mut terminal, BRD, 0x0134, vec![0; 2]);
+    assert_eq!(
+        format!("{:?}", terminal.state()),
+        "SafeOp",
+        "AL status code {code:02X?}: the file's PDOs are not the terminal's"
+    );
+}
+
 /// What no ESC could hold is refused with the code a real one gives: a
 /// mailbox past the ESC's memory, or one over the other.
 #[test]

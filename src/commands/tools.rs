@@ -211,3 +211,36 @@ pub(crate) fn probe(
     }
     code
 }
+
+/// `canif esi --profile P`: the emulated terminal's ESI file on stdout.
+pub(crate) fn esi(catalogue: &canif_spec::Catalogue, name: &str, out: &mut String) -> ExitCode {
+    use canif_harness::door::ethercat::{emulated_terminal, esi, Emulated};
+    let terminals: Vec<&str> = catalogue
+        .profiles
+        .iter()
+        .filter(|p| p.ethercat.is_some())
+        .map(|p| p.name.as_str())
+        .collect();
+    let Some((profile, identity)) = catalogue
+        .profile(name)
+        .and_then(|p| Some((p, p.ethercat.as_ref()?)))
+    else {
+        errln!(
+            "canif esi: `{name}` is no EtherCAT terminal profile; the terminals are {}",
+            terminals.join(", ")
+        );
+        return ExitCode::from(2);
+    };
+    let terminal = emulated_terminal(
+        &profile.model_capabilities(),
+        identity,
+        &Emulated {
+            faults: vec![],
+            choices: vec![],
+            link_fault: None,
+        },
+    );
+    out.push_str(&esi::esi(identity, &terminal));
+    out.push('\n');
+    ExitCode::SUCCESS
+}

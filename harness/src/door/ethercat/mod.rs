@@ -8,6 +8,7 @@
 //! checked to be exactly those.
 
 mod coe;
+pub mod esi;
 mod exchange;
 mod link;
 pub mod objects;
