@@ -110,6 +110,36 @@ fn esi_writes_an_ethercat_info_document_for_a_terminal_profile() {
     assert!(stderr.contains("el6751-legacy, el6751-mdp"), "{stderr}");
 }
 
+/// Why a test that needs what this machine lacks does not run: said on
+/// stderr, and a failure where CI requires it (CANIF_VETH=required).
+fn skip(test: &str, why: &str) {
+    assert!(
+        std::env::var("CANIF_VETH").as_deref() != Ok("required"),
+        "CANIF_VETH=required, but {why}"
+    );
+    eprintln!("SKIP {test}: {why}");
+}
+
+/// canif's terminal on one end of a fresh veth pair (`tag` tells the pairs
+/// of concurrent tests apart), or `None` where none can be made (skipped).
+fn terminal_on_veth(test: &str, tag: u32) -> Option<(canif_kernel::VethPair, std::process::Child)> {
+    let pair =
+        match canif_kernel::VethPair::create(&format!("{}", std::process::id() % 10_000 + tag)) {
+            Ok(pair) => pair,
+            Err(why) => {
+                skip(test, &format!("no veth pair here ({why})"));
+                return None;
+            }
+        };
+    let terminal = Command::new(env!("CARGO_BIN_EXE_canif"))
+        .args(["device", "--ethercat", &pair.terminal])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("canif device starts");
+    Some((pair, terminal))
+}
+
 /// The same run across the kernel's packet path: the emulated terminal on one
 /// end of a veth pair, canif's master on the other. Needs root (CI runs as
 /// root and must not skip it: CANIF_VETH=required).
@@ -168,29 +198,17 @@ fn the_terminal_is_certified_across_a_veth_pair() {
 /// the terminal is not tuned to ethercrab.
 #[test]
 fn an_independent_master_drives_the_terminal() {
-    let required = std::env::var("CANIF_VETH").as_deref() == Ok("required");
-    let skip = |why: String| {
-        assert!(!required, "CANIF_VETH=required, but {why}");
-        eprintln!("SKIP an_independent_master_drives_the_terminal: {why}");
-    };
+    let test = "an_independent_master_drives_the_terminal";
     let has_pysoem = Command::new("python3")
         .args(["-c", "import pysoem"])
         .output()
         .is_ok_and(|o| o.status.success());
     if !has_pysoem {
-        return skip("no Python package pysoem (.ci/run installs it)".into());
+        return skip(test, "no Python package pysoem (.ci/run installs it)");
     }
-    let pair = match canif_kernel::VethPair::create(&format!("{}", std::process::id() % 10_000 + 1))
-    {
-        Ok(pair) => pair,
-        Err(why) => return skip(format!("no veth pair here ({why})")),
+    let Some((pair, mut terminal)) = terminal_on_veth(test, 1) else {
+        return;
     };
-    let mut terminal = Command::new(env!("CARGO_BIN_EXE_canif"))
-        .args(["device", "--ethercat", &pair.terminal])
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .expect("canif device starts");
     // It opens its socket before it says so on stderr.
     std::thread::sleep(std::time::Duration::from_millis(500));
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/python/pysoem_master.py");
@@ -223,22 +241,10 @@ fn an_independent_master_drives_the_terminal() {
 /// from 02:00:00:00:00:01 comes back with working counter 1.
 #[test]
 fn a_master_on_a_locally_administered_address_is_answered() {
-    let required = std::env::var("CANIF_VETH").as_deref() == Ok("required");
-    let skip = |why: String| {
-        assert!(!required, "CANIF_VETH=required, but {why}");
-        eprintln!("SKIP a_master_on_a_locally_administered_address_is_answered: {why}");
+    let test = "a_master_on_a_locally_administered_address_is_answered";
+    let Some((pair, mut terminal)) = terminal_on_veth(test, 2) else {
+        return;
     };
-    let pair = match canif_kernel::VethPair::create(&format!("{}", std::process::id() % 10_000 + 2))
-    {
-        Ok(pair) => pair,
-        Err(why) => return skip(format!("no veth pair here ({why})")),
-    };
-    let mut terminal = Command::new(env!("CARGO_BIN_EXE_canif"))
-        .args(["device", "--ethercat", &pair.terminal])
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .expect("canif device starts");
     let master = canif_kernel::PacketSocket::open(&pair.master, 0x88A4).unwrap();
     #[rustfmt::skip]
     let mut frame = vec![

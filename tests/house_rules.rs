@@ -203,34 +203,9 @@ fn harness_arrows() -> BTreeMap<String, BTreeSet<String>> {
 #[test]
 fn no_harness_module_imports_one_that_imports_it_back() {
     let arrows = harness_arrows();
-    // Depth-first search for a cycle, naming it.
-    fn visit(
-        module: &str,
-        arrows: &BTreeMap<String, BTreeSet<String>>,
-        path: &mut Vec<String>,
-        done: &mut BTreeSet<String>,
-    ) -> Option<Vec<String>> {
-        if let Some(at) = path.iter().position(|m| m == module) {
-            let mut cycle = path[at..].to_vec();
-            cycle.push(module.to_string());
-            return Some(cycle);
-        }
-        if done.contains(module) {
-            return None;
-        }
-        path.push(module.to_string());
-        for next in &arrows[module] {
-            if let Some(cycle) = visit(next, arrows, path, done) {
-                return Some(cycle);
-            }
-        }
-        path.pop();
-        done.insert(module.to_string());
-        None
-    }
     let mut done = BTreeSet::new();
     for module in arrows.keys() {
-        if let Some(cycle) = visit(module, &arrows, &mut Vec::new(), &mut done) {
+        if let Some(cycle) = find_cycle(module, &arrows, &mut Vec::new(), &mut done) {
             panic!("module cycle: {}", cycle.join(" → "));
         }
     }

@@ -575,6 +575,12 @@ impl Catalogue {
     pub fn profile(&self, name: &str) -> Option<&Profile> {
         self.profiles.iter().find(|p| p.name == name)
     }
+
+    /// The names of the profiles that are EtherCAT terminals.
+    pub fn terminal_names(&self) -> Vec<&str> {
+        let terminals = self.profiles.iter().filter(|p| p.ethercat.is_some());
+        terminals.map(|p| p.name.as_str()).collect()
+    }
 }
 
 fn valid_id(id: &str) -> bool {

@@ -215,12 +215,7 @@ pub(crate) fn probe(
 /// `canif esi --profile P`: the emulated terminal's ESI file on stdout.
 pub(crate) fn esi(catalogue: &canif_spec::Catalogue, name: &str, out: &mut String) -> ExitCode {
     use canif_harness::door::ethercat::{emulated_terminal, esi, Emulated};
-    let terminals: Vec<&str> = catalogue
-        .profiles
-        .iter()
-        .filter(|p| p.ethercat.is_some())
-        .map(|p| p.name.as_str())
-        .collect();
+    let terminals = catalogue.terminal_names();
     let Some((profile, identity)) = catalogue
         .profile(name)
         .and_then(|p| Some((p, p.ethercat.as_ref()?)))

@@ -53,12 +53,7 @@ pub(crate) fn run(
             .map(|p| p.name.as_str())
             .collect();
         if !not_terminals.is_empty() {
-            let terminals: Vec<&str> = catalogue
-                .profiles
-                .iter()
-                .filter(|p| p.ethercat.is_some())
-                .map(|p| p.name.as_str())
-                .collect();
+            let terminals = catalogue.terminal_names();
             errln!(
                 "--iut ethercat: {} {} no EtherCAT terminal; name terminal profiles with --profile ({})",
                 not_terminals.join(", "),
