@@ -244,7 +244,7 @@ fn module_path(src: &Path, file: &Path) -> Vec<String> {
 
 /// The paths a line names through `crate::` or `super::`, as module paths
 /// of the crate (unresolved: the longest known prefix is taken later).
-fn named_paths(line: &str, from: &[String], is_dir_module: bool) -> Vec<Vec<String>> {
+fn named_paths(line: &str, from: &[String]) -> Vec<Vec<String>> {
     let ident = |rest: &str| -> Vec<String> {
         let mut parts = Vec::new();
         let mut rest = rest;
@@ -287,9 +287,8 @@ fn named_paths(line: &str, from: &[String], is_dir_module: bool) -> Vec<Vec<Stri
         if before.is_some_and(|c| c.is_ascii_alphanumeric() || c == '_' || c == ':') {
             continue;
         }
-        // A file `a/b.rs` is module `a::b`; its `super` is `a`. A `mod.rs` is
-        // its folder's module, whose `super` is one up as well.
-        let _ = is_dir_module;
+        // A file `a/b.rs` is module `a::b`, and a `mod.rs` its folder's
+        // module: either way its `super` is one up.
         let base = from.len().saturating_sub(ups);
         let mut path = from[..base].to_vec();
         path.extend(ident(tail));
@@ -322,10 +321,9 @@ fn no_module_at_any_level_imports_one_that_imports_it_back() {
         let mut arrows: BTreeMap<Vec<String>, BTreeMap<String, BTreeSet<String>>> = BTreeMap::new();
         for file in &files {
             let from = module_path(&src, file);
-            let is_dir_module = file.file_name().is_some_and(|n| n == "mod.rs");
             let text = std::fs::read_to_string(file).unwrap();
             for line in text.lines().filter(|l| !l.trim_start().starts_with("//")) {
-                for named in named_paths(line, &from, is_dir_module) {
+                for named in named_paths(line, &from) {
                     let Some(to) = (0..=named.len())
                         .rev()
                         .map(|n| named[..n].to_vec())

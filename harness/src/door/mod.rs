@@ -148,6 +148,23 @@ pub enum Door {
     },
 }
 
+/// Offers a device process a configuration: a refusal is its answer, judged
+/// by the refusal grid; a broken exchange is a failure to build.
+fn offer(
+    iut: &mut ExecIut,
+    caps: &Capabilities,
+    config: &InterfaceConfig,
+    bus: Option<&OwnedBus>,
+) -> Result<(), BuildError> {
+    match iut
+        .configure(caps, config, bus)
+        .map_err(BuildError::Failed)?
+    {
+        Configured::Accepted => Ok(()),
+        Configured::Refused(reason) => Err(BuildError::Refused(reason)),
+    }
+}
+
 /// Asks a device, configuration after configuration, whether it accepts.
 pub type Configurer = Box<dyn FnMut(&Capabilities, &InterfaceConfig) -> Result<(), BuildError>>;
 
@@ -195,17 +212,14 @@ impl Door {
         config: &InterfaceConfig,
         bus: Option<&OwnedBus>,
     ) -> Result<Box<dyn Iut>, BuildError> {
-        if let Some((command, timeouts)) = self.hosted(Role::Device) {
-            // The harness drives the host's CAN side through the protocol.
-            let mut iut = ExecIut::spawn_on(&command, timeouts, true, Channel::Control)
+        if let Some((command, timeouts, same_cpu, channel)) = self.device_process() {
+            // A hosted library's CAN side the harness drives through the
+            // protocol; an exec IUT's is on `bus` where it opens its own.
+            let bus = bus.filter(|_| channel == Channel::Stdio);
+            let mut iut = ExecIut::spawn_on(&command, timeouts, same_cpu, channel)
                 .map_err(BuildError::Failed)?;
-            return match iut
-                .configure(caps, config, None)
-                .map_err(BuildError::Failed)?
-            {
-                Configured::Accepted => Ok(Box::new(iut)),
-                Configured::Refused(reason) => Err(BuildError::Refused(reason)),
-            };
+            offer(&mut iut, caps, config, bus)?;
+            return Ok(Box::new(iut));
         }
         match self {
             Door::Lib { path, .. } => Ok(Box::new(lib::build(path, caps, config)?)),
@@ -218,28 +232,14 @@ impl Door {
                 })?;
                 Ok(Box::new(ethercat::build(caps, config, identity, link)?))
             }
-            Door::Exec {
-                command,
-                timeouts,
-                same_cpu,
-            } => {
-                let mut iut =
-                    ExecIut::spawn(command, *timeouts, *same_cpu).map_err(BuildError::Failed)?;
-                match iut
-                    .configure(caps, config, bus)
-                    .map_err(BuildError::Failed)?
-                {
-                    Configured::Accepted => Ok(Box::new(iut)),
-                    Configured::Refused(reason) => Err(BuildError::Refused(reason)),
-                }
-            }
+            Door::Exec { .. } => unreachable!("a process, started above"),
         }
     }
 
-    /// Something that answers configuration after configuration; for an
-    /// external process, one process answers them all.
-    pub fn configurer(&self) -> Configurer {
-        let one_process = match (self.hosted(Role::Device), self) {
+    /// The process a device behind this door runs in, and how it speaks:
+    /// an exec IUT on its stdio, a hosted library on the host's control channel.
+    fn device_process(&self) -> Option<(String, Timeouts, bool, Channel)> {
+        match (self.hosted(Role::Device), self) {
             (Some((command, timeouts)), _) => Some((command, timeouts, true, Channel::Control)),
             (
                 None,
@@ -250,8 +250,13 @@ impl Door {
                 },
             ) => Some((command.clone(), *timeouts, *same_cpu, Channel::Stdio)),
             _ => None,
-        };
-        match one_process {
+        }
+    }
+
+    /// Something that answers configuration after configuration; for an
+    /// external process, one process answers them all.
+    pub fn configurer(&self) -> Configurer {
+        match self.device_process() {
             Some((command, timeouts, same_cpu, channel)) => {
                 let mut process: Option<ExecIut> = None;
                 Box::new(move |caps, config| {
@@ -262,13 +267,7 @@ impl Door {
                                 .map_err(BuildError::Failed)?,
                         ),
                     };
-                    match iut
-                        .configure(caps, config, None)
-                        .map_err(BuildError::Failed)?
-                    {
-                        Configured::Accepted => Ok(()),
-                        Configured::Refused(reason) => Err(BuildError::Refused(reason)),
-                    }
+                    offer(iut, caps, config, None)
                 })
             }
             None => {
