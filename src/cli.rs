@@ -236,75 +236,79 @@ pub(crate) enum LibRole {
     Client,
 }
 
+/// `canif run`'s arguments, converted once by clap.
+#[derive(clap::Args)]
+pub(crate) struct RunArgs {
+    #[command(flatten)]
+    pub(crate) iut: IutOptions,
+    /// A profile name (see `canif profiles`; repeatable) or `all`.
+    #[arg(long, default_value = "all")]
+    pub(crate) profile: Vec<String>,
+    #[arg(long, default_value_t = 1)]
+    pub(crate) seed: u64,
+    #[command(flatten)]
+    pub(crate) product: ProductOptions,
+    /// Generated scenarios per interface [default: 4].
+    #[arg(long, value_parser = clap::value_parser!(u64).range(0..=10_000))]
+    pub(crate) cases: Option<u64>,
+    /// Virtual seconds of generated traffic per scenario (a soak run).
+    #[arg(long, value_parser = seconds)]
+    pub(crate) duration: Option<f64>,
+    /// Leave out the 65,540-cycle RxCounter wrap.
+    #[arg(long)]
+    pub(crate) no_counter_wrap: bool,
+    /// Where to write junit.xml, report.json and summary.md.
+    #[arg(long, default_value = "reports/latest")]
+    pub(crate) report: PathBuf,
+    /// Also write every scenario's bus as a candump log and a pcapng file here.
+    #[arg(long, value_name = "DIR")]
+    pub(crate) trace: Option<PathBuf>,
+    /// What to check: the CAN interface, or a CANopen node.
+    #[arg(long, value_enum, default_value = "interface")]
+    pub(crate) suite: Suite,
+    /// Which side is under test: the device, or a PLC-side client (the
+    /// harness then plays the device, the master and the application).
+    #[arg(long, value_enum, default_value = "device")]
+    pub(crate) side: SideArg,
+    /// With --side plc: only these EtherCAT master models (repeatable; see
+    /// `canif faults`); all by default.
+    #[arg(long, value_name = "NAME")]
+    pub(crate) master: Vec<String>,
+    /// `sim` (the simulated bus, virtual time) or `socketcan:IFACE` (a Linux
+    /// SocketCAN interface, real time; `socketcan:IUT_IFACE,OTHER_IFACE` for
+    /// two controllers on one bus).
+    #[arg(long, default_value = "sim", value_parser = bus_arg)]
+    pub(crate) bus: BusArg,
+    #[command(flatten)]
+    pub(crate) real_time: RealTimeOptions,
+    /// After the IUT breaks, still start it for every remaining scenario
+    /// (by default they are reported as skipped, and the Gherkin stage is left out).
+    #[arg(long)]
+    pub(crate) no_fail_fast: bool,
+    /// Only checks whose name contains this text (repeatable: any of them):
+    /// lockstep and Gherkin scenarios, as `canif list scenarios` names them.
+    #[arg(long, value_name = "TEXT")]
+    pub(crate) scenario: Vec<String>,
+    /// Only checks that exercise this requirement (repeatable).
+    #[arg(long, value_name = "ID")]
+    pub(crate) requirement: Vec<String>,
+    /// The time the candump log's and pcapng's first frame is stamped with,
+    /// in seconds since the Unix epoch (default: when the run started).
+    #[arg(long, value_name = "SECONDS")]
+    pub(crate) trace_epoch: Option<u64>,
+    /// With --suite canopen: the node id to check.
+    #[arg(long, default_value_t = 5)]
+    pub(crate) node: u8,
+    /// With --suite canopen on the simulated bus: a coupler fault (toggle-stuck, sdo-size-always-4, no-abort).
+    #[arg(long)]
+    pub(crate) coupler_fault: Option<String>,
+}
+
 #[derive(Subcommand)]
 pub(crate) enum Command {
     /// Certify an implementation against the model, per profile, on the
     /// simulated bus or a SocketCAN interface.
-    Run {
-        #[command(flatten)]
-        iut: IutOptions,
-        /// A profile name (see `canif profiles`; repeatable) or `all`.
-        #[arg(long, default_value = "all")]
-        profile: Vec<String>,
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        #[command(flatten)]
-        product: ProductOptions,
-        /// Generated scenarios per interface [default: 4].
-        #[arg(long, value_parser = clap::value_parser!(u64).range(0..=10_000))]
-        cases: Option<u64>,
-        /// Virtual seconds of generated traffic per scenario (a soak run).
-        #[arg(long, value_parser = seconds)]
-        duration: Option<f64>,
-        /// Leave out the 65,540-cycle RxCounter wrap.
-        #[arg(long)]
-        no_counter_wrap: bool,
-        /// Where to write junit.xml, report.json and summary.md.
-        #[arg(long, default_value = "reports/latest")]
-        report: PathBuf,
-        /// Also write every scenario's bus as a candump log and a pcapng file here.
-        #[arg(long, value_name = "DIR")]
-        trace: Option<PathBuf>,
-        /// What to check: the CAN interface, or a CANopen node.
-        #[arg(long, value_enum, default_value = "interface")]
-        suite: Suite,
-        /// Which side is under test: the device, or a PLC-side client (the
-        /// harness then plays the device, the master and the application).
-        #[arg(long, value_enum, default_value = "device")]
-        side: SideArg,
-        /// With --side plc: only these EtherCAT master models (repeatable; see
-        /// `canif faults`); all by default.
-        #[arg(long, value_name = "NAME")]
-        master: Vec<String>,
-        /// `sim` (the simulated bus, virtual time) or `socketcan:IFACE` (a Linux
-        /// SocketCAN interface, real time; `socketcan:IUT_IFACE,OTHER_IFACE` for
-        /// two controllers on one bus).
-        #[arg(long, default_value = "sim", value_parser = bus_arg)]
-        bus: BusArg,
-        #[command(flatten)]
-        real_time: RealTimeOptions,
-        /// After the IUT breaks, still start it for every remaining scenario
-        /// (by default they are reported as skipped, and the Gherkin stage is left out).
-        #[arg(long)]
-        no_fail_fast: bool,
-        /// Only checks whose name contains this text (repeatable: any of them):
-        /// lockstep and Gherkin scenarios, as `canif list scenarios` names them.
-        #[arg(long, value_name = "TEXT")]
-        scenario: Vec<String>,
-        /// Only checks that exercise this requirement (repeatable).
-        #[arg(long, value_name = "ID")]
-        requirement: Vec<String>,
-        /// The time the candump log's and pcapng's first frame is stamped with,
-        /// in seconds since the Unix epoch (default: when the run started).
-        #[arg(long, value_name = "SECONDS")]
-        trace_epoch: Option<u64>,
-        /// With --suite canopen: the node id to check.
-        #[arg(long, default_value_t = 5)]
-        node: u8,
-        /// With --suite canopen on the simulated bus: a coupler fault (toggle-stuck, sdo-size-always-4, no-abort).
-        #[arg(long)]
-        coupler_fault: Option<String>,
-    },
+    Run(RunArgs),
     /// Certify profiles: a certificate (canonical JSON + HTML) of every
     /// requirement's verdict, signed with an OpenSSH Ed25519 key.
     Certify {

@@ -3,6 +3,8 @@
 use std::path::Path;
 use std::process::ExitCode;
 
+use crate::stop::{stop, Stop};
+
 use canif_harness::certificate::{self, Certificate};
 use canif_harness::compare::CompareOptions;
 use canif_harness::device::suite::Options;
@@ -39,7 +41,7 @@ pub(crate) fn certify(
     run: CertifyRun<'_>,
     out: &Path,
     key: Option<&Path>,
-) -> ExitCode {
+) -> Result<ExitCode, Stop> {
     let CertifyRun {
         profile_names,
         iut,
@@ -47,40 +49,25 @@ pub(crate) fn certify(
         product,
         seed,
     } = run;
-    let profiles = match profiles(catalogue, profile_names) {
-        Ok(p) => p,
-        Err(code) => return code,
-    };
+    let profiles = profiles(catalogue, profile_names)?;
     if let Some(key) = key {
         // A key that cannot sign is found out before the run, not after it.
         if let Err(error) = certificate::sign(b"", key) {
-            errln!("--key {error}");
-            return ExitCode::from(2);
+            return Err(stop!("--key {error}"));
         }
     }
     let report = match side {
         SideArg::Device => {
-            let kind = match resolve_iut(iut) {
-                Ok(kind) => kind,
-                Err(code) => return code,
-            };
+            let kind = resolve_iut(iut)?;
             // What the device declares on the command line: the certificate rests on it.
-            let declared = match declared_choices(&iut.declare) {
-                Ok(declared) => declared,
-                Err(code) => return code,
-            };
+            let declared = declared_choices(&iut.declare)?;
             let options = Options {
                 seed,
                 declared,
                 ..Options::default()
             };
-            let plan = match Plan::new(profiles, options, product) {
-                Ok(plan) => plan,
-                Err(code) => return code,
-            };
-            if let Err(code) = plan.check_selection(catalogue) {
-                return code;
-            }
+            let plan = Plan::new(profiles, options, product)?;
+            plan.check_selection(catalogue)?;
             device::execute(
                 catalogue,
                 &kind,
@@ -89,24 +76,15 @@ pub(crate) fn certify(
             )
         }
         SideArg::Plc => {
-            let kind = match resolve_client(iut) {
-                Ok(kind) => kind,
-                Err(code) => return code,
-            };
+            let kind = resolve_client(iut)?;
             // What the client declares, on the command line and of itself.
-            let declared = match client_declaration(&iut.declare) {
-                Ok(declared) => declared,
-                Err(code) => return code,
-            };
+            let declared = client_declaration(&iut.declare)?;
             let options = ClientOptions {
                 declared: Ok(declared),
                 ..ClientOptions::new(seed)
             }
             .declared_by(&kind);
-            let plan = match Plan::new(profiles, options, product) {
-                Ok(plan) => plan,
-                Err(code) => return code,
-            };
+            let plan = Plan::new(profiles, options, product)?;
             plc::execute(catalogue, &kind, &plan)
         }
     };
@@ -121,8 +99,10 @@ pub(crate) fn certify(
         .and_then(|()| std::fs::write(out.join("certificate.html"), &page))
         .and_then(|()| std::fs::write(&json, &bytes));
     if let Err(error) = written {
-        errln!("cannot write the certificate to {}: {error}", out.display());
-        return ExitCode::from(2);
+        return Err(stop!(
+            "cannot write the certificate to {}: {error}",
+            out.display()
+        ));
     }
     match key {
         Some(key) => match certificate::sign(&bytes, key).map(|s| std::fs::write(&sig, s)) {
@@ -137,12 +117,10 @@ pub(crate) fn certify(
                 ssh_keygen_command(&json)
             ),
             Ok(Err(error)) => {
-                errln!("cannot write {}: {error}", sig.display());
-                return ExitCode::from(2);
+                return Err(stop!("cannot write {}: {error}", sig.display()));
             }
             Err(error) => {
-                errln!("--key {error}");
-                return ExitCode::from(2);
+                return Err(stop!("--key {error}"));
             }
         },
         None => {
@@ -163,19 +141,17 @@ pub(crate) fn certify(
 }
 
 /// `certify --verify CERT --pubkey KEY.pub`: the signature, and the HTML's hash.
-pub(crate) fn verify_certificate(path: &Path, pubkey: &Path) -> ExitCode {
+pub(crate) fn verify_certificate(path: &Path, pubkey: &Path) -> Result<ExitCode, Stop> {
     let bytes = match std::fs::read(path) {
         Ok(bytes) => bytes,
         Err(error) => {
-            errln!("{}: {error}", path.display());
-            return ExitCode::from(2);
+            return Err(stop!("{}: {error}", path.display()));
         }
     };
     let cert = match Certificate::parse(&bytes) {
         Ok(cert) => cert,
         Err(error) => {
-            errln!("{}: {error}", path.display());
-            return ExitCode::from(2);
+            return Err(stop!("{}: {error}", path.display()));
         }
     };
     let sig_path = path.with_extension("json.sig");
@@ -185,7 +161,7 @@ pub(crate) fn verify_certificate(path: &Path, pubkey: &Path) -> ExitCode {
             path.display(),
             sig_path.display()
         );
-        return ExitCode::from(1);
+        return Ok(ExitCode::from(1));
     };
     match certificate::verify(&bytes, &signature, pubkey) {
         Ok(fingerprint) => {
@@ -200,7 +176,7 @@ pub(crate) fn verify_certificate(path: &Path, pubkey: &Path) -> ExitCode {
                         path.display(),
                         html.display()
                     );
-                    return ExitCode::from(1);
+                    return Ok(ExitCode::from(1));
                 }
                 Err(_) => format!("no {} to check", html.display()),
             };
@@ -215,11 +191,11 @@ pub(crate) fn verify_certificate(path: &Path, pubkey: &Path) -> ExitCode {
                 cert.iut,
                 cert.profiles.join(", ")
             );
-            ExitCode::SUCCESS
+            Ok(ExitCode::SUCCESS)
         }
         Err(error) => {
             sayln!("{}: {error}", path.display());
-            ExitCode::from(1)
+            Ok(ExitCode::from(1))
         }
     }
 }
@@ -230,28 +206,19 @@ pub(crate) fn compare(
     options: CompareOptions,
     format: CompareFormat,
     out: &mut String,
-) -> ExitCode {
+) -> Result<ExitCode, Stop> {
     let load = |path: &Path| -> Result<ReportFile, String> {
         let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
         ReportFile::parse(&text).map_err(|e| format!("{}: {e}", path.display()))
     };
-    let (base, new) = match (load(base), load(new)) {
-        (Ok(base), Ok(new)) => (base, new),
-        (Err(e), _) | (_, Err(e)) => {
-            errln!("{e}");
-            return ExitCode::from(2);
-        }
-    };
-    let comparison = match canif_harness::compare::compare(&base, &new, options) {
-        Ok(comparison) => comparison,
-        Err(mismatches) => {
-            errln!("the two reports do not describe the same run (--force compares them anyway):");
-            for mismatch in mismatches {
-                errln!("  {mismatch}");
-            }
-            return ExitCode::from(2);
-        }
-    };
+    let (base, new) = (
+        load(base).map_err(|e| stop!("{e}"))?,
+        load(new).map_err(|e| stop!("{e}"))?,
+    );
+    let comparison = canif_harness::compare::compare(&base, &new, options).map_err(|mismatches| {
+        let listed: String = mismatches.iter().map(|m| format!("\n  {m}")).collect();
+        stop!("the two reports do not describe the same run (--force compares them anyway):{listed}")
+    })?;
     match format {
         CompareFormat::Markdown => out.push_str(&comparison.markdown()),
         CompareFormat::Json => {
@@ -259,5 +226,5 @@ pub(crate) fn compare(
             out.push('\n');
         }
     }
-    ExitCode::from(u8::from(comparison.regressed()))
+    Ok(ExitCode::from(u8::from(comparison.regressed())))
 }

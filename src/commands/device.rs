@@ -4,6 +4,8 @@
 use std::io::Write as _;
 use std::process::ExitCode;
 
+use crate::stop::{stop, Stop};
+
 use canif_harness::device::bus::BusChoice;
 use canif_harness::device::IutKind;
 use canif_harness::door::adapter::CONTROL_FDS;
@@ -18,21 +20,19 @@ pub(crate) fn device(
     (faults, choices, declare): (&[String], &[String], &[String]),
     protocol: u64,
     bus: Option<&str>,
-) -> ExitCode {
+) -> Result<ExitCode, Stop> {
     if !stdio {
-        errln!("canif device needs --stdio: its process image is served over the adapter protocol (docs/adapter-protocol.md)");
-        return ExitCode::from(2);
+        return Err(stop!("canif device needs --stdio: its process image is served over the adapter protocol (docs/adapter-protocol.md)"));
     }
-    let kind = match (soft_device_faults(faults), soft_device_choices(choices)) {
-        (Ok(faults), Ok(choices)) => IutKind::SoftDevice { faults, choices },
-        (Err(code), _) | (_, Err(code)) => return code,
+    let kind = IutKind::SoftDevice {
+        faults: soft_device_faults(faults)?,
+        choices: soft_device_choices(choices)?,
     };
     // Checked as `run --declare` checks them, then said as the protocol says them.
     let mut declared = canif_harness::door::declaration::choices::Declared::default();
     for text in declare {
         if let Err(error) = declared.declare(text) {
-            errln!("--declare {text}: {error}");
-            return ExitCode::from(2);
+            return Err(stop!("--declare {text}: {error}"));
         }
     }
     let build: &Build<'_> = &|caps, config| kind.build(caps, config);
@@ -48,11 +48,8 @@ pub(crate) fn device(
         Some(bus) => serve_on_bus(build, bus),
     };
     match served {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(error) => {
-            errln!("canif device: {error}");
-            ExitCode::from(2)
-        }
+        Ok(()) => Ok(ExitCode::SUCCESS),
+        Err(error) => Err(stop!("canif device: {error}")),
     }
 }
 
@@ -65,23 +62,20 @@ pub(crate) fn ethercat_terminal(
     (interface, bus): (&str, Option<&str>),
     profile: &str,
     (faults, choices): (&[String], &[String]),
-) -> ExitCode {
+) -> Result<ExitCode, Stop> {
     use canif_harness::door::ethercat::{emulated_terminal, served, Emulated};
     let Some(profile) = catalogue.profile(profile) else {
-        errln!("unknown profile `{profile}`; `canif profiles` lists them");
-        return ExitCode::from(2);
+        return Err(stop!(
+            "unknown profile `{profile}`; `canif profiles` lists them"
+        ));
     };
     let Some(identity) = profile.ethercat else {
-        errln!(
+        return Err(stop!(
             "--profile {}: no EtherCAT terminal (it gives no identity)",
             profile.name
-        );
-        return ExitCode::from(2);
+        ));
     };
-    let (faults, choices) = match (soft_device_faults(faults), soft_device_choices(choices)) {
-        (Ok(faults), Ok(choices)) => (faults, choices),
-        (Err(code), _) | (_, Err(code)) => return code,
-    };
+    let (faults, choices) = (soft_device_faults(faults)?, soft_device_choices(choices)?);
     let emulated = Emulated {
         faults,
         choices,
@@ -90,13 +84,11 @@ pub(crate) fn ethercat_terminal(
     let can = match bus.map(canif_kernel::BusSpec::parse).transpose() {
         Ok(spec) => spec.map(|spec| spec.iut),
         Err(error) => {
-            errln!("--bus {error}");
-            return ExitCode::from(2);
+            return Err(stop!("--bus {error}"));
         }
     };
     if let (Some(can), Err(error)) = (&can, canif_kernel::probe()) {
-        errln!("--bus socketcan:{can}: {error}");
-        return ExitCode::from(2);
+        return Err(stop!("--bus socketcan:{can}: {error}"));
     }
     let mut terminal = emulated_terminal(&profile.model_capabilities(), &identity, &emulated);
     // Said once both interfaces are open: from here a master finds it.
@@ -125,12 +117,9 @@ pub(crate) fn ethercat_terminal(
                 "canif device: {} EtherCAT frames answered, {} cycles ({} SYNC0 events missed), {} CAN frames sent",
                 served.frames, served.cycles, served.missed_sync0, served.can_frames
             );
-            ExitCode::SUCCESS
+            Ok(ExitCode::SUCCESS)
         }
-        Err(error) => {
-            errln!("canif device --ethercat {interface}: {error}");
-            ExitCode::from(2)
-        }
+        Err(error) => Err(stop!("canif device --ethercat {interface}: {error}")),
     }
 }
 
@@ -140,9 +129,8 @@ pub(crate) fn ethercat_terminal(
     (interface, _): (&str, Option<&str>),
     _: &str,
     _: (&[String], &[String]),
-) -> ExitCode {
-    errln!("--ethercat {interface}: this canif was built without Linux sockets (cargo feature `socketcan`)");
-    ExitCode::from(2)
+) -> Result<ExitCode, Stop> {
+    stop!("--ethercat {interface}: this canif was built without Linux sockets (cargo feature `socketcan`)")
 }
 
 #[cfg(feature = "socketcan")]
@@ -166,18 +154,14 @@ pub(crate) fn coupler(
     bus: Option<&str>,
     node: u8,
     fault: Option<&str>,
-) -> ExitCode {
-    let mut coupler = match (node_id(node), coupler_fault(fault)) {
-        (Ok(node), Ok(fault)) => simulated_coupler(node, fault),
-        (Err(code), _) | (_, Err(code)) => return code,
-    };
+) -> Result<ExitCode, Stop> {
+    let mut coupler = simulated_coupler(node_id(node)?, coupler_fault(fault)?);
     match (socketcand, bus) {
         (Some(port), _) => {
             let listener = match std::net::TcpListener::bind(("127.0.0.1", port)) {
                 Ok(listener) => listener,
                 Err(error) => {
-                    errln!("cannot listen on 127.0.0.1:{port}: {error}");
-                    return ExitCode::from(2);
+                    return Err(stop!("cannot listen on 127.0.0.1:{port}: {error}"));
                 }
             };
             // The port goes to stdout first, so a caller that asked for port 0 learns it.
@@ -191,26 +175,27 @@ pub(crate) fn coupler(
                 if let Err(error) =
                     canif_harness::canopen::socketcand::serve(&listener, &mut coupler)
                 {
-                    errln!("canif coupler --socketcand: {error}");
-                    return ExitCode::from(2);
+                    return Err(stop!("canif coupler --socketcand: {error}"));
                 }
             }
         }
         (None, Some(bus)) => coupler_on_bus(bus, &mut coupler),
-        (None, None) => ExitCode::from(2),
+        (None, None) => unreachable!("clap requires --socketcand or --bus"),
     }
 }
 
 #[cfg(feature = "socketcan")]
-fn coupler_on_bus(bus: &str, coupler: &mut canif_model::canopen::coupler::Coupler) -> ExitCode {
+fn coupler_on_bus(
+    bus: &str,
+    coupler: &mut canif_model::canopen::coupler::Coupler,
+) -> Result<ExitCode, Stop> {
     let opened = canif_kernel::BusSpec::parse(bus)
         .and_then(|spec| canif_kernel::probe().map(|()| spec).map_err(String::from))
         .and_then(|spec| canif_kernel::KernelSocket::open(&spec.iut, false).map_err(String::from));
     let socket = match opened {
         Ok(socket) => socket,
         Err(error) => {
-            errln!("canif coupler --bus {bus}: {error}");
-            return ExitCode::from(2);
+            return Err(stop!("canif coupler --bus {bus}: {error}"));
         }
     };
     sayln!(
@@ -220,14 +205,15 @@ fn coupler_on_bus(bus: &str, coupler: &mut canif_model::canopen::coupler::Couple
     );
     let _ = std::io::stdout().flush();
     let error = canif_harness::canopen::on_bus::serve(&socket, coupler);
-    errln!("{error}");
-    ExitCode::from(2)
+    Err(stop!("{error}"))
 }
 
 #[cfg(not(feature = "socketcan"))]
-fn coupler_on_bus(bus: &str, _: &mut canif_model::canopen::coupler::Coupler) -> ExitCode {
-    errln!("canif coupler --bus {bus}: this canif was built without SocketCAN (cargo feature `socketcan`)");
-    ExitCode::from(2)
+fn coupler_on_bus(
+    bus: &str,
+    _: &mut canif_model::canopen::coupler::Coupler,
+) -> Result<ExitCode, Stop> {
+    stop!("canif coupler --bus {bus}: this canif was built without SocketCAN (cargo feature `socketcan`)")
 }
 
 /// What `canif run --suite canopen` checks, and how.
@@ -248,30 +234,23 @@ pub(crate) fn canopen_suite(
     selection: &canif_harness::run::Selection,
     run: &CanopenRun,
     report_dir: &std::path::Path,
-) -> ExitCode {
+) -> Result<ExitCode, Stop> {
     if iut
         .iut
         .as_ref()
         .is_some_and(|i| *i != crate::cli::IutArg::SoftDevice)
         || !iut.fault.is_empty()
     {
-        errln!("--suite canopen checks a CANopen node (the simulated coupler, or a node on --bus), not an interface IUT: --iut and --fault do not apply (--coupler-fault does)");
-        return ExitCode::from(2);
+        return Err(stop!("--suite canopen checks a CANopen node (the simulated coupler, or a node on --bus), not an interface IUT: --iut and --fault do not apply (--coupler-fault does)"));
     }
-    let node = match node_id(run.node) {
-        Ok(node) => node,
-        Err(code) => return code,
-    };
+    let node = node_id(run.node)?;
     let started_unix = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map_or(0, |d| d.as_secs());
     let started = std::time::Instant::now();
     let (results, target) = match run.bus {
         BusChoice::Sim => {
-            let mut coupler = match coupler_fault(run.fault) {
-                Ok(chosen) => simulated_coupler(node, chosen),
-                Err(code) => return code,
-            };
+            let mut coupler = simulated_coupler(node, coupler_fault(run.fault)?);
             let results = canif_harness::canopen::check_node(&mut coupler, node, 0);
             let target = format!(
                 "simulated coupler, node {}{}",
@@ -283,15 +262,13 @@ pub(crate) fn canopen_suite(
         #[cfg(feature = "socketcan")]
         BusChoice::SocketCan(options) => {
             if run.fault.is_some() {
-                errln!("--coupler-fault applies to the simulated coupler; on a SocketCAN bus, start `canif coupler --bus … --fault …` instead");
-                return ExitCode::from(2);
+                return Err(stop!("--coupler-fault applies to the simulated coupler; on a SocketCAN bus, start `canif coupler --bus … --fault …` instead"));
             }
             let mut remote =
                 match canif_harness::canopen::SocketCanNode::open(&options.spec.tester, node) {
                     Ok(remote) => remote,
                     Err(error) => {
-                        errln!("error: {error}");
-                        return ExitCode::from(2);
+                        return Err(stop!("error: {error}"));
                     }
                 };
             remote.answer_timeout = options.timeout.min(std::time::Duration::from_millis(500));
@@ -311,11 +288,10 @@ pub(crate) fn canopen_suite(
         .filter(|c| selection.admits(c.name, c.requirements.iter().copied()))
         .collect();
     if selected.is_empty() {
-        errln!(
+        return Err(stop!(
             "{} matches no CANopen node check; `canif run --suite canopen` runs them all",
             selection.flags()
-        );
-        return ExitCode::from(2);
+        ));
     }
     for check in &selected {
         match &check.outcome {
@@ -329,8 +305,9 @@ pub(crate) fn canopen_suite(
     }
     // The node is judged against every requirement as one "profile" with every capability.
     let Some(mut profile) = catalogue.profiles.first().cloned() else {
-        errln!("the catalogue has no profile to judge the node against");
-        return ExitCode::from(2);
+        return Err(stop!(
+            "the catalogue has no profile to judge the node against"
+        ));
     };
     profile.name = format!("canopen-node-{}", node.get());
     profile.capabilities = catalogue
@@ -387,24 +364,20 @@ fn simulated_coupler(
 }
 
 /// A CANopen node id from the command line, or the exit code of a usage error.
-fn node_id(node: u8) -> Result<canif_model::canopen::NodeId, ExitCode> {
-    canif_model::canopen::NodeId::new(node).ok_or_else(|| {
-        errln!("node ids are 1..63, not {node}");
-        ExitCode::from(2)
-    })
+fn node_id(node: u8) -> Result<canif_model::canopen::NodeId, Stop> {
+    canif_model::canopen::NodeId::new(node).ok_or_else(|| stop!("node ids are 1..63, not {node}"))
 }
 
 /// The coupler fault named on the command line, or the exit code of a usage error.
 fn coupler_fault(
     name: Option<&str>,
-) -> Result<Option<canif_model::canopen::coupler::CouplerFault>, ExitCode> {
+) -> Result<Option<canif_model::canopen::coupler::CouplerFault>, Stop> {
     use canif_model::canopen::coupler::CouplerFault;
     match name {
         None => Ok(None),
         Some(name) => CouplerFault::from_name(name).map(Some).ok_or_else(|| {
             let known: Vec<&str> = CouplerFault::ALL.iter().map(|f| f.name()).collect();
-            errln!("unknown coupler fault `{name}`: {}", known.join(", "));
-            ExitCode::from(2)
+            stop!("unknown coupler fault `{name}`: {}", known.join(", "))
         }),
     }
 }
@@ -415,7 +388,7 @@ pub(crate) fn lib_host(
     role: crate::cli::LibRole,
     path: &std::path::Path,
     control: bool,
-) -> ExitCode {
+) -> Result<ExitCode, Stop> {
     use std::io::{BufRead, Write};
     // With --control the protocol runs on descriptors 3 and 4, and the
     // library's stdout and stderr are its own to print on.
@@ -427,12 +400,11 @@ pub(crate) fn lib_host(
         true => match canif_harness::door::serve::control_channel() {
             Ok((requests, answers)) => (Box::new(requests), Box::new(answers)),
             Err(error) => {
-                errln!(
+                return Err(stop!(
                     "canif lib-host --control: descriptors {} and {} are not open: {error}",
                     CONTROL_FDS.0,
                     CONTROL_FDS.1
-                );
-                return ExitCode::from(2);
+                ));
             }
         },
     };
@@ -445,10 +417,7 @@ pub(crate) fn lib_host(
         }
     };
     match served {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(error) => {
-            errln!("canif lib-host {}: {error}", path.display());
-            ExitCode::from(2)
-        }
+        Ok(()) => Ok(ExitCode::SUCCESS),
+        Err(error) => Err(stop!("canif lib-host {}: {error}", path.display())),
     }
 }

@@ -6,7 +6,7 @@ pub(crate) mod run;
 pub(crate) mod spec;
 pub(crate) mod tools;
 
-use std::process::ExitCode;
+use crate::stop::{stop, Stop};
 
 use canif_harness::client::faulty::{ClientFault, ClientShape};
 use canif_harness::client::suite::ClientKind;
@@ -18,34 +18,30 @@ use canif_softdevice::{Choice, Fault};
 use crate::cli::{IutArg, IutOptions};
 
 /// The soft-device faults named on the command line, or the exit code of a usage error.
-pub(crate) fn soft_device_faults(names: &[String]) -> Result<Vec<Fault>, ExitCode> {
+pub(crate) fn soft_device_faults(names: &[String]) -> Result<Vec<Fault>, Stop> {
     names
         .iter()
         .map(|name| {
-            Fault::from_name(name).ok_or_else(|| {
-                errln!("unknown fault `{name}`; `canif faults` lists them");
-                ExitCode::from(2)
-            })
+            Fault::from_name(name)
+                .ok_or_else(|| stop!("unknown fault `{name}`; `canif faults` lists them"))
         })
         .collect()
 }
 
 /// The soft-device choices named on the command line, or the exit code of a usage error.
-fn soft_device_choices(names: &[String]) -> Result<Vec<Choice>, ExitCode> {
+fn soft_device_choices(names: &[String]) -> Result<Vec<Choice>, Stop> {
     names
         .iter()
         .map(|name| {
-            Choice::from_name(name).ok_or_else(|| {
-                errln!("unknown choice `{name}`; `canif faults` lists them");
-                ExitCode::from(2)
-            })
+            Choice::from_name(name)
+                .ok_or_else(|| stop!("unknown choice `{name}`; `canif faults` lists them"))
         })
         .collect()
 }
 
 /// The IUT named on the command line, started once to see that it can
 /// start, or the exit code of a usage error.
-pub(crate) fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
+pub(crate) fn resolve_iut(iut: &IutOptions) -> Result<IutKind, Stop> {
     let kind = iut_kind(iut)?;
     if let IutKind::Door(door) = &kind {
         starts(door, Role::Device)?;
@@ -55,7 +51,7 @@ pub(crate) fn resolve_iut(iut: &IutOptions) -> Result<IutKind, ExitCode> {
 
 /// The client named on the command line for `--side plc`, started once to
 /// see that it can start, or the exit code of a usage error.
-pub(crate) fn resolve_client(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
+pub(crate) fn resolve_client(iut: &IutOptions) -> Result<ClientKind, Stop> {
     let kind = client_kind(iut)?;
     if let ClientKind::Door(door) = &kind {
         starts(door, Role::Client)?;
@@ -65,28 +61,26 @@ pub(crate) fn resolve_client(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
 
 /// One line and exit 2 for an implementation that cannot start at all: a
 /// run of it would only repeat the shell's words for every requirement.
-fn starts(door: &Door, role: Role) -> Result<(), ExitCode> {
-    door.starts(role).map_err(|error| {
-        errln!("canif: {}", error.what);
-        ExitCode::from(2)
-    })
+fn starts(door: &Door, role: Role) -> Result<(), Stop> {
+    door.starts(role)
+        .map_err(|error| stop!("canif: {}", error.what))
 }
 
 /// The device `--iut` names.
-fn iut_kind(iut: &IutOptions) -> Result<IutKind, ExitCode> {
+fn iut_kind(iut: &IutOptions) -> Result<IutKind, Stop> {
     let choices = soft_device_choices(&iut.choice)?;
     let arg = iut.iut.clone().unwrap_or(IutArg::SoftDevice);
     if !choices.is_empty() && !matches!(arg, IutArg::SoftDevice | IutArg::Ethercat(_)) {
-        errln!("--choice applies to the soft device only");
-        return Err(ExitCode::from(2));
+        return Err(stop!("--choice applies to the soft device only"));
     }
     let chosen = soft_device_faults(&iut.fault)?;
     let only_soft = |chosen: &[Fault]| {
         if chosen.is_empty() {
             Ok(())
         } else {
-            errln!("--fault applies to the soft device only (pass it to the IUT's own command)");
-            Err(ExitCode::from(2))
+            Err(stop!(
+                "--fault applies to the soft device only (pass it to the IUT's own command)"
+            ))
         }
     };
     Ok(match &arg {
@@ -128,8 +122,9 @@ fn iut_kind(iut: &IutOptions) -> Result<IutKind, ExitCode> {
             IutKind::Model
         }
         IutArg::Reference | IutArg::SoftClient => {
-            errln!("--iut reference and softclient are PLC-side clients: add --side plc");
-            return Err(ExitCode::from(2));
+            return Err(stop!(
+                "--iut reference and softclient are PLC-side clients: add --side plc"
+            ));
         }
     })
 }
@@ -140,25 +135,24 @@ fn named<T>(
     names: &[String],
     from_name: fn(&str) -> Option<T>,
     what: &str,
-) -> Result<Vec<T>, ExitCode> {
+) -> Result<Vec<T>, Stop> {
     names
         .iter()
         .map(|name| {
-            from_name(name).ok_or_else(|| {
-                errln!("unknown {what} `{name}`; `canif faults` lists them");
-                ExitCode::from(2)
-            })
+            from_name(name)
+                .ok_or_else(|| stop!("unknown {what} `{name}`; `canif faults` lists them"))
         })
         .collect()
 }
 
 /// The client `--iut` names for `--side plc`. A fault without `--iut` picks
 /// the soft client.
-fn client_kind(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
+fn client_kind(iut: &IutOptions) -> Result<ClientKind, Stop> {
     let faults = named(&iut.fault, ClientFault::from_name, "client fault")?;
     if faults.len() > 1 {
-        errln!("--side plc: one --fault at a time (the soft client has one defect)");
-        return Err(ExitCode::from(2));
+        return Err(stop!(
+            "--side plc: one --fault at a time (the soft client has one defect)"
+        ));
     }
     let shapes = named(&iut.choice, ClientShape::from_name, "soft-client choice")?;
     match (shapes.as_slice(), faults.first(), &iut.iut) {
@@ -170,8 +164,7 @@ fn client_kind(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
             })
         }
         _ => {
-            errln!("--side plc: --choice takes the soft client (--iut softclient), one at a time, without --fault");
-            return Err(ExitCode::from(2));
+            return Err(stop!("--side plc: --choice takes the soft client (--iut softclient), one at a time, without --fault"));
         }
     }
     match (&iut.iut, faults.first()) {
@@ -180,8 +173,7 @@ fn client_kind(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
         }
         (None | Some(IutArg::Reference), None) => Ok(ClientKind::Reference),
         (Some(IutArg::Reference), Some(_)) => {
-            errln!("--fault applies to the soft client (--iut softclient), not the reference");
-            Err(ExitCode::from(2))
+            Err(stop!("--fault applies to the soft client (--iut softclient), not the reference"))
         }
         (Some(IutArg::Exec(command)), None) => Ok(ClientKind::Door(Door::Exec {
             command: command.clone(),
@@ -193,14 +185,12 @@ fn client_kind(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
             host: lib_host(iut),
         })),
         (Some(IutArg::Exec(_) | IutArg::Lib(_)), Some(_)) => {
-            errln!("--fault applies to the soft client (pass it to the client's own command)");
-            Err(ExitCode::from(2))
+            Err(stop!("--fault applies to the soft client (pass it to the client's own command)"))
         }
         (Some(other), _) => {
-            errln!(
+            Err(stop!(
                 "--side plc runs a client: --iut reference, softclient, exec:'COMMAND' or lib:PATH, not {other:?}"
-            );
-            Err(ExitCode::from(2))
+            ))
         }
         (None, Some(_)) => unreachable!("a fault without --iut is the soft client"),
     }
@@ -210,12 +200,11 @@ fn client_kind(iut: &IutOptions) -> Result<ClientKind, ExitCode> {
 /// of a usage error naming the argument, file and line that cannot be taken.
 pub(crate) fn client_declaration(
     declare: &[String],
-) -> Result<canif_harness::client::ClientDeclaration, ExitCode> {
+) -> Result<canif_harness::client::ClientDeclaration, Stop> {
     let mut declared = canif_harness::client::ClientDeclaration::default();
     for line in declaration_lines(declare)? {
         if let Err(error) = declared.declare(&line.text()) {
-            errln!("{}: {error}", line.origin);
-            return Err(ExitCode::from(2));
+            return Err(stop!("{}: {error}", line.origin));
         }
     }
     Ok(declared)
@@ -223,23 +212,19 @@ pub(crate) fn client_declaration(
 
 /// The choices `--declare` names (docs/choices.md), or the exit code of a
 /// usage error naming the argument, file and line that cannot be taken.
-pub(crate) fn declared_choices(declare: &[String]) -> Result<Declared, ExitCode> {
+pub(crate) fn declared_choices(declare: &[String]) -> Result<Declared, Stop> {
     let mut declared = Declared::default();
     for line in declaration_lines(declare)? {
         if let Err(error) = declared.declare(&line.text()) {
-            errln!("{}: `{}`: {error}", line.origin, line.text());
-            return Err(ExitCode::from(2));
+            return Err(stop!("{}: `{}`: {error}", line.origin, line.text()));
         }
     }
     Ok(declared)
 }
 
 /// `--declare` read the one way both sides read it.
-fn declaration_lines(declare: &[String]) -> Result<Vec<declaration::Line>, ExitCode> {
-    declaration::read_arguments(declare).map_err(|error| {
-        errln!("{error}");
-        ExitCode::from(2)
-    })
+fn declaration_lines(declare: &[String]) -> Result<Vec<declaration::Line>, Stop> {
+    declaration::read_arguments(declare).map_err(|error| stop!("{error}"))
 }
 
 /// Where a lib:PATH IUT runs: a `canif lib-host` of this executable, unless

@@ -3,12 +3,18 @@
 use std::path::Path;
 use std::process::ExitCode;
 
+use crate::stop::{stop, Stop};
+
 use canif_harness::device::suite::Options;
 use canif_spec::{coverage, Catalogue, Status, Verification};
 
 use crate::cli::SpecCommand;
 
-pub(crate) fn spec(catalogue: &Catalogue, command: SpecCommand, out: &mut String) -> ExitCode {
+pub(crate) fn spec(
+    catalogue: &Catalogue,
+    command: SpecCommand,
+    out: &mut String,
+) -> Result<ExitCode, Stop> {
     match command {
         SpecCommand::List { area } => {
             for r in catalogue
@@ -26,8 +32,7 @@ pub(crate) fn spec(catalogue: &Catalogue, command: SpecCommand, out: &mut String
         }
         SpecCommand::Show { id } => {
             let Some(r) = catalogue.requirement(&id) else {
-                errln!("no requirement `{id}` (try `canif spec list`)");
-                return ExitCode::from(2);
+                return Err(stop!("no requirement `{id}` (try `canif spec list`)"));
             };
             outln!(out, "{}  [{:?}]  {}:{}", r.id, r.status, r.file, r.line);
             outln!(out, "  {}", r.statement);
@@ -73,7 +78,7 @@ pub(crate) fn spec(catalogue: &Catalogue, command: SpecCommand, out: &mut String
         }
         SpecCommand::Coverage { root, each } => return spec_coverage(catalogue, &root, each, out),
     }
-    ExitCode::SUCCESS
+    Ok(ExitCode::SUCCESS)
 }
 
 pub(crate) fn summary(catalogue: &Catalogue, out: &mut String) {
@@ -147,19 +152,17 @@ pub(crate) fn spec_coverage(
     root: &Path,
     each: bool,
     out: &mut String,
-) -> ExitCode {
+) -> Result<ExitCode, Stop> {
     let sources = match coverage::test_sources(root) {
         Ok(sources) if !sources.is_empty() => sources,
         Ok(_) => {
-            errln!(
+            return Err(stop!(
                 "no test sources under {} (run from the workspace root or pass --root)",
                 root.display()
-            );
-            return ExitCode::from(2);
+            ));
         }
         Err(error) => {
-            errln!("cannot read tests under {}: {error}", root.display());
-            return ExitCode::from(2);
+            return Err(stop!("cannot read tests under {}: {error}", root.display()));
         }
     };
     let result = coverage::coverage(catalogue, &sources);
@@ -240,14 +243,14 @@ pub(crate) fn spec_coverage(
             out,
             "every normative and derived requirement is named by a test"
         );
-        ExitCode::SUCCESS
+        Ok(ExitCode::SUCCESS)
     } else {
         outln!(out, "not covered: {}", result.uncovered.join(", "));
-        ExitCode::from(1)
+        Ok(ExitCode::from(1))
     }
 }
 
-pub(crate) fn profiles(catalogue: &Catalogue, out: &mut String) -> ExitCode {
+pub(crate) fn profiles(catalogue: &Catalogue, out: &mut String) -> Result<ExitCode, Stop> {
     for profile in &catalogue.profiles {
         outln!(out, "{:<22} {}", profile.name, profile.device);
         outln!(
@@ -264,5 +267,5 @@ pub(crate) fn profiles(catalogue: &Catalogue, out: &mut String) -> ExitCode {
             }
         );
     }
-    ExitCode::SUCCESS
+    Ok(ExitCode::SUCCESS)
 }

@@ -2,17 +2,25 @@
 
 use std::process::ExitCode;
 
+use crate::stop::{stop, Stop};
+
 use canif_model::frame::{CanId, Frame};
 use canif_model::sizing::{self, FrameTimeBasis};
 use canif_model::timing::{frame_bits, frame_duration, BitRates, Stuffing};
 
 /// `canif size`: the manual's figure and the safe figure, the safe one
 /// recommended, and why (ruling R4, amended).
-pub(crate) fn size(bitrate: u32, cycle_us: u64, payload: u8, out: &mut String) -> ExitCode {
+pub(crate) fn size(
+    bitrate: u32,
+    cycle_us: u64,
+    payload: u8,
+    out: &mut String,
+) -> Result<ExitCode, Stop> {
     let cycle = cycle_us * 1_000;
     let Some(advice) = sizing::advise(bitrate, cycle, payload) else {
-        errln!("cannot size: payload must be 0..=8 and the bit rate above 0");
-        return ExitCode::from(2);
+        return Err(stop!(
+            "cannot size: payload must be 0..=8 and the bit rate above 0"
+        ));
     };
     outln!(
         out,
@@ -63,7 +71,7 @@ pub(crate) fn size(bitrate: u32, cycle_us: u64, payload: u8, out: &mut String) -
             "  more than 32 slots cannot be configured: shorten the cycle time (000 §4)"
         );
     }
-    ExitCode::SUCCESS
+    Ok(ExitCode::SUCCESS)
 }
 
 pub(crate) fn frame_time(
@@ -73,7 +81,7 @@ pub(crate) fn frame_time(
     extended: bool,
     fd: bool,
     out: &mut String,
-) -> ExitCode {
+) -> Result<ExitCode, Stop> {
     let id = if extended {
         CanId::Extended(0)
     } else {
@@ -81,8 +89,7 @@ pub(crate) fn frame_time(
     };
     let frame = if fd {
         let Some(size) = canif_model::dlc::fd_round_up(payload) else {
-            errln!("a CAN FD frame carries at most 64 bytes");
-            return ExitCode::from(2);
+            return Err(stop!("a CAN FD frame carries at most 64 bytes"));
         };
         Frame::fd(
             id,
@@ -96,8 +103,7 @@ pub(crate) fn frame_time(
     let frame = match frame {
         Ok(frame) => frame,
         Err(error) => {
-            errln!("{error}");
-            return ExitCode::from(2);
+            return Err(stop!("{error}"));
         }
     };
     let rates = BitRates {
@@ -134,7 +140,7 @@ pub(crate) fn frame_time(
             cell as f64 / 1000.0
         );
     }
-    ExitCode::SUCCESS
+    Ok(ExitCode::SUCCESS)
 }
 
 /// `canif probe`: each profile's scenarios that tell a choice's values
@@ -143,7 +149,7 @@ pub(crate) fn probe(
     kind: &canif_harness::device::IutKind,
     profiles: &[&canif_spec::Profile],
     out: &std::path::Path,
-) -> ExitCode {
+) -> Result<ExitCode, Stop> {
     use canif_harness::device::probe::{declaration, finding, probe, Finding};
     use canif_harness::door::declaration::choices::Choice;
     let options = canif_harness::device::Options::quick(1);
@@ -168,15 +174,14 @@ pub(crate) fn probe(
     // unknown, so nothing is found and nothing written.
     let broke: std::collections::BTreeSet<&String> = probes.iter().flat_map(|p| &p.broke).collect();
     if let Some(first) = broke.first() {
-        errln!(
+        return Err(stop!(
             "canif probe: the IUT broke, so no choice was found and {} was not written: {first}{}",
             out.display(),
             match broke.len() {
                 1 => String::new(),
                 n => format!(" (and {} other errors, above)", n - 1),
             }
-        );
-        return ExitCode::from(2);
+        ));
     }
     let mut code = ExitCode::SUCCESS;
     for choice in Choice::ALL.into_iter().filter(|c| c.settled_by().is_some()) {
@@ -200,8 +205,7 @@ pub(crate) fn probe(
     if let Some(declared) = declared {
         let text = serde_json::to_string_pretty(&declared.entries()).expect("a JSON object") + "\n";
         if let Err(error) = std::fs::write(out, text) {
-            errln!("cannot write {}: {error}", out.display());
-            return ExitCode::from(2);
+            return Err(stop!("cannot write {}: {error}", out.display()));
         }
         errln!(
             "written to {} (canif run --declare @{})",
@@ -209,22 +213,25 @@ pub(crate) fn probe(
             out.display()
         );
     }
-    code
+    Ok(code)
 }
 
 /// `canif esi --profile P`: the emulated terminal's ESI file on stdout.
-pub(crate) fn esi(catalogue: &canif_spec::Catalogue, name: &str, out: &mut String) -> ExitCode {
+pub(crate) fn esi(
+    catalogue: &canif_spec::Catalogue,
+    name: &str,
+    out: &mut String,
+) -> Result<ExitCode, Stop> {
     use canif_harness::door::ethercat::{emulated_terminal, esi, Emulated};
     let terminals = catalogue.terminal_names();
     let Some((profile, identity)) = catalogue
         .profile(name)
         .and_then(|p| Some((p, p.ethercat.as_ref()?)))
     else {
-        errln!(
+        return Err(stop!(
             "canif esi: `{name}` is no EtherCAT terminal profile; the terminals are {}",
             terminals.join(", ")
-        );
-        return ExitCode::from(2);
+        ));
     };
     let terminal = emulated_terminal(
         &profile.model_capabilities(),
@@ -237,5 +244,39 @@ pub(crate) fn esi(catalogue: &canif_spec::Catalogue, name: &str, out: &mut Strin
     );
     out.push_str(&esi::esi(identity, &terminal));
     out.push('\n');
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `canif faults`: every deliberate defect and documented choice of the soft
+/// device and client, and the master models.
+pub(crate) fn faults(out: &mut String) -> ExitCode {
+    for fault in canif_softdevice::Fault::ALL {
+        outln!(out, "{:<36} {}", fault.name(), fault.description());
+    }
+    outln!(
+        out,
+        "\nchoices the documents leave (--choice; the device still conforms):"
+    );
+    for choice in canif_softdevice::Choice::ALL {
+        outln!(out, "{:<36} {}", choice.name(), choice.description());
+    }
+    outln!(
+        out,
+        "\nclient faults (--side plc --fault; the soft client):"
+    );
+    for fault in canif_harness::client::faulty::ClientFault::ALL {
+        outln!(out, "{:<36} {}", fault.name(), fault.description());
+    }
+    outln!(
+        out,
+        "\nclient ways of working (--side plc --choice; the soft client takes one and declares it):"
+    );
+    for shape in canif_harness::client::faulty::ClientShape::ALL {
+        outln!(out, "{:<36} declares {}", shape.name(), shape.declares());
+    }
+    outln!(out, "\nmaster models (--side plc --master):");
+    for master in canif_harness::client::master::Master::ALL {
+        outln!(out, "{:<36} {}", master.name, master.description());
+    }
     ExitCode::SUCCESS
 }

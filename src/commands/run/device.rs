@@ -4,6 +4,8 @@
 use std::path::Path;
 use std::process::ExitCode;
 
+use crate::stop::{stop, Stop};
+
 #[cfg(feature = "socketcan")]
 use canif_harness::device::bus::kernel::KernelBusOptions;
 use canif_harness::device::bus::BusChoice;
@@ -24,25 +26,19 @@ pub(crate) fn run(
     plan: &Plan<Options>,
     pace: Pace,
     report_dir: &Path,
-) -> ExitCode {
-    let kind = match resolve_iut(iut) {
-        Ok(kind) => kind,
-        Err(code) => return code,
-    };
-    if let Err(code) = plan.check_selection(catalogue) {
-        return code;
-    }
+) -> Result<ExitCode, Stop> {
+    let kind = resolve_iut(iut)?;
+    plan.check_selection(catalogue)?;
     if let IutKind::Door(Door::Ethercat {
         link: canif_harness::door::ethercat::EthercatLink::Interface { name, .. },
         ..
     }) = &kind
     {
         if plan.options.bus.is_sim() {
-            errln!(
+            return Err(stop!(
                 "--iut ethercat:{name}: a terminal on a network interface has its CAN port on a real bus; \
                  add --bus socketcan:IFACE (the CAN adapter cabled to it), or use ethercat:emulated"
-            );
-            return ExitCode::from(2);
+            ));
         }
     }
     if let IutKind::Door(Door::Ethercat { .. }) = kind {
@@ -54,13 +50,12 @@ pub(crate) fn run(
             .collect();
         if !not_terminals.is_empty() {
             let terminals = catalogue.terminal_names();
-            errln!(
+            return Err(stop!(
                 "--iut ethercat: {} {} no EtherCAT terminal; name terminal profiles with --profile ({})",
                 not_terminals.join(", "),
                 if not_terminals.len() == 1 { "is" } else { "are" },
                 terminals.join(", ")
-            );
-            return ExitCode::from(2);
+            ));
         }
     }
     #[cfg(feature = "socketcan")]
@@ -71,8 +66,7 @@ pub(crate) fn run(
             canif_kernel::KernelSocket::open(&kernel.spec.tester, false).map(|_| ())
         });
         if let Err(error) = opened {
-            errln!("error: --bus {}: {error}", kernel.spec.describe());
-            return ExitCode::from(2);
+            return Err(stop!("error: --bus {}: {error}", kernel.spec.describe()));
         }
     }
     finish(

@@ -11,6 +11,9 @@ mod progress;
 use std::path::Path;
 use std::process::ExitCode;
 
+use crate::cli::{RunArgs, SideArg, Suite};
+use crate::stop::{stop, Stop};
+
 use canif_features::{ScenarioInfo, UnderTest};
 use canif_harness::report::{Product, ProfileReport, RunMeta, RunReport};
 use canif_harness::run::{run_profile, KillRow, ProfileRun, Side};
@@ -35,11 +38,9 @@ impl<'c, S: Side> Plan<'c, S> {
         profiles: Vec<&'c Profile>,
         options: S,
         product: Option<Product>,
-    ) -> Result<Self, ExitCode> {
-        let scenarios = canif_features::scenarios().map_err(|error| {
-            errln!("the feature files do not parse: {error}");
-            ExitCode::from(2)
-        })?;
+    ) -> Result<Self, Stop> {
+        let scenarios = canif_features::scenarios()
+            .map_err(|error| stop!("the feature files do not parse: {error}"))?;
         let gherkin = canif_features::schedule::targets(&scenarios, &profiles, S::SIDE);
         Ok(Plan {
             profiles,
@@ -69,12 +70,13 @@ impl<'c, S: Side> Plan<'c, S> {
     }
 
     /// An unknown requirement or a selection that matches nothing is a usage error.
-    pub(crate) fn check_selection(&self, catalogue: &Catalogue) -> Result<(), ExitCode> {
+    pub(crate) fn check_selection(&self, catalogue: &Catalogue) -> Result<(), Stop> {
         let selection = self.options.selection();
         for id in &selection.requirements {
             if catalogue.requirement(id).is_none() {
-                errln!("--requirement {id}: no such requirement; `canif spec list` lists them");
-                return Err(ExitCode::from(2));
+                return Err(stop!(
+                    "--requirement {id}: no such requirement; `canif spec list` lists them"
+                ));
             }
         }
         if selection.is_everything()
@@ -85,7 +87,7 @@ impl<'c, S: Side> Plan<'c, S> {
         {
             return Ok(());
         }
-        errln!(
+        Err(stop!(
             "{} matches no check on {}; `canif list scenarios` lists them",
             selection.flags(),
             self.profiles
@@ -93,8 +95,7 @@ impl<'c, S: Side> Plan<'c, S> {
                 .map(|p| p.name.as_str())
                 .collect::<Vec<_>>()
                 .join(", ")
-        );
-        Err(ExitCode::from(2))
+        ))
     }
 
     /// Each profile's cases against what is under test, with a progress line each.
@@ -212,6 +213,118 @@ impl<'c, S: Side> Plan<'c, S> {
         }
     }
 }
+/// `canif run`: either side, or the CANopen suite, with its reports.
+pub(crate) fn command(catalogue: &Catalogue, args: RunArgs) -> Result<ExitCode, Stop> {
+    let RunArgs {
+        iut,
+        profile,
+        seed,
+        product,
+        cases,
+        duration,
+        no_counter_wrap,
+        report,
+        trace,
+        suite,
+        bus,
+        real_time,
+        no_fail_fast,
+        scenario,
+        requirement,
+        trace_epoch,
+        node,
+        coupler_fault,
+        side,
+        master,
+    } = args;
+    let bus = device::bus_choice(&bus, &real_time);
+    let pace = device::pace(&real_time);
+    let selection = canif_harness::run::Selection {
+        scenarios: scenario,
+        requirements: requirement,
+    };
+    let device_only = [
+        (suite == Suite::Canopen, "--suite canopen"),
+        (cases.is_some(), "--cases"),
+        (duration.is_some(), "--duration"),
+        (trace.is_some(), "--trace"),
+        (no_fail_fast, "--no-fail-fast"),
+        (real_time.ethercat_soak_s > 0, "--ethercat-soak-s"),
+    ];
+    let plc_only = [(!master.is_empty(), "--master")];
+    crate::cli::side_conflicts(side, &device_only, &plc_only)?;
+    if suite == Suite::Canopen {
+        let canopen = crate::commands::device::CanopenRun {
+            bus: &bus,
+            node,
+            fault: coupler_fault.as_deref(),
+            seed,
+            product: product.product(),
+        };
+        return crate::commands::device::canopen_suite(
+            catalogue, &iut, &selection, &canopen, &report,
+        );
+    }
+    let profiles = profiles(catalogue, &profile)?;
+    if side == SideArg::Plc {
+        let client_bus = plc::client_bus(&bus)?;
+        let kind = crate::commands::resolve_client(&iut)?;
+        let masters = plc::masters(&master)?;
+        let declared = crate::commands::client_declaration(&iut.declare)?;
+        let options = canif_harness::client::suite::ClientOptions {
+            seed,
+            bus: client_bus,
+            counter_wrap: !no_counter_wrap,
+            masters,
+            selection,
+            declared: Ok(declared),
+        };
+        // What the client declares of itself, asked once.
+        let options = options.declared_by(&kind);
+        let plan = Plan::new(profiles, options, product.product())?;
+        return plc::run(catalogue, &kind, &plan, &report);
+    }
+    if let Some(dir) = &trace {
+        // A trace folder that cannot be written is said before the
+        // run, not found missing after it.
+        let writable = std::fs::create_dir_all(dir).and_then(|()| {
+            let probe = dir.join(".canif-trace-probe");
+            std::fs::write(&probe, b"").and_then(|()| std::fs::remove_file(probe))
+        });
+        if let Err(error) = writable {
+            return Err(stop!(
+                "--trace {}: cannot write there: {error}",
+                dir.display()
+            ));
+        }
+    }
+    let declared = crate::commands::declared_choices(&iut.declare)?;
+    let started = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap_or_default();
+    let options = canif_harness::device::Options {
+        seed,
+        cases: if duration.is_some() {
+            1
+        } else {
+            cases.unwrap_or(4)
+        },
+        generated_cycles: duration.map_or(200, |s| (s * 1000.0).max(1.0) as u64),
+        counter_wrap: !no_counter_wrap && bus.is_sim(),
+        trace_dir: trace,
+        trace_epoch: trace_epoch.map_or(started.as_nanos() as u64, |s| {
+            s.saturating_mul(1_000_000_000)
+        }),
+        bus,
+        selection,
+        fail_fast: !no_fail_fast,
+        declared,
+        observed: Default::default(),
+        iut_declared: Default::default(),
+    };
+    let plan = Plan::new(profiles, options, product.product())?;
+    device::run(catalogue, &iut, &plan, pace, &report)
+}
 
 /// `canif list scenarios`: every check a run of these profiles can select.
 pub(crate) fn list_scenarios<S: Side>(
@@ -219,26 +332,20 @@ pub(crate) fn list_scenarios<S: Side>(
     names: &[String],
     options: S,
     out: &mut String,
-) -> ExitCode {
-    let profiles = match profiles(catalogue, names) {
-        Ok(p) => p,
-        Err(code) => return code,
-    };
-    let plan = match Plan::new(profiles, options, None) {
-        Ok(plan) => plan,
-        Err(code) => return code,
-    };
+) -> Result<ExitCode, Stop> {
+    let profiles = profiles(catalogue, names)?;
+    let plan = Plan::new(profiles, options, None)?;
     for (profile, name, covers) in plan.candidates() {
         outln!(out, "{profile}\t{name}\t{}", covers.join(" "));
     }
-    ExitCode::SUCCESS
+    Ok(ExitCode::SUCCESS)
 }
 
 /// The profiles named on the command line (`all`, or names), or the exit code of a usage error.
 pub(crate) fn profiles<'c>(
     catalogue: &'c Catalogue,
     names: &[String],
-) -> Result<Vec<&'c Profile>, ExitCode> {
+) -> Result<Vec<&'c Profile>, Stop> {
     if names.is_empty() || names.iter().any(|n| n == "all") {
         return Ok(catalogue.profiles.iter().collect());
     }
@@ -249,8 +356,10 @@ pub(crate) fn profiles<'c>(
             Some(_) => {}
             None => {
                 let known: Vec<_> = catalogue.profiles.iter().map(|p| p.name.as_str()).collect();
-                errln!("unknown profile `{name}`; known: {}", known.join(", "));
-                return Err(ExitCode::from(2));
+                return Err(stop!(
+                    "unknown profile `{name}`; known: {}",
+                    known.join(", ")
+                ));
             }
         }
     }
@@ -258,13 +367,16 @@ pub(crate) fn profiles<'c>(
 }
 
 /// Writes the reports and says the verdict: each failing requirement in one line.
-pub(crate) fn finish(catalogue: &Catalogue, report: &RunReport, report_dir: &Path) -> ExitCode {
+pub(crate) fn finish(
+    catalogue: &Catalogue,
+    report: &RunReport,
+    report_dir: &Path,
+) -> Result<ExitCode, Stop> {
     if let Err(error) = report.write(catalogue, report_dir) {
-        errln!(
+        return Err(stop!(
             "cannot write the reports to {}: {error}",
             report_dir.display()
-        );
-        return ExitCode::from(2);
+        ));
     }
     if report.interrupted {
         errln!("interrupted: the reports hold what ran before the signal");
@@ -287,11 +399,11 @@ pub(crate) fn finish(catalogue: &Catalogue, report: &RunReport, report_dir: &Pat
         report.totals_line(),
         report_dir.display()
     );
-    ExitCode::from(report.exit_code())
+    Ok(ExitCode::from(report.exit_code()))
 }
 
 /// `canif self-check`: both kill matrices, every fault of each side on every profile.
-pub(crate) fn self_check(catalogue: &Catalogue, seed: u64) -> ExitCode {
+pub(crate) fn self_check(catalogue: &Catalogue, seed: u64) -> Result<ExitCode, Stop> {
     let options = canif_harness::device::Options {
         cases: 2,
         generated_cycles: 150,
@@ -311,7 +423,7 @@ pub(crate) fn self_check(catalogue: &Catalogue, seed: u64) -> ExitCode {
     );
     sayln!();
     let clients_uncaught = print_kill_table("client fault", &clients, |f| f.name());
-    ExitCode::from(u8::from(uncaught + clients_uncaught > 0))
+    Ok(ExitCode::from(u8::from(uncaught + clients_uncaught > 0)))
 }
 
 /// One kill matrix as Markdown: each fault, the profiles it was caught on and

@@ -5,6 +5,8 @@
 use std::path::Path;
 use std::process::ExitCode;
 
+use crate::stop::{stop, Stop};
+
 use canif_features::schedule::declined_by_client;
 use canif_harness::client::master::Master;
 use canif_harness::client::suite::{ClientBus, ClientKind, ClientOptions};
@@ -15,7 +17,7 @@ use canif_spec::{Catalogue, Side};
 use super::{finish, Plan};
 
 /// The master models named on the command line (all when none), or the exit code of a usage error.
-pub(crate) fn masters(names: &[String]) -> Result<Vec<Master>, ExitCode> {
+pub(crate) fn masters(names: &[String]) -> Result<Vec<Master>, Stop> {
     if names.is_empty() {
         return Ok(Master::ALL.to_vec());
     }
@@ -24,8 +26,7 @@ pub(crate) fn masters(names: &[String]) -> Result<Vec<Master>, ExitCode> {
         .map(|name| {
             Master::by_name(name).ok_or_else(|| {
                 let known: Vec<&str> = Master::ALL.iter().map(|m| m.name).collect();
-                errln!("unknown master `{name}`; known: {}", known.join(", "));
-                ExitCode::from(2)
+                stop!("unknown master `{name}`; known: {}", known.join(", "))
             })
         })
         .collect()
@@ -33,21 +34,19 @@ pub(crate) fn masters(names: &[String]) -> Result<Vec<Master>, ExitCode> {
 
 /// The bus of `--side plc`: the simulated one, or one SocketCAN interface
 /// that the played device's controller and the other nodes share.
-pub(crate) fn client_bus(bus: &BusChoice) -> Result<ClientBus, ExitCode> {
+pub(crate) fn client_bus(bus: &BusChoice) -> Result<ClientBus, Stop> {
     match bus {
         BusChoice::Sim => Ok(ClientBus::Sim),
         #[cfg(feature = "socketcan")]
         BusChoice::SocketCan(options) => {
             let spec = &options.spec;
             if spec.iut != spec.tester {
-                errln!("--side plc: one interface (socketcan:IFACE); the device and the other nodes share it");
-                return Err(ExitCode::from(2));
+                return Err(stop!("--side plc: one interface (socketcan:IFACE); the device and the other nodes share it"));
             }
             if let Err(error) = canif_kernel::probe()
                 .and_then(|()| canif_kernel::KernelSocket::open(&spec.iut, false).map(|_| ()))
             {
-                errln!("error: --bus {}: {error}", spec.describe());
-                return Err(ExitCode::from(2));
+                return Err(stop!("error: --bus {}: {error}", spec.describe()));
             }
             Ok(ClientBus::SocketCan {
                 interface: spec.iut.clone(),
@@ -62,10 +61,8 @@ pub(crate) fn run(
     kind: &ClientKind,
     plan: &Plan<ClientOptions>,
     report_dir: &Path,
-) -> ExitCode {
-    if let Err(code) = plan.check_selection(catalogue) {
-        return code;
-    }
+) -> Result<ExitCode, Stop> {
+    plan.check_selection(catalogue)?;
     finish(catalogue, &execute(catalogue, kind, plan), report_dir)
 }
 
