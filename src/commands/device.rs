@@ -1,12 +1,11 @@
-//! `canif device`, `canif coupler` and `canif run --suite canopen`: the soft
-//! device and the simulated coupler served to others, and the CANopen checks.
+//! `canif device` and `canif coupler`: the soft device and the simulated
+//! coupler served to others.
 
 use std::io::Write as _;
 use std::process::ExitCode;
 
 use crate::stop::{stop, Stop};
 
-use canif_harness::device::bus::BusChoice;
 use canif_harness::device::IutKind;
 use canif_harness::door::adapter::CONTROL_FDS;
 use canif_harness::door::serve::device::{self as server, Build};
@@ -130,7 +129,7 @@ pub(crate) fn ethercat_terminal(
     _: &str,
     _: (&[String], &[String]),
 ) -> Result<ExitCode, Stop> {
-    stop!("--ethercat {interface}: this canif was built without Linux sockets (cargo feature `socketcan`)")
+    Err(stop!("--ethercat {interface}: this canif was built without Linux sockets (cargo feature `socketcan`)"))
 }
 
 #[cfg(feature = "socketcan")]
@@ -213,142 +212,7 @@ fn coupler_on_bus(
     bus: &str,
     _: &mut canif_model::canopen::coupler::Coupler,
 ) -> Result<ExitCode, Stop> {
-    stop!("canif coupler --bus {bus}: this canif was built without SocketCAN (cargo feature `socketcan`)")
-}
-
-/// What `canif run --suite canopen` checks, and how.
-pub(crate) struct CanopenRun<'a> {
-    pub bus: &'a BusChoice,
-    pub node: u8,
-    pub fault: Option<&'a str>,
-    pub seed: u64,
-    pub product: Option<canif_harness::report::Product>,
-}
-
-/// `canif run --suite canopen`: the CANopen node checks (002, 004), on the
-/// simulated coupler or on a node on a SocketCAN interface, with the same
-/// reports as the interface suite.
-pub(crate) fn canopen_suite(
-    catalogue: &canif_spec::Catalogue,
-    iut: &crate::cli::IutOptions,
-    selection: &canif_harness::run::Selection,
-    run: &CanopenRun,
-    report_dir: &std::path::Path,
-) -> Result<ExitCode, Stop> {
-    if iut
-        .iut
-        .as_ref()
-        .is_some_and(|i| *i != crate::cli::IutArg::SoftDevice)
-        || !iut.fault.is_empty()
-    {
-        return Err(stop!("--suite canopen checks a CANopen node (the simulated coupler, or a node on --bus), not an interface IUT: --iut and --fault do not apply (--coupler-fault does)"));
-    }
-    let node = node_id(run.node)?;
-    let started_unix = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_secs());
-    let started = std::time::Instant::now();
-    let (results, target) = match run.bus {
-        BusChoice::Sim => {
-            let mut coupler = simulated_coupler(node, coupler_fault(run.fault)?);
-            let results = canif_harness::canopen::check_node(&mut coupler, node, 0);
-            let target = format!(
-                "simulated coupler, node {}{}",
-                node.get(),
-                run.fault.map_or(String::new(), |f| format!(" with {f}"))
-            );
-            (results, target)
-        }
-        #[cfg(feature = "socketcan")]
-        BusChoice::SocketCan(options) => {
-            if run.fault.is_some() {
-                return Err(stop!("--coupler-fault applies to the simulated coupler; on a SocketCAN bus, start `canif coupler --bus … --fault …` instead"));
-            }
-            let mut remote =
-                match canif_harness::canopen::SocketCanNode::open(&options.spec.tester, node) {
-                    Ok(remote) => remote,
-                    Err(error) => {
-                        return Err(stop!("error: {error}"));
-                    }
-                };
-            remote.answer_timeout = options.timeout.min(std::time::Duration::from_millis(500));
-            // Real time: heartbeats are seen at the 10 ms poll step, plus scheduling jitter.
-            let results = canif_harness::canopen::check_node(&mut remote, node, 30_000_000);
-            let target = format!(
-                "node {} on {} (Linux {})",
-                node.get(),
-                options.spec.tester,
-                canif_kernel::kernel_release()
-            );
-            (results, target)
-        }
-    };
-    let selected: Vec<_> = results
-        .into_iter()
-        .filter(|c| selection.admits(c.name, c.requirements.iter().copied()))
-        .collect();
-    if selected.is_empty() {
-        return Err(stop!(
-            "{} matches no CANopen node check; `canif run --suite canopen` runs them all",
-            selection.flags()
-        ));
-    }
-    for check in &selected {
-        match &check.outcome {
-            Ok(()) => errln!("pass  {} ({})", check.name, check.requirements.join(", ")),
-            Err(why) => errln!(
-                "FAIL  {} ({}): {why}",
-                check.name,
-                check.requirements.join(", ")
-            ),
-        }
-    }
-    // The node is judged against every requirement as one "profile" with every capability.
-    let Some(mut profile) = catalogue.profiles.first().cloned() else {
-        return Err(stop!(
-            "the catalogue has no profile to judge the node against"
-        ));
-    };
-    profile.name = format!("canopen-node-{}", node.get());
-    profile.capabilities = catalogue
-        .capabilities
-        .iter()
-        .map(|c| c.name.clone())
-        .collect();
-    // The node's requirements only: the interface's are the interface suite's.
-    let reach = canif_harness::verdict::Reach {
-        scope: canif_spec::Scope {
-            side: canif_spec::Side::Device,
-            suite: canif_spec::Suite::Canopen,
-        },
-        here: canif_harness::canopen::node_check_ids()
-            .iter()
-            .map(|s| s.to_string())
-            .collect(),
-        left_out: selection.not_run(),
-        ..canif_harness::verdict::Reach::default()
-    };
-    let report = canif_harness::report::RunReport {
-        meta: canif_harness::report::RunMeta {
-            complete: selection.is_everything(),
-            product: run.product.clone(),
-            left_out: (!selection.is_everything()).then(|| selection.describe()),
-            started_unix,
-            suite: canif_harness::report::SuiteKind::Canopen,
-            ..canif_harness::report::RunMeta::new(profile.name.clone(), target, run.seed, catalogue)
-        },
-        profiles: vec![canif_harness::report::ProfileReport::new(
-            catalogue,
-            &profile,
-            canif_harness::run::ProfileRun::none(&profile.name),
-            Vec::new(),
-            selected,
-            &reach,
-        )],
-        wall_time_ms: started.elapsed().as_millis(),
-        interrupted: false,
-    };
-    super::run::finish(catalogue, &report, report_dir)
+    Err(stop!("canif coupler --bus {bus}: this canif was built without SocketCAN (cargo feature `socketcan`)"))
 }
 
 /// The quick start's coupler (2 digital, 4 analog channels), with a fault if asked.
@@ -364,12 +228,12 @@ fn simulated_coupler(
 }
 
 /// A CANopen node id from the command line, or the exit code of a usage error.
-fn node_id(node: u8) -> Result<canif_model::canopen::NodeId, Stop> {
+pub(crate) fn node_id(node: u8) -> Result<canif_model::canopen::NodeId, Stop> {
     canif_model::canopen::NodeId::new(node).ok_or_else(|| stop!("node ids are 1..63, not {node}"))
 }
 
 /// The coupler fault named on the command line, or the exit code of a usage error.
-fn coupler_fault(
+pub(crate) fn coupler_fault(
     name: Option<&str>,
 ) -> Result<Option<canif_model::canopen::coupler::CouplerFault>, Stop> {
     use canif_model::canopen::coupler::CouplerFault;

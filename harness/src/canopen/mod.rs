@@ -3,13 +3,15 @@
 //! takes frames and time works: the simulated coupler of the model, or a node
 //! on a SocketCAN interface (`socketcan::SocketCanNode`, real time).
 //!
-//! - `checks`: the node checks; `quick_start`: the same telegrams through an
-//!   IUT's process image; `socketcand` and `on_bus`: the simulated coupler
-//!   served to other tools.
+//! - `checks`: the node checks; [`side`]: they as a side of the suite (what
+//!   `canif run --suite canopen` runs); `socketcand` and `on_bus`: the
+//!   simulated coupler served to other tools. (`device::quick_start` sends the
+//!   same telegrams through an IUT's process image.)
 
 mod checks;
 #[cfg(feature = "socketcan")]
 pub mod on_bus;
+pub mod side;
 #[cfg(feature = "socketcan")]
 mod socketcan;
 pub mod socketcand;

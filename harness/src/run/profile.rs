@@ -23,6 +23,9 @@ pub trait Side {
     const UNDER_TEST: &'static str;
     /// Which side of the interface this is (the catalogue's and the feature files' word).
     const SIDE: canif_spec::Side;
+    /// Which suite: the CAN interface's (with its Gherkin scenarios), or the
+    /// CANopen node checks'.
+    const SUITE: canif_spec::Suite = canif_spec::Suite::Interface;
 
     /// Every case a profile's run has, in the order they run.
     fn cases(&self, profile: &Profile) -> Vec<Self::Case>;
@@ -68,11 +71,6 @@ impl ProfileRun {
             failures,
             reach,
         }
-    }
-
-    /// A profile on which no scenario ran (the CANopen suite's node).
-    pub fn none(profile: &str) -> Self {
-        ProfileRun::new(profile, Vec::new(), Reach::default())
     }
 
     /// Every requirement's verdict over these runs alone (a report merges

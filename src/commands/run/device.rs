@@ -146,7 +146,7 @@ pub(crate) fn execute(
     );
     let mut meta = meta;
     meta.terminals = survey_terminals(kind, plan, pace);
-    let lockstep = plan.run_profiles(catalogue, kind, "cycles");
+    let lockstep = plan.run_profiles(catalogue, kind, Some("cycles"));
     meta.choices = judged_choices(options, kind);
     let iut_broke = lockstep.iter().flat_map(|p| &p.runs).any(|r| {
         matches!(
@@ -245,6 +245,7 @@ pub(crate) fn pace(real_time: &RealTimeOptions) -> Pace {
     }
 }
 
+#[cfg_attr(not(feature = "socketcan"), allow(unused_variables))]
 pub(crate) fn bus_choice(bus: &BusArg, real_time: &RealTimeOptions) -> BusChoice {
     match bus {
         BusArg::Sim => BusChoice::Sim,

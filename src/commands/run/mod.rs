@@ -4,6 +4,7 @@
 //! per requirement × profile, and reported. What differs between the sides
 //! is in `device` and `plc`; everything else is here, once.
 
+mod canopen;
 pub(crate) mod device;
 pub(crate) mod plc;
 mod progress;
@@ -41,7 +42,13 @@ impl<'c, S: Side> Plan<'c, S> {
     ) -> Result<Self, Stop> {
         let scenarios = canif_features::scenarios()
             .map_err(|error| stop!("the feature files do not parse: {error}"))?;
-        let gherkin = canif_features::schedule::targets(&scenarios, &profiles, S::SIDE);
+        // The feature files are the interface suite's.
+        let gherkin = match S::SUITE {
+            canif_spec::Suite::Interface => {
+                canif_features::schedule::targets(&scenarios, &profiles, S::SIDE)
+            }
+            canif_spec::Suite::Canopen => Vec::new(),
+        };
         Ok(Plan {
             profiles,
             options,
@@ -103,7 +110,7 @@ impl<'c, S: Side> Plan<'c, S> {
         &self,
         catalogue: &Catalogue,
         under_test: &S::UnderTest,
-        unit: &str,
+        unit: Option<&str>,
     ) -> Vec<ProfileRun> {
         let count = self.profiles.len();
         let mut runs = Vec::new();
@@ -254,16 +261,11 @@ pub(crate) fn command(catalogue: &Catalogue, args: RunArgs) -> Result<ExitCode, 
     let plc_only = [(!master.is_empty(), "--master")];
     crate::cli::side_conflicts(side, &device_only, &plc_only)?;
     if suite == Suite::Canopen {
-        let canopen = crate::commands::device::CanopenRun {
-            bus: &bus,
-            node,
-            fault: coupler_fault.as_deref(),
-            seed,
-            product: product.product(),
-        };
-        return crate::commands::device::canopen_suite(
-            catalogue, &iut, &selection, &canopen, &report,
-        );
+        let target = canopen::target(&iut, &bus, node, coupler_fault.as_deref())?;
+        let profile = canopen::node_profile(catalogue, &target)?;
+        let side = canif_harness::canopen::side::CanopenSide::new(selection);
+        let plan = Plan::new(vec![&profile], side, product.product())?;
+        return canopen::run(catalogue, &target, &plan, seed, &report);
     }
     let profiles = profiles(catalogue, &profile)?;
     if side == SideArg::Plc {

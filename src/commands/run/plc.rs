@@ -104,7 +104,7 @@ pub(crate) fn execute(
         product: plan.product.clone(),
         gherkin,
     };
-    let mut lockstep = plan.run_profiles(catalogue, kind, "task cycles");
+    let mut lockstep = plan.run_profiles(catalogue, kind, Some("task cycles"));
     for run in &mut lockstep {
         for (profile, scenario) in declined.iter().filter(|(p, _)| *p == run.profile) {
             let profile = plan.profiles.iter().find(|p| p.name == *profile);

@@ -41,13 +41,14 @@ impl<'a> Progress<'a> {
         }
     }
 
-    /// The profile's line; `unit`: what its cycles are (device or task cycles).
+    /// The profile's line; `unit`: what its cycles are (device or task
+    /// cycles), `None` for cases that run no cycles (the CANopen checks).
     pub(crate) fn done(
         self,
         result: &ProfileRun,
         catalogue: &Catalogue,
         profile: &Profile,
-        unit: &str,
+        unit: Option<&str>,
     ) {
         if self.terminal {
             err!("\r\x1b[2K");
@@ -63,14 +64,20 @@ impl<'a> Progress<'a> {
                 })
                 .count()
         };
+        let volume = match unit {
+            Some(unit) => format!(
+                "{} scenarios, {} {unit}, {} frames checked",
+                result.runs.len(),
+                result.cycles(),
+                result.frames_checked()
+            ),
+            None => format!("{} checks", result.runs.len()),
+        };
         errln!(
-            "[{}/{}] {:<22} {} scenarios, {} {unit}, {} frames checked: {}",
+            "[{}/{}] {:<22} {volume}: {}",
             self.n + 1,
             self.count,
             self.profile,
-            result.runs.len(),
-            result.cycles(),
-            result.frames_checked(),
             match (count(false), count(true)) {
                 (0, 0) => "all pass".to_string(),
                 (f, 0) => format!(
