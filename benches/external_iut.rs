@@ -1,11 +1,12 @@
 //! An external IUT must not be the bottleneck: the soak scenario (one virtual
 //! minute of a 1 Mbit/s bus at full load, 32 slots) checked frame by frame
 //! against the soft device in process, the C example device loaded over the C
-//! ABI (`lib:`), and the soft device behind the adapter protocol as its own
-//! process (`canif device --stdio`): protocol 2 (one exchange per cycle) and
-//! protocol 1 (one per bus event), the IUT on the harness's CPU (the default)
-//! and, for protocol 2, on any CPU. Plain main:
-//! prints figures and the ratios of one run; asserts nothing.
+//! ABI (`lib:`) in process and in `canif lib-host` (protocol 3, a record per
+//! bus event), and the soft device behind the adapter protocol as its own
+//! process (`canif device --stdio`): protocol 3 (a cycle's records in shared
+//! memory) on any CPU and on the harness's, protocol 2 (a line per cycle)
+//! and protocol 1 (a line per bus event). Plain main: prints figures and the
+//! ratios of one run; asserts nothing.
 
 use std::time::Instant;
 
@@ -58,19 +59,27 @@ fn main() {
             }),
         ),
         (
-            "canif device --stdio, protocol 2",
+            "canif device --stdio, protocol 3",
             IutKind::Door(Door::Exec {
-                command: format!("{device} device --stdio --protocol 2"),
+                command: format!("{device} device --stdio --protocol 3"),
+                timeouts: Timeouts::with_request(std::time::Duration::from_millis(10_000)),
+                same_cpu: false,
+            }),
+        ),
+        (
+            "the same, IUT on the harness's CPU",
+            IutKind::Door(Door::Exec {
+                command: format!("{device} device --stdio --protocol 3"),
                 timeouts: Timeouts::with_request(std::time::Duration::from_millis(10_000)),
                 same_cpu: true,
             }),
         ),
         (
-            "the same, IUT on any CPU (--iut-cpu-free)",
+            "canif device --stdio, protocol 2",
             IutKind::Door(Door::Exec {
                 command: format!("{device} device --stdio --protocol 2"),
                 timeouts: Timeouts::with_request(std::time::Duration::from_millis(10_000)),
-                same_cpu: false,
+                same_cpu: true,
             }),
         ),
         (
@@ -82,9 +91,18 @@ fn main() {
             }),
         ),
     ];
-    // CANIF_BENCH_ONLY=2: leave out protocol 1 (for profiling).
-    let only_v2 = std::env::var("CANIF_BENCH_ONLY").is_ok_and(|v| v == "2");
-    let iuts = &iuts[..if only_v2 { 5 } else { 6 }];
+    // CANIF_BENCH_ONLY=TEXT: the in-process row and those whose label holds
+    // TEXT (for profiling one door).
+    let only = std::env::var("CANIF_BENCH_ONLY").ok();
+    let iuts: Vec<_> = iuts
+        .into_iter()
+        .enumerate()
+        .filter(|(n, (label, _))| {
+            *n == 0 || only.as_ref().is_none_or(|o| label.contains(o.as_str()))
+        })
+        .map(|(_, iut)| iut)
+        .collect();
+    let iuts = &iuts[..];
     let mut rates = Vec::new();
     for (label, kind) in iuts {
         // A fresh thread each: a same-CPU IUT pins the thread that starts it.

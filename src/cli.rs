@@ -409,9 +409,10 @@ pub(crate) enum Command {
         /// (repeatable; docs/choices.md), as a device declares its choices.
         #[arg(long, value_name = "NAME=VALUE", requires = "stdio")]
         declare: Vec<String>,
-        /// The highest adapter-protocol version to agree on (2 batches a cycle's
-        /// bus events into one exchange; 1 is one request per event).
-        #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u64).range(1..=2))]
+        /// The highest adapter-protocol version to agree on (3 carries each
+        /// cycle in shared memory; 2 batches a cycle's bus events into one
+        /// line; 1 is one line per event).
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..=3))]
         protocol: u64,
         /// Put the device's CAN side on a SocketCAN interface (`socketcan:IFACE`):
         /// it sends and receives real frames there, and the adapter protocol

@@ -209,8 +209,8 @@ fn an_iut_that_prints_garbage_is_an_error() {
 #[test]
 fn another_protocol_version_is_an_error() {
     broken(
-        r#"read l; echo '{"type":"configured","protocol":3,"accepted":true}'; cat >/dev/null"#,
-        &["protocol version 3", "offered 1 to 2"],
+        r#"read l; echo '{"type":"configured","protocol":4,"accepted":true}'; cat >/dev/null"#,
+        &["protocol version 4", "offered 1 to 3"],
     );
 }
 
@@ -377,7 +377,7 @@ fn real_traffic_and_the_documented_session_fit_the_schema() {
     // The schema says no to what the protocol forbids.
     assert!(!schema.is_valid(&serde_json::json!({"type": "inputs", "inputs": "0g"})));
     assert!(!schema
-        .is_valid(&serde_json::json!({"type": "configured", "protocol": 3, "accepted": true})));
+        .is_valid(&serde_json::json!({"type": "configured", "protocol": 4, "accepted": true})));
 }
 
 /// On a SocketCAN bus `configure` names the interface and the epoch: the

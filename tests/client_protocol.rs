@@ -148,14 +148,16 @@ fn schema() -> jsonschema::Validator {
     jsonschema::validator_for(&serde_json::from_str(&text).unwrap()).unwrap()
 }
 
-/// Every line of a real client session, both ways, fits the schema.
+/// Every line of a real client session, both ways, fits the schema (the
+/// example keeps to version 1 with `--lines`, so that every task is a line;
+/// without it, it agrees on version 3, and only `start` is).
 #[test]
 fn real_client_traffic_fits_the_schema() {
     let dir = std::env::temp_dir().join(format!("canif-client-traffic-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let (requests, answers) = (dir.join("requests.log"), dir.join("answers.log"));
     let command = format!(
-        "tee {} | python3 {SCRIPT} | tee {}",
+        "tee {} | python3 {SCRIPT} --lines | tee {}",
         requests.display(),
         answers.display()
     );
@@ -171,9 +173,19 @@ fn real_client_traffic_fits_the_schema() {
             lines += 1;
         }
     }
-    let requests = std::fs::read_to_string(&requests).unwrap();
-    assert!(requests.contains(r#""type":"start""#) && requests.contains(r#""requests":[{"#));
+    let sent = std::fs::read_to_string(&requests).unwrap();
+    assert!(sent.contains(r#""type":"start""#) && sent.contains(r#""requests":[{"#));
     assert!(lines > 300, "{lines} lines");
+    let command = format!(
+        "tee {} | python3 {SCRIPT} | tee {}",
+        requests.display(),
+        answers.display()
+    );
+    assert_eq!(run_one(&command, 5_000).outcome, Outcome::Pass);
+    std::thread::sleep(Duration::from_millis(100));
+    let answers = std::fs::read_to_string(&answers).unwrap();
+    assert!(answers.contains(r#""protocol":3"#), "{answers}");
+    assert!(!answers.contains(r#""type":"tasked""#), "{answers}");
     let _ = std::fs::remove_dir_all(dir);
 }
 

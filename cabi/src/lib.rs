@@ -8,6 +8,7 @@
 mod client;
 pub mod guard;
 pub mod isolation;
+pub mod shared;
 
 use std::ffi::{c_char, c_int, c_void, CStr};
 use std::path::Path;

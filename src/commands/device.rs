@@ -41,6 +41,7 @@ pub(crate) fn device(
                 .at_most(protocol)
                 .declaring(declared.entries()),
             std::io::stdin().lock(),
+            0,
             std::io::stdout(),
         )
         .map_err(|e| e.to_string()),
@@ -272,12 +273,14 @@ pub(crate) fn lib_host(
             }
         },
     };
+    // The requests' descriptor, watched while version 3 runs in shared memory.
+    let line_fd = if control { CONTROL_FDS.0 } else { 0 };
     let served = match role {
         crate::cli::LibRole::Device => {
-            canif_harness::door::serve::device::serve_library(path, input, output)
+            canif_harness::door::serve::device::serve_library(path, input, line_fd, output)
         }
         crate::cli::LibRole::Client => {
-            canif_harness::door::serve::client::serve_library(path, input, output)
+            canif_harness::door::serve::client::serve_library(path, input, line_fd, output)
         }
     };
     match served {

@@ -240,7 +240,9 @@ impl Door {
     /// an exec IUT on its stdio, a hosted library on the host's control channel.
     fn device_process(&self) -> Option<(String, Timeouts, bool, Channel)> {
         match (self.hosted(Role::Device), self) {
-            (Some((command, timeouts)), _) => Some((command, timeouts, true, Channel::Control)),
+            // A host speaks protocol 3: on a CPU of its own, each side spins
+            // a moment for the other's record instead of sleeping.
+            (Some((command, timeouts)), _) => Some((command, timeouts, false, Channel::Control)),
             (
                 None,
                 Door::Exec {
@@ -307,6 +309,12 @@ impl Door {
             Some(BuildError::Failed(error)) if error.cause == IutCause::NotStarted => Err(error),
             _ => Ok(()),
         }
+    }
+
+    /// Ends the client processes kept idle between programs (see
+    /// `exec::client`): what a run does when its last program has ended.
+    pub fn release_idle_clients() {
+        exec::client::release_idle();
     }
 
     /// A fresh client (a new PLC program) behind the door for an interface.

@@ -3,6 +3,7 @@
 //!
 //! - [`protocol`]: the messages, as serde types, written once.
 //! - `process`: an implementation in another process, in either role.
+//! - [`shared`]: protocol 3, the cycle's records in shared memory.
 //!
 //! Its users are the doors: `door::exec` (a device or client process, and
 //! a hosted library on its control channel), and `door::serve` (canif
@@ -11,6 +12,7 @@
 mod lines;
 pub(crate) mod process;
 pub mod protocol;
+pub mod shared;
 
 /// The descriptors a `canif lib-host --control` reads requests from and
 /// writes answers to: its control channel, apart from the library's own

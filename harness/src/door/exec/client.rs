@@ -14,14 +14,44 @@ use crate::door::Timeouts;
 use crate::error::IutCause;
 use crate::error::IutError;
 
-/// The client role's protocol version.
-pub(super) const CLIENT_PROTOCOL: u64 = 1;
+/// The client role's protocol versions: 1 on the lines, 3 in shared memory
+/// (the client role has no version 2).
+pub(super) const CLIENT_PROTOCOL: u64 = 3;
+
+/// Processes of clients that said each `start` begins a new program
+/// (`"restarts":true`), idle between programs: the next program of the same
+/// command starts in one of them instead of a new process (an interpreter's
+/// start took most of a PLC-side run). One per command; [`release_idle`]
+/// ends them.
+static IDLE: std::sync::Mutex<Vec<(String, Channel, AdapterProcess)>> =
+    std::sync::Mutex::new(Vec::new());
+
+fn take_idle(command: &str, channel: Channel) -> Option<AdapterProcess> {
+    let mut idle = IDLE.lock().ok()?;
+    let at = idle
+        .iter()
+        .position(|(c, ch, _)| c == command && *ch == channel)?;
+    Some(idle.swap_remove(at).2)
+}
+
+/// Ends every idle client process (a run's end: `bye`, then their trees).
+pub(crate) fn release_idle() {
+    let idle = IDLE.lock().map(|mut idle| std::mem::take(&mut *idle));
+    drop(idle);
+}
 
 pub(crate) struct ExecClient {
-    process: AdapterProcess,
+    /// `None` once given back to [`IDLE`].
+    process: Option<AdapterProcess>,
+    command: String,
+    channel: Channel,
+    /// It said each `start` begins a new program.
+    restarts: bool,
     layout: ImageLayout,
     /// What its `started` answer declared.
     declaration: ClientDeclaration,
+    /// The version `started` agreed.
+    protocol: u64,
 }
 
 impl ExecClient {
@@ -33,19 +63,21 @@ impl ExecClient {
         config: &InterfaceConfig,
         layout: ImageLayout,
     ) -> Result<Self, IutError> {
-        let mut process = AdapterProcess::spawn(command, timeouts, true, channel)?;
+        let mut process = match take_idle(command, channel) {
+            Some(process) => process,
+            None => AdapterProcess::spawn(command, timeouts, false, channel)?,
+        };
         let request = Request::Start {
             protocol: CLIENT_PROTOCOL,
             config: Config::new(config, &layout),
+            shared: process.shared_offer(),
         };
         let started = process.exchange(&request, Answer::STARTED)?;
         let protocol = started.protocol;
-        if protocol != CLIENT_PROTOCOL {
+        if protocol != 1 && protocol != 3 {
             return Err(process.fail(
                 IutCause::Protocol,
-                format!(
-                "speaks client protocol version {protocol} (this harness speaks {CLIENT_PROTOCOL})"
-            ),
+                format!("speaks client protocol version {protocol} (this harness speaks 1 and 3)"),
             ));
         }
         let lines: Vec<String> = started
@@ -64,10 +96,41 @@ impl ExecClient {
             }
         };
         Ok(ExecClient {
-            process,
+            restarts: started.restarts == Some(true),
+            process: Some(process),
+            command: command.to_string(),
+            channel,
             layout,
             declaration,
+            protocol,
         })
+    }
+}
+
+impl ExecClient {
+    fn process(&mut self) -> &mut AdapterProcess {
+        self.process.as_mut().expect("the process, until dropped")
+    }
+}
+
+impl Drop for ExecClient {
+    /// A program that ends in a sound process that restarts waits idle for
+    /// the next one; any other process ends with its program.
+    fn drop(&mut self) {
+        let Some(process) = self.process.take() else {
+            return;
+        };
+        if !(self.restarts && process.is_sound()) {
+            return;
+        }
+        if let Ok(mut idle) = IDLE.lock() {
+            if !idle
+                .iter()
+                .any(|(c, ch, _)| *c == self.command && *ch == self.channel)
+            {
+                idle.push((self.command.clone(), self.channel, process));
+            }
+        }
     }
 }
 
@@ -88,9 +151,14 @@ impl Client for ExecClient {
             delivered,
             refused,
             sent,
-        } = self.process.exchange(&request, Answer::TASKED)?;
+        } = match self.protocol {
+            3 => self
+                .process()
+                .exchange_shared(&[], &request, Answer::TASKED)?,
+            _ => self.process().exchange(&request, Answer::TASKED)?,
+        };
         if outputs.0.len() != size {
-            return Err(self.process.fail(
+            return Err(self.process().fail(
                 IutCause::Impossible,
                 format!(
                     "answered an output image of {} bytes; the interface's is {size}",
@@ -99,7 +167,7 @@ impl Client for ExecClient {
             ));
         }
         if let Some(index) = refused.iter().find(|i| **i >= io.requests.len()) {
-            return Err(self.process.fail(
+            return Err(self.process().fail(
                 IutCause::Impossible,
                 format!(
                     "refused request {index} of the {} it was given",

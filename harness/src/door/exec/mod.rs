@@ -13,8 +13,8 @@ use canif_model::Nanos;
 
 use crate::door::adapter::process::{AdapterProcess, Channel};
 use crate::door::adapter::protocol::{
-    Answer, BusEvent, Caps, Config, Hex, OwnedBus, PlannedFrame, Request, SteppedLine, Transmitted,
-    WireFrame, PROTOCOL_VERSION,
+    Answer, BusEvent, Caps, Config, Expected, Hex, OwnedBus, PlannedFrame, Request, SteppedLine,
+    Transmitted, WireFrame, PROTOCOL_VERSION,
 };
 use crate::door::declaration::choices::Declared;
 use crate::door::iut::{InvalidFrame, Iut, Planned, Transmit};
@@ -39,6 +39,9 @@ pub struct ExecIut {
     next_release: Option<Nanos>,
     /// The protocol version `configure` agreed.
     version: u64,
+    /// One exchange per cycle (version 2, or 3 with a device that steps):
+    /// the bus events are gathered and the plan kept here.
+    batched: bool,
     /// Protocol 2: what happened on the bus since the last step.
     events: Vec<BusEvent>,
     /// Protocol 2: the frames the IUT will start next, and from when.
@@ -68,6 +71,7 @@ impl ExecIut {
             input_size: 0,
             next_release: None,
             version: 1,
+            batched: false,
             events: Vec::new(),
             plan: VecDeque::new(),
             on_wire: false,
@@ -77,6 +81,24 @@ impl ExecIut {
 
     fn fail(&mut self, cause: IutCause, what: String) -> IutError {
         self.process.fail(cause, what)
+    }
+
+    /// One request and its answer: in the shared mapping (version 3, after
+    /// the bus events gathered since the last record), or on the lines.
+    fn exchange<T>(&mut self, request: &Request, expected: Expected<T>) -> Result<T, IutError> {
+        match self.version {
+            3 => {
+                let events = std::mem::take(&mut self.events);
+                self.process.exchange_shared(&events, request, expected)
+            }
+            _ => self.process.exchange(request, expected),
+        }
+    }
+
+    /// The bus events wait for the next record or step instead of a line
+    /// each (they are all answered `ok`).
+    fn gathers(&self) -> bool {
+        self.batched || self.version == 3
     }
 
     /// Offers a configuration; `Err`: the IUT failed (refusing is an answer).
@@ -94,10 +116,14 @@ impl ExecIut {
             config: Config::new(config, &layout),
             capabilities: Caps::from(caps),
             bus: bus.cloned(),
+            shared: self.process.shared_offer().filter(|_| offered >= 3),
         };
         let configured = self.process.exchange(&request, Answer::CONFIGURED)?;
-        let (protocol, accepted, reason) =
-            (configured.protocol, configured.accepted, configured.reason);
+        let (protocol, accepted, reason) = (
+            configured.protocol,
+            configured.accepted,
+            configured.reason.clone(),
+        );
         let mut declared = Declared::default();
         for (name, value) in &configured.declares {
             if let Err(error) = declared.declare(&format!("{name}={value}")) {
@@ -115,6 +141,7 @@ impl ExecIut {
             ));
         }
         self.version = protocol;
+        self.batched = protocol == 2 || (protocol == 3 && configured.steps != Some(false));
         self.events.clear();
         self.plan.clear();
         self.on_wire = false;
@@ -134,10 +161,15 @@ impl ExecIut {
             outputs: Hex(outputs.to_vec()),
             events: std::mem::take(&mut self.events),
         };
-        let line = self.process.exchange_line(&request)?;
-        let (inputs, plan) = match serde_json::from_str::<SteppedLine>(&line) {
-            Ok(stepped) => (stepped.inputs, stepped.plan),
-            Err(_) => self.process.answer_of(&line, Answer::STEPPED)?,
+        let (inputs, plan) = if self.version == 3 {
+            self.process
+                .exchange_shared(&[], &request, Answer::STEPPED)?
+        } else {
+            let line = self.process.exchange_line(&request)?;
+            match serde_json::from_str::<SteppedLine>(&line) {
+                Ok(stepped) => (stepped.inputs, stepped.plan),
+                Err(_) => self.process.answer_of(&line, Answer::STEPPED)?,
+            }
         };
         let mut planned = VecDeque::with_capacity(plan.len());
         for PlannedFrame {
@@ -177,14 +209,14 @@ impl Iut for ExecIut {
     }
 
     fn cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError> {
-        let inputs = if self.version >= 2 {
+        let inputs = if self.batched {
             self.step(outputs, now)?
         } else {
             let request = Request::Cycle {
                 now_ns: now,
                 outputs: Hex(outputs.to_vec()),
             };
-            self.process.exchange(&request, Answer::INPUTS)?.0
+            self.exchange(&request, Answer::INPUTS)?.0
         };
         if inputs.len() != self.input_size {
             return Err(self.fail(
@@ -200,7 +232,7 @@ impl Iut for ExecIut {
     }
 
     fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) -> Result<(), IutError> {
-        if self.version >= 2 {
+        if self.gathers() {
             self.events.push(BusEvent::Received {
                 frame: WireFrame::from(frame),
                 end_ns: end_of_reception,
@@ -211,11 +243,11 @@ impl Iut for ExecIut {
             frame: WireFrame::from(frame),
             end_ns: end_of_reception,
         };
-        self.process.exchange(&request, Answer::OK)
+        self.exchange(&request, Answer::OK)
     }
 
     fn poll_transmit(&mut self, now: Nanos) -> Result<Transmit, IutError> {
-        if self.version >= 2 {
+        if self.batched {
             if self.on_wire {
                 return Ok(None);
             }
@@ -229,9 +261,8 @@ impl Iut for ExecIut {
                 _ => None,
             });
         }
-        let (frame, next_ns) = self
-            .process
-            .exchange(&Request::PollTransmit { now_ns: now }, Answer::TRANSMIT)?;
+        let (frame, next_ns) =
+            self.exchange(&Request::PollTransmit { now_ns: now }, Answer::TRANSMIT)?;
         self.next_release = next_ns;
         match frame {
             None => Ok(None),
@@ -249,7 +280,7 @@ impl Iut for ExecIut {
     }
 
     fn poll_timeout(&self) -> Option<Nanos> {
-        if self.version >= 2 {
+        if self.batched {
             return self
                 .plan
                 .front()
@@ -260,17 +291,16 @@ impl Iut for ExecIut {
     }
 
     fn transmit_complete(&mut self) -> Result<(), IutError> {
-        if self.version >= 2 {
+        if self.gathers() {
             self.events.push(BusEvent::Completed);
             self.on_wire = false;
             return Ok(());
         }
-        self.process
-            .exchange(&Request::TransmitComplete {}, Answer::OK)
+        self.exchange(&Request::TransmitComplete {}, Answer::OK)
     }
 
     fn controller_status(&mut self, status: &ControllerStatus) -> Result<(), IutError> {
-        if self.version >= 2 {
+        if self.gathers() {
             self.events.push(BusEvent::Status {
                 status: status.into(),
             });
@@ -279,6 +309,6 @@ impl Iut for ExecIut {
         let request = Request::ControllerStatus {
             status: status.into(),
         };
-        self.process.exchange(&request, Answer::OK)
+        self.exchange(&request, Answer::OK)
     }
 }

@@ -125,7 +125,7 @@ pub fn serve_on_bus(build: &Build<'_>, interface: Option<&str>) -> Result<(), Bu
         let Some(line) = line.filter(|l| !l.trim().is_empty()) else {
             continue;
         };
-        let request = match Server::parse(&line) {
+        let request = match Server::parse_line(&line) {
             Ok(request) => request,
             Err(answer) => {
                 write_answer(&mut output, &answer).map_err(io)?;

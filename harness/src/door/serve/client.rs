@@ -6,16 +6,15 @@
 use std::io::{BufRead, Write};
 use std::path::Path;
 
-use canif_model::config::InterfaceConfig;
 use canif_model::image::{ImageLayout, MessageRepr};
 
-use crate::door::adapter::protocol::{Answer, Config, Hex, Request, WireFrame, WireMessage};
+use super::session::{self, Serves, Switch};
+use crate::door::adapter::protocol::{
+    Answer, Config, Hex, Request, SharedOffer, WireFrame, WireMessage,
+};
+use crate::door::adapter::shared::IutEnd;
 use crate::door::client::{Client, TaskIo};
 use crate::door::lib::client::LibClient;
-use crate::error::IutError;
-
-/// The client role's protocol version this server speaks.
-const PROTOCOL: u64 = 1;
 
 /// The layout the sizes of `config` name (with InfoData or without).
 fn layout_of(config: &Config) -> Option<ImageLayout> {
@@ -26,65 +25,98 @@ fn layout_of(config: &Config) -> Option<ImageLayout> {
         .find(|l| l.input_size() == config.input_size && l.output_size() == config.output_size)
 }
 
-/// Serves the library at `path` over the protocol until `bye` or the end of
-/// the input: each `start` starts a program of it, its images behind guard pages.
-pub fn serve_library(
-    path: &Path,
-    input: impl BufRead,
-    mut output: impl Write,
-) -> std::io::Result<()> {
-    let start = |config: &InterfaceConfig, layout| -> Result<LibClient, IutError> {
-        LibClient::start(path, config, layout)?.guarded()
-    };
-    let mut client: Option<(LibClient, ImageLayout)> = None;
-    for line in input.lines() {
-        let line = match line {
-            Ok(line) if line.trim().is_empty() => continue,
-            Ok(line) => line,
-            Err(error) => {
-                answer(&mut output, &Answer::error(format!("not a line: {error}")))?;
-                continue;
+/// A library's client served: each `start` starts a program of it, its
+/// images behind guard pages.
+struct ClientServer<'a> {
+    path: &'a Path,
+    client: Option<(LibClient, ImageLayout)>,
+    switch: Option<Switch>,
+}
+
+impl ClientServer<'_> {
+    fn start(&mut self, protocol: u64, config: &Config, shared: Option<&SharedOffer>) -> Answer {
+        let Some(layout) = layout_of(config) else {
+            return Answer::error("the image sizes fit no layout of this configuration");
+        };
+        let started =
+            LibClient::start(self.path, &config.interface(), layout).and_then(LibClient::guarded);
+        let started = match started {
+            Ok(started) => started,
+            Err(error) => return Answer::error(error.to_string()),
+        };
+        let declared = started.declaration();
+        self.client = Some((started, layout));
+        // Version 3 where offered and the mapping opens; else 1.
+        let shared = shared.filter(|_| protocol >= 3).map(IutEnd::open);
+        let protocol = match shared {
+            Some(Ok(end)) => {
+                self.switch = Some(Switch::ToShared(end));
+                3
+            }
+            _ => {
+                self.switch = Some(Switch::ToLines);
+                1
             }
         };
-        let reply = match serde_json::from_str::<Request>(&line) {
-            Err(error) => Answer::error(format!("not a request: {error}")),
-            Ok(Request::Bye {}) => return Ok(()),
-            Ok(Request::Start { config, .. }) => match layout_of(&config) {
-                None => Answer::error("the image sizes fit no layout of this configuration"),
-                Some(layout) => match start(&config.interface(), layout) {
-                    Ok(started) => {
-                        let declared = started.declaration();
-                        client = Some((started, layout));
-                        Answer::Started {
-                            protocol: PROTOCOL,
-                            tells_sent: None,
-                            declares: declared
-                                .lines()
-                                .iter()
-                                .filter_map(|l| l.split_once('='))
-                                .map(|(k, v)| (k.to_string(), v.to_string()))
-                                .collect(),
-                        }
-                    }
-                    Err(error) => Answer::error(error.to_string()),
-                },
-            },
-            Ok(Request::Task {
+        Answer::Started {
+            protocol,
+            tells_sent: None,
+            restarts: None,
+            declares: declared
+                .lines()
+                .iter()
+                .filter_map(|l| l.split_once('='))
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect(),
+        }
+    }
+}
+
+impl Serves for ClientServer<'_> {
+    fn answer(&mut self, request: &Request) -> Option<Answer> {
+        Some(match request {
+            Request::Bye {} => return None,
+            Request::Start {
+                protocol,
+                config,
+                shared,
+            } => self.start(*protocol, config, shared.as_ref()),
+            Request::Task {
                 inputs,
                 outputs,
                 requests,
-            }) => match client.as_mut() {
+            } => match self.client.as_mut() {
                 None => Answer::error("start first"),
-                Some((client, layout)) => task(client, *layout, inputs, outputs, &requests),
+                Some((client, layout)) => {
+                    task(client, *layout, inputs.clone(), outputs.clone(), requests)
+                }
             },
-            Ok(other) => Answer::error(format!(
+            other => Answer::error(format!(
                 "`{}` is the device role's; this is a client",
                 other.name()
             )),
-        };
-        answer(&mut output, &reply)?;
+        })
     }
-    Ok(())
+
+    fn switch(&mut self) -> Switch {
+        self.switch.take().unwrap_or(Switch::Stay)
+    }
+}
+
+/// Serves the library at `path` over the protocol until `bye` or the end of
+/// the input (descriptor `line_fd`).
+pub fn serve_library(
+    path: &Path,
+    input: impl BufRead,
+    line_fd: i32,
+    output: impl Write,
+) -> std::io::Result<()> {
+    let mut server = ClientServer {
+        path,
+        client: None,
+        switch: None,
+    };
+    session::run(&mut server, input, line_fd, output)
 }
 
 fn task(
@@ -138,11 +170,4 @@ fn task(
         },
         Err(error) => Answer::error(error.to_string()),
     }
-}
-
-fn answer(output: &mut impl Write, answer: &Answer) -> std::io::Result<()> {
-    let mut line = serde_json::to_vec(answer).map_err(std::io::Error::other)?;
-    line.push(b'\n');
-    output.write_all(&line)?;
-    output.flush()
 }

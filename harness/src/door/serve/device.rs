@@ -3,6 +3,9 @@
 
 use std::io::{BufRead, Write};
 
+use super::session::{self, Serves, Switch};
+use crate::door::adapter::shared::IutEnd;
+
 use canif_model::config::{Capabilities, InterfaceConfig};
 
 use canif_model::Nanos;
@@ -30,6 +33,11 @@ pub struct Server<'a> {
     version: u64,
     /// What the served device declares in its `configured` answer.
     declares: std::collections::BTreeMap<String, String>,
+    /// It can tell its transmit plan (versions 2 and 3 in steps); a device
+    /// that can only be polled speaks 1, or 3 a record per bus event.
+    steps: bool,
+    /// Where the requests after the last `configured` come from.
+    switch: Option<Switch>,
 }
 
 impl<'a> Server<'a> {
@@ -41,7 +49,15 @@ impl<'a> Server<'a> {
             most: PROTOCOL_VERSION,
             version: 1,
             declares: Default::default(),
+            steps: true,
+            switch: None,
         }
+    }
+
+    /// A device that can only be polled (a library: the C ABI has no plan).
+    pub fn polled(mut self) -> Self {
+        self.steps = false;
+        self
     }
 
     /// Declares these choices (name to value) in every `configured` answer.
@@ -62,7 +78,7 @@ impl<'a> Server<'a> {
     }
 
     /// Reads one request line: the request, or the error answer to give.
-    pub fn parse(line: &str) -> Result<Request, Answer> {
+    pub fn parse_line(line: &str) -> Result<Request, Answer> {
         // Protocol 2's one request per cycle first, as a plain struct (fast).
         if let Ok(step) = serde_json::from_str::<StepLine>(line) {
             return Ok(Request::Step {
@@ -76,6 +92,7 @@ impl<'a> Server<'a> {
 
     /// The answer to one request; `None` for `bye`.
     pub fn answer(&mut self, request: &Request) -> Option<Answer> {
+        let batched = self.batched();
         let iut = match (request, self.iut.as_mut()) {
             (Request::Bye {}, _) => return None,
             (Request::Start { .. } | Request::Task { .. }, _) => {
@@ -88,6 +105,7 @@ impl<'a> Server<'a> {
                     protocol,
                     config,
                     capabilities,
+                    shared,
                     ..
                 },
                 _,
@@ -99,12 +117,27 @@ impl<'a> Server<'a> {
                         "protocol {protocol} is no version of the adapter protocol (1 to {PROTOCOL_VERSION})"
                     )));
                 }
-                self.version = (*protocol).min(self.most);
+                self.version = match ((*protocol).min(self.most), self.steps) {
+                    // Version 2 is steps only.
+                    (2, false) => 1,
+                    (version, _) => version,
+                };
+                // Version 3 where the mapping opens; else the best below it.
+                self.switch = Some(Switch::ToLines);
+                if self.version == 3 {
+                    match shared.as_ref().map(IutEnd::open) {
+                        Some(Ok(end)) => self.switch = Some(Switch::ToShared(end)),
+                        _ => self.version = if self.steps { 2 } else { 1 },
+                    }
+                }
                 return Some(self.configure(&capabilities.into(), &config.interface()));
             }
             (_, None) => return Some(Answer::error("configure first")),
-            (Request::Step { .. }, Some(_)) if self.version < 2 => {
-                return Some(Answer::error("`step` is protocol 2; configure agreed on 1"))
+            (Request::Step { .. }, Some(_)) if !batched => {
+                return Some(Answer::error(format!(
+                    "`step` is for a device that tells its plan; configure agreed on version {} without it",
+                    self.version
+                )))
             }
             (request, Some(_)) if request.is_bus_request() && !self.drives_bus => {
                 return Some(Answer::error(format!(
@@ -158,7 +191,13 @@ impl<'a> Server<'a> {
         })
     }
 
+    /// One exchange per cycle agreed.
+    fn batched(&self) -> bool {
+        self.steps && self.version >= 2
+    }
+
     fn configure(&mut self, caps: &Capabilities, config: &InterfaceConfig) -> Answer {
+        let steps = (self.version == 3).then_some(self.steps);
         match (self.build)(caps, config) {
             Ok(built) => {
                 // What the device declares itself, and what the server was told to add.
@@ -170,6 +209,7 @@ impl<'a> Server<'a> {
                     accepted: true,
                     reason: None,
                     declares,
+                    steps,
                 }
             }
             Err(BuildError::Refused(reason)) => {
@@ -179,6 +219,7 @@ impl<'a> Server<'a> {
                     accepted: false,
                     reason: Some(reason),
                     declares: Default::default(),
+                    steps,
                 }
             }
             // Not a refusal: the device could not be made (a library that
@@ -253,43 +294,31 @@ fn ok_or_error(result: Result<(), crate::error::IutError>) -> Answer {
     }
 }
 
-/// Writes one answer as a line.
-pub fn write_answer(output: &mut impl Write, answer: &Answer) -> std::io::Result<()> {
-    // Writing an internally tagged enum buffers nothing (only reading does).
-    let mut line = serde_json::to_vec(answer).expect("answers serialize");
-    line.push(b'\n');
-    output.write_all(&line)?;
-    output.flush()
+pub use session::write_answer;
+
+impl Serves for Server<'_> {
+    fn parse(&self, line: &str) -> Result<Request, Answer> {
+        Server::parse_line(line)
+    }
+    fn answer(&mut self, request: &Request) -> Option<Answer> {
+        Server::answer(self, request)
+    }
+    fn switch(&mut self) -> Switch {
+        self.switch.take().unwrap_or(Switch::Stay)
+    }
 }
 
-/// Serves an in-process IUT over the adapter protocol. Returns when the
-/// harness says `bye` or closes the input. Whatever a line holds — not JSON,
-/// not UTF-8, fields the protocol does not name — it gets an `error` answer.
+/// Serves an in-process IUT over the adapter protocol, the requests' lines
+/// on `input` (descriptor `line_fd`), the answers on `output`. Returns when
+/// the harness says `bye` or closes the input.
 pub fn serve(
     server: Server<'_>,
-    mut input: impl BufRead,
-    mut output: impl Write,
+    input: impl BufRead,
+    line_fd: i32,
+    output: impl Write,
 ) -> std::io::Result<()> {
     let mut server = server;
-    let mut bytes = Vec::new();
-    loop {
-        bytes.clear();
-        if input.read_until(b'\n', &mut bytes)? == 0 {
-            return Ok(());
-        }
-        let answer = match std::str::from_utf8(&bytes) {
-            Err(error) => Answer::error(format!("not UTF-8: {error}")),
-            Ok(line) if line.trim().is_empty() => continue,
-            Ok(line) => match Server::parse(line) {
-                Ok(request) => match server.answer(&request) {
-                    Some(answer) => answer,
-                    None => return Ok(()),
-                },
-                Err(answer) => answer,
-            },
-        };
-        write_answer(&mut output, &answer)?;
-    }
+    session::run(&mut server, input, line_fd, output)
 }
 
 /// Serves the device of the library at `path` (what `canif lib-host --role
@@ -298,6 +327,7 @@ pub fn serve(
 pub fn serve_library(
     path: &std::path::Path,
     input: impl BufRead,
+    line_fd: i32,
     output: impl Write,
 ) -> std::io::Result<()> {
     let build = |caps: &Capabilities, config: &InterfaceConfig| {
@@ -307,6 +337,7 @@ pub fn serve_library(
             .guarded(output_size)
             .map(|iut| Box::new(iut) as Box<dyn Iut>)
     };
-    // A library cannot tell its transmit plan (the C ABI polls): protocol 1.
-    serve(Server::new(&build, true).at_most(1), input, output)
+    // A library cannot tell its transmit plan (the C ABI polls): version 1,
+    // or 3 a record per bus event.
+    serve(Server::new(&build, true).polled(), input, line_fd, output)
 }

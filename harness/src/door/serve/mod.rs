@@ -10,6 +10,7 @@
 pub mod bus;
 pub mod client;
 pub mod device;
+pub mod session;
 
 use crate::door::adapter::CONTROL_FDS;
 

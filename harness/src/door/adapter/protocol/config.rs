@@ -293,3 +293,24 @@ mod tests {
         assert!(serde_json::from_str::<Status>(r#"{"bus_of": true}"#).is_err());
     }
 }
+
+/// `configure`'s and `start`'s `shared` field: the harness offers protocol 3
+/// on these descriptors.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SharedOffer {
+    pub memfd: u32,
+    pub wake_iut: u32,
+    pub wake_harness: u32,
+    pub size: u64,
+}
+
+impl SharedOffer {
+    /// The field as it must come when it comes: an object, never `null`
+    /// (the schema's word; serde would take `null` as absent).
+    pub fn not_null<'de, D: serde::Deserializer<'de>>(
+        deserializer: D,
+    ) -> Result<Option<SharedOffer>, D::Error> {
+        SharedOffer::deserialize(deserializer).map(Some)
+    }
+}

@@ -9,7 +9,7 @@ mod frame;
 mod step;
 
 pub use client::WireMessage;
-pub use config::{Action, Caps, Config, Filter, Format, OwnedBus, Queue, Status};
+pub use config::{Action, Caps, Config, Filter, Format, OwnedBus, Queue, SharedOffer, Status};
 pub use frame::{Hex, InvalidWireFrame, Transmitted, WireFrame};
 pub use step::{BusEvent, PlannedFrame, StepLine, StepTag, SteppedLine, SteppedTag};
 
@@ -17,8 +17,8 @@ use canif_model::Nanos;
 use serde::{Deserialize, Serialize};
 
 /// The highest protocol version this harness speaks; `configure` offers it
-/// and the IUT answers the version it will speak (1 or 2).
-pub const PROTOCOL_VERSION: u64 = 2;
+/// and the IUT answers the version it will speak (1, 2 or 3).
+pub const PROTOCOL_VERSION: u64 = 3;
 
 /// What the harness asks.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -30,6 +30,13 @@ pub enum Request {
         capabilities: Caps,
         #[serde(default, skip_serializing_if = "Option::is_none")]
         bus: Option<OwnedBus>,
+        /// Version 3 offered: the descriptors of the shared mapping.
+        #[serde(
+            default,
+            deserialize_with = "SharedOffer::not_null",
+            skip_serializing_if = "Option::is_none"
+        )]
+        shared: Option<SharedOffer>,
     },
     Cycle {
         now_ns: Nanos,
@@ -59,6 +66,13 @@ pub enum Request {
     Start {
         protocol: u64,
         config: Config,
+        /// Version 3 offered: the descriptors of the shared mapping.
+        #[serde(
+            default,
+            deserialize_with = "SharedOffer::not_null",
+            skip_serializing_if = "Option::is_none"
+        )]
+        shared: Option<SharedOffer>,
     },
     /// Client role: one PLC task: the input image as the master delivers
     /// it, the output buffer as the master hands it, the application's send
@@ -107,6 +121,7 @@ pub struct Configured {
     pub accepted: bool,
     pub reason: Option<String>,
     pub declares: std::collections::BTreeMap<String, String>,
+    pub steps: Option<bool>,
 }
 
 /// The fields of a `started` answer.
@@ -114,6 +129,7 @@ pub struct Configured {
 pub struct Started {
     pub protocol: u64,
     pub tells_sent: Option<bool>,
+    pub restarts: Option<bool>,
     pub declares: std::collections::BTreeMap<String, String>,
 }
 
@@ -130,6 +146,11 @@ pub enum Answer {
         /// (docs/choices.md), choice name to value.
         #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
         declares: std::collections::BTreeMap<String, String>,
+        /// Version 3: whether the device answers `step` records (it tells
+        /// its plan, as in version 2; the default) or one record per bus
+        /// event (as in version 1: a device that can only be polled).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        steps: Option<bool>,
     },
     Inputs {
         inputs: Hex,
@@ -155,6 +176,11 @@ pub enum Answer {
         tells_sent: Option<bool>,
         #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
         declares: std::collections::BTreeMap<String, String>,
+        /// Each `start` begins a new program in this process, nothing of the
+        /// one before kept: canif may hand the next program's `start` to
+        /// this process instead of starting another (`true`), or not.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        restarts: Option<bool>,
     },
     /// Client role: the output image the task left, the messages it
     /// delivered to its application, the requests (by index) it cannot send,
@@ -202,11 +228,13 @@ impl Answer {
                 accepted,
                 reason,
                 declares,
+                steps,
             } => Ok(Configured {
                 protocol,
                 accepted,
                 reason,
                 declares,
+                steps,
             }),
             other => Err(other),
         },
@@ -251,10 +279,12 @@ impl Answer {
                 protocol,
                 tells_sent,
                 declares,
+                restarts,
             } => Ok(Started {
                 protocol,
                 tells_sent,
                 declares,
+                restarts,
             }),
             other => Err(other),
         },
@@ -376,6 +406,7 @@ mod tests {
             r#"{"type":"transmit","frame":null,"next_ns":null}"#
         );
         let configured = Answer::Configured {
+            steps: None,
             declares: Default::default(),
             protocol: 1,
             accepted: false,

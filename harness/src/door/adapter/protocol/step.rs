@@ -19,6 +19,20 @@ pub enum BusEvent {
     Status { status: Status },
 }
 
+impl BusEvent {
+    /// The version 1 request that says the same (a step's `started` is
+    /// that version's `poll_transmit`).
+    pub fn into_request(self) -> super::Request {
+        use super::Request;
+        match self {
+            BusEvent::Received { frame, end_ns } => Request::Receive { frame, end_ns },
+            BusEvent::Started { at_ns } => Request::PollTransmit { now_ns: at_ns },
+            BusEvent::Completed => Request::TransmitComplete {},
+            BusEvent::Status { status } => Request::ControllerStatus { status },
+        }
+    }
+}
+
 /// A [`BusEvent`] as the line carries it: `{"event": KIND, …}`. Read as a
 /// flat struct, then checked, so the many events of a step are not buffered
 /// twice (as an internally tagged enum would be).

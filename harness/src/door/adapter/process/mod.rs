@@ -17,8 +17,11 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use super::lines::{Line, LineReader};
-use super::protocol::{Answer, Expected, Request};
+use super::protocol::{Answer, Expected, Request, SharedOffer};
+use super::shared::HarnessEnd;
 use super::CONTROL_FDS;
+
+mod shared;
 use crate::door::Timeouts;
 use crate::error::{IutCause, IutError};
 
@@ -98,11 +101,15 @@ pub(crate) struct AdapterProcess {
     started: bool,
     /// The first failure; every later call reports it.
     failed: Option<IutError>,
+    /// Protocol 3's mapping and wake-ups, handed to the process at its start.
+    shared: Option<HarnessEnd>,
 }
 
 impl AdapterProcess {
     /// Starts `command` (through `sh -c`) in a new process group; with
-    /// `same_cpu`, the calling thread and the IUT share the CPU the thread is on.
+    /// `same_cpu`, the calling thread and the IUT share the CPU the thread is
+    /// on. It is handed protocol 3's mapping and eventfds (`shared::SHARED_FDS`),
+    /// to use if it agrees to version 3.
     pub(crate) fn spawn(
         command: &str,
         timeouts: Timeouts,
@@ -129,6 +136,8 @@ impl AdapterProcess {
             .process_group(0);
         // The control channel's far ends, kept open until the host has them.
         let mut far_ends: Vec<OwnedFd> = Vec::new();
+        let shared = HarnessEnd::new().map_err(|e| broken("shared memory", e))?;
+        let mut handed = shared.handed().to_vec();
         let control = match channel {
             Channel::Stdio => {
                 sh.stdin(Stdio::piped());
@@ -139,13 +148,8 @@ impl AdapterProcess {
                 let (answers, host_writes) = std::io::pipe().map_err(|e| broken("pipe", e))?;
                 far_ends.push(host_reads.into());
                 far_ends.push(host_writes.into());
-                canif_cabi::isolation::hand_over(
-                    &mut sh,
-                    &[
-                        (far_ends[0].as_fd(), CONTROL_FDS.0),
-                        (far_ends[1].as_fd(), CONTROL_FDS.1),
-                    ],
-                );
+                handed.push((far_ends[0].as_fd(), CONTROL_FDS.0));
+                handed.push((far_ends[1].as_fd(), CONTROL_FDS.1));
                 sh.stdin(Stdio::null());
                 Some((
                     File::from(OwnedFd::from(requests)),
@@ -153,6 +157,8 @@ impl AdapterProcess {
                 ))
             }
         };
+        canif_cabi::isolation::hand_over(&mut sh, &handed);
+        drop(handed);
         let mut child = sh.spawn().map_err(|e| {
             IutError::new(
                 IutCause::NotStarted,
@@ -193,7 +199,19 @@ impl AdapterProcess {
             timeouts,
             started: false,
             failed: None,
+            shared: Some(shared),
         })
+    }
+
+    /// Whether nothing has gone wrong with it yet (a process that failed
+    /// once is never asked again).
+    pub(crate) fn is_sound(&self) -> bool {
+        self.failed.is_none()
+    }
+
+    /// What `configure` and `start` offer for protocol 3.
+    pub(crate) fn shared_offer(&self) -> Option<SharedOffer> {
+        self.shared.as_ref().map(|_| HarnessEnd::offer())
     }
 
     /// Ends the IUT and everything it started: the tree below it (see
@@ -292,23 +310,9 @@ impl AdapterProcess {
         self.failed.get_or_insert(error).clone()
     }
 
-    /// Sends one request and waits for the one-line answer `expected`.
-    pub(crate) fn exchange<T>(
-        &mut self,
-        request: &Request,
-        expected: Expected<T>,
-    ) -> Result<T, IutError> {
-        let line = self.exchange_line(request)?;
-        self.answer_of(&line, expected)
-    }
-
-    /// Sends one request; its answer line, unread.
-    pub(crate) fn exchange_line(&mut self, request: &Request) -> Result<String, IutError> {
-        if let Some(failure) = &self.failed {
-            return Err(failure.clone());
-        }
-        // A line already waiting answers nothing the harness asked: read as
-        // the next answer, it would desynchronise every exchange after it.
+    /// A line already waiting answers nothing the harness asked: read as
+    /// the next answer, it would desynchronise every exchange after it.
+    fn no_stray_line(&mut self, request: &Request) -> Result<(), IutError> {
         match self.lines.next(Duration::ZERO) {
             Line::Text(stray) => {
                 self.kill();
@@ -340,6 +344,25 @@ impl AdapterProcess {
             // Nothing waiting; a closed stdout shows at the answer.
             Line::Silent | Line::Closed => {}
         }
+        Ok(())
+    }
+
+    /// Sends one request and waits for the one-line answer `expected`.
+    pub(crate) fn exchange<T>(
+        &mut self,
+        request: &Request,
+        expected: Expected<T>,
+    ) -> Result<T, IutError> {
+        let line = self.exchange_line(request)?;
+        self.answer_of(&line, expected)
+    }
+
+    /// Sends one request; its answer line, unread.
+    pub(crate) fn exchange_line(&mut self, request: &Request) -> Result<String, IutError> {
+        if let Some(failure) = &self.failed {
+            return Err(failure.clone());
+        }
+        self.no_stray_line(request)?;
         let mut line = serde_json::to_vec(request).expect("requests serialize");
         line.push(b'\n');
         // One write per request: the IUT wakes once.
@@ -441,6 +464,17 @@ impl AdapterProcess {
                 return Err(self.fail(IutCause::Protocol, format!("{what}: {}", truncate(line))))
             }
         };
+        self.take(answer, expected, line)
+    }
+
+    /// The fields of the answer `expected`; an error answer is the IUT's
+    /// report, any other a broken exchange (`shown`: the answer as it came).
+    fn take<T>(
+        &mut self,
+        answer: Answer,
+        expected: Expected<T>,
+        shown: &str,
+    ) -> Result<T, IutError> {
         match (expected.take)(answer) {
             Ok(fields) => Ok(fields),
             Err(Answer::Error { message }) => {
@@ -452,7 +486,7 @@ impl AdapterProcess {
                     "answered `{}` where `{}` was due: {}",
                     other.name(),
                     expected.name,
-                    truncate(line)
+                    truncate(shown)
                 ),
             )),
         }
