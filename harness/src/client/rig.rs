@@ -372,6 +372,7 @@ fn drive(
                 Event::Arrive(frame) => device.schedule(time + period / 4, *frame),
                 Event::OverstateRxCount => overstate = true,
                 Event::PlcRestart => {
+                    end_program(&mut client);
                     client = built(layout)?;
                     declared(&record.declared, client.as_ref())?;
                     exchange.client_restarted();
@@ -381,6 +382,7 @@ fn drive(
                 // The master runs on: its buffers keep what the old program
                 // wrote, and the new one's first tasks are handed those.
                 Event::ModuleRestart => {
+                    end_program(&mut client);
                     client = built(layout)?;
                     declared(&record.declared, client.as_ref())?;
                     judge.plc_restarted(device_saw);
@@ -512,6 +514,27 @@ fn drive(
         tracker.breached(judge.finish(device.queued_rx()));
     }
     Ok(())
+}
+
+/// Ends the running program before the next starts, as a restart does (and
+/// a process that runs one program after another is free for the next).
+fn end_program(client: &mut Box<dyn Client>) {
+    drop(std::mem::replace(client, Box::new(BetweenPrograms)));
+}
+
+/// What stands between a program that ended and the next: never asked.
+struct BetweenPrograms;
+
+impl Client for BetweenPrograms {
+    fn task(
+        &mut self,
+        _: crate::door::client::TaskIo<'_>,
+    ) -> Result<crate::door::client::TaskAnswer, IutError> {
+        Err(IutError::new(
+            crate::error::IutCause::HarnessBug,
+            "a task between two programs",
+        ))
+    }
 }
 
 /// What the run holds the client to: what was declared before and what this
