@@ -88,8 +88,12 @@ impl ExecIut {
     fn exchange<T>(&mut self, request: &Request, expected: Expected<T>) -> Result<T, IutError> {
         match self.version {
             3 => {
-                let events = std::mem::take(&mut self.events);
-                self.process.exchange_shared(&events, request, expected)
+                // The buffer goes back, emptied, to gather the next events.
+                let mut events = std::mem::take(&mut self.events);
+                let answer = self.process.exchange_shared(&events, request, expected);
+                events.clear();
+                self.events = events;
+                answer
             }
             _ => self.process.exchange(request, expected),
         }

@@ -85,10 +85,8 @@ impl AdapterProcess {
             None => Err("no shared mapping".to_string()),
         };
         match answer {
-            Ok(answer) => {
-                let shown = format!("a `{}` record", answer.name());
-                self.take(answer, expected, &shown)
-            }
+            // (The answer's kind is named by `take` where it is not the one due.)
+            Ok(answer) => self.take(answer, expected, "(a record in shared memory)"),
             Err(why) => Err(self.fail(
                 IutCause::Protocol,
                 format!("wrote a record that is no answer: {why}"),

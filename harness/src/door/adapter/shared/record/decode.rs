@@ -157,12 +157,15 @@ impl<'a> Decoded<'a> {
                 inputs: Hex(self.inputs),
             },
             kind::TRANSMIT => {
-                let frame = match self.slots().collect::<Vec<_>>().as_slice() {
-                    [] => None,
-                    [(tag::FRAME, slot)] => Some(Transmitted::Frame(get_frame(slot))),
-                    [(tag::INVALID, slot)] => Some(Transmitted::Invalid(InvalidWireFrame {
-                        invalid: get_text(slot)?,
-                    })),
+                let mut slots = self.slots();
+                let frame = match (slots.next(), slots.next()) {
+                    (None, _) => None,
+                    (Some((tag::FRAME, slot)), None) => Some(Transmitted::Frame(get_frame(slot))),
+                    (Some((tag::INVALID, slot)), None) => {
+                        Some(Transmitted::Invalid(InvalidWireFrame {
+                            invalid: get_text(slot)?,
+                        }))
+                    }
                     _ => return Err("a `transmit` record holds one frame or none".into()),
                 };
                 Answer::Transmit {

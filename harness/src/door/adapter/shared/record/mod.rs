@@ -73,7 +73,9 @@ struct Builder {
 
 impl Builder {
     fn new(kind: u32, time: u64) -> Builder {
-        let mut record = vec![0u8; record::ENTRIES];
+        // Room for a cycle's events at once: one allocation, not one per entry.
+        let mut record = Vec::with_capacity(record::ENTRIES + 32 * entry::SIZE);
+        record.resize(record::ENTRIES, 0);
         put(&mut record, record::KIND, kind.into());
         put(&mut record, record::TIME, time);
         Builder {

@@ -1,6 +1,7 @@
 //! Every record read back as written, and broken ones refused.
 
 use super::*;
+use crate::door::adapter::protocol::{InvalidWireFrame, PlannedFrame, Status};
 
 fn frame(id: u32, data: &[u8]) -> WireFrame {
     WireFrame {
