@@ -93,8 +93,8 @@ impl Iut for Ordered {
         self.inner.controller_status(status)
     }
 
-    fn transmit_plan(&self, now: Nanos) -> Option<Vec<Planned>> {
-        self.inner.transmit_plan(now)
+    fn transmit_plan(&self, now: Nanos, most: usize) -> Option<Vec<Planned>> {
+        self.inner.transmit_plan(now, most)
     }
     fn exchange_with(&mut self, mode: canif_model::exchange::ExchangeMode) {
         self.inner.exchange_with(mode);

@@ -40,10 +40,11 @@ pub trait Iut {
     fn controller_status(&mut self, status: &ControllerStatus) -> Result<(), IutError>;
     /// The frames the controller would start from `now` on, in order, if the
     /// bus let it and nothing else happened, each with the earliest time it may
-    /// start; the frame on the wire, if any, is not among them. Adapter
-    /// protocol 2 asks for this once per cycle. `None`: the IUT cannot tell.
-    fn transmit_plan(&self, now: Nanos) -> Option<Vec<Planned>> {
-        let _ = now;
+    /// start; the frame on the wire, if any, is not among them; at most
+    /// `most` of them. Adapter protocols 2 and 3 ask for this once per cycle.
+    /// `None`: the IUT cannot tell.
+    fn transmit_plan(&self, now: Nanos, most: usize) -> Option<Vec<Planned>> {
+        let _ = (now, most);
         None
     }
     /// How the played master exchanges the process data (003): a device
@@ -70,13 +71,14 @@ pub trait Iut {
 pub type Planned = (Result<Frame, InvalidFrame>, Nanos);
 
 /// How many frames a plan lists at most: more than a controller's queue holds.
-const MOST_PLANNED: usize = 4_096;
+pub(crate) const MOST_PLANNED: usize = 4_096;
 
 /// The plan of a device that can be cloned: a copy of it is let send
 /// everything, as the real one would if the bus took each frame at once.
 fn plan_by_rehearsal<D: Clone>(
     device: &D,
     now: Nanos,
+    most: usize,
     mut poll: impl FnMut(&mut D, Nanos) -> Option<Result<Frame, InvalidFrame>>,
     mut done: impl FnMut(&mut D),
     due: impl Fn(&D) -> Option<Nanos>,
@@ -84,7 +86,7 @@ fn plan_by_rehearsal<D: Clone>(
     let mut rehearsal = device.clone();
     done(&mut rehearsal); // the frame on the wire, if any, is not planned
     let (mut plan, mut t) = (Vec::new(), now);
-    while plan.len() < MOST_PLANNED {
+    while plan.len() < most.min(MOST_PLANNED) {
         match poll(&mut rehearsal, t) {
             Some(frame) => {
                 plan.push((frame, t));
@@ -145,10 +147,11 @@ impl Iut for ModelIut {
         self.0.handle_controller_status(*status);
         Ok(())
     }
-    fn transmit_plan(&self, now: Nanos) -> Option<Vec<Planned>> {
+    fn transmit_plan(&self, now: Nanos, most: usize) -> Option<Vec<Planned>> {
         Some(plan_by_rehearsal(
             &self.0,
             now,
+            most,
             |d, t| d.poll_transmit(t).map(Ok),
             Device::handle_transmit_complete,
             Device::poll_timeout,
@@ -207,8 +210,8 @@ impl<D: BorrowMut<SoftDevice>> Iut for SoftDeviceIut<D> {
         soft_controller::status(self.0.borrow_mut(), status);
         Ok(())
     }
-    fn transmit_plan(&self, now: Nanos) -> Option<Vec<Planned>> {
-        Some(soft_controller::plan(self.0.borrow(), now))
+    fn transmit_plan(&self, now: Nanos, most: usize) -> Option<Vec<Planned>> {
+        Some(soft_controller::plan(self.0.borrow(), now, most))
     }
 }
 
@@ -243,10 +246,11 @@ pub(crate) mod soft_controller {
         }
     }
 
-    pub(crate) fn plan(device: &SoftDevice, now: Nanos) -> Vec<Planned> {
+    pub(crate) fn plan(device: &SoftDevice, now: Nanos, most: usize) -> Vec<Planned> {
         plan_by_rehearsal(
             device,
             now,
+            most,
             |d, t| d.controller_idle(t).map(|f| from_soft(&f)),
             SoftDevice::tx_done_interrupt,
             SoftDevice::next_release,

@@ -566,12 +566,12 @@ impl Iut for EthercatIut {
         self.controller(|d| soft_controller::status(d, status))
     }
 
-    fn transmit_plan(&self, now: Nanos) -> Option<Vec<Planned>> {
+    fn transmit_plan(&self, now: Nanos, most: usize) -> Option<Vec<Planned>> {
         let terminal = lock(self.terminal.as_ref()?);
         terminal
             .application
             .device()
-            .map(|d| soft_controller::plan(d, now))
+            .map(|d| soft_controller::plan(d, now, most))
     }
 
     fn exchange_with(&mut self, mode: ExchangeMode) {

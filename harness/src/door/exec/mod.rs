@@ -46,6 +46,9 @@ pub struct ExecIut {
     events: Vec<BusEvent>,
     /// Protocol 2: the frames the IUT will start next, and from when.
     plan: VecDeque<Planned>,
+    /// Protocol 3: the plan was cut short; the rest is asked for once these
+    /// frames have started.
+    more: bool,
     /// Protocol 2: a frame of the plan is on the wire.
     on_wire: bool,
     /// What it declared in its `configured` answer.
@@ -74,6 +77,7 @@ impl ExecIut {
             batched: false,
             events: Vec::new(),
             plan: VecDeque::new(),
+            more: false,
             on_wire: false,
             declared: Declared::default(),
         })
@@ -148,6 +152,7 @@ impl ExecIut {
         self.batched = protocol == 2 || (protocol == 3 && configured.steps != Some(false));
         self.events.clear();
         self.plan.clear();
+        self.more = false;
         self.on_wire = false;
         self.input_size = layout.input_size();
         Ok(if accepted {
@@ -165,16 +170,34 @@ impl ExecIut {
             outputs: Hex(outputs.to_vec()),
             events: std::mem::take(&mut self.events),
         };
-        let (inputs, plan) = if self.version == 3 {
+        let (inputs, plan, more) = if self.version == 3 {
             self.process
                 .exchange_shared(&[], &request, Answer::STEPPED)?
         } else {
             let line = self.process.exchange_line(&request)?;
             match serde_json::from_str::<SteppedLine>(&line) {
-                Ok(stepped) => (stepped.inputs, stepped.plan),
+                Ok(stepped) => (stepped.inputs, stepped.plan, false),
                 Err(_) => self.process.answer_of(&line, Answer::STEPPED)?,
             }
         };
+        self.take_plan(plan, more)?;
+        Ok(inputs.0)
+    }
+
+    /// Protocol 3: the rest of a plan cut short, after the bus events since.
+    fn refill(&mut self, now: Nanos) -> Result<(), IutError> {
+        let request = Request::Plan {
+            now_ns: now,
+            events: std::mem::take(&mut self.events),
+        };
+        let (_, plan, more) = self
+            .process
+            .exchange_shared(&[], &request, Answer::STEPPED)?;
+        self.take_plan(plan, more)
+    }
+
+    /// The plan an answer gave, checked frame by frame, in place of the old.
+    fn take_plan(&mut self, plan: Vec<PlannedFrame>, more: bool) -> Result<(), IutError> {
         let mut planned = VecDeque::with_capacity(plan.len());
         for PlannedFrame {
             frame,
@@ -203,7 +226,8 @@ impl ExecIut {
             planned.push_back((frame, not_before_ns));
         }
         self.plan = planned;
-        Ok(inputs.0)
+        self.more = more;
+        Ok(())
     }
 }
 
@@ -254,6 +278,9 @@ impl Iut for ExecIut {
         if self.batched {
             if self.on_wire {
                 return Ok(None);
+            }
+            if self.plan.is_empty() && self.more {
+                self.refill(now)?;
             }
             return Ok(match self.plan.front() {
                 Some((_, not_before)) if *not_before <= now => {

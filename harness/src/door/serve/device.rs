@@ -93,6 +93,12 @@ impl<'a> Server<'a> {
     /// The answer to one request; `None` for `bye`.
     pub fn answer(&mut self, request: &Request) -> Option<Answer> {
         let batched = self.batched();
+        // In records (version 3) a plan is cut after what one cycle can
+        // start, the rest asked for when needed; on lines it is whole.
+        let most = match self.version {
+            3 => PLAN_IN_RECORDS,
+            _ => crate::door::iut::MOST_PLANNED,
+        };
         let iut = match (request, self.iut.as_mut()) {
             (Request::Bye {}, _) => return None,
             (Request::Start { .. } | Request::Task { .. }, _) => {
@@ -133,6 +139,9 @@ impl<'a> Server<'a> {
                 return Some(self.configure(&capabilities.into(), &config.interface()));
             }
             (_, None) => return Some(Answer::error("configure first")),
+            (Request::Plan { .. }, Some(_)) if !batched || self.version < 3 => {
+                return Some(Answer::error("`plan` is a record of version 3 in steps"))
+            }
             (Request::Step { .. }, Some(_)) if !batched => {
                 return Some(Answer::error(format!(
                     "`step` is for a device that tells its plan; configure agreed on version {} without it",
@@ -180,10 +189,16 @@ impl<'a> Server<'a> {
                 now_ns,
                 outputs,
                 events,
-            } => match step(iut.as_mut(), *now_ns, &outputs.0, events) {
+            } => match step(iut.as_mut(), *now_ns, Some(&outputs.0), events, most) {
                 Ok(answer) => answer,
                 Err(error) => Answer::error(error.to_string()),
             },
+            Request::Plan { now_ns, events } => {
+                match step(iut.as_mut(), *now_ns, None, events, most) {
+                    Ok(answer) => answer,
+                    Err(error) => Answer::error(error.to_string()),
+                }
+            }
             Request::Configure { .. }
             | Request::Bye {}
             | Request::Start { .. }
@@ -232,13 +247,20 @@ impl<'a> Server<'a> {
     }
 }
 
-/// Protocol 2: the step's bus events replayed in order — exactly the calls
-/// protocol 1 would have made — then the cycle, then the plan.
+/// The most frames of a plan one `stepped` record carries: more than a cycle
+/// of 1 ms starts at 1 Mbit/s (about eight), few enough that a long queue is
+/// not written and read again every cycle.
+const PLAN_IN_RECORDS: usize = 16;
+
+/// Protocols 2 and 3: the step's bus events replayed in order — exactly the
+/// calls protocol 1 would have made — then the cycle (none for the rest of a
+/// plan: `outputs` is `None`), then at most `most` frames of the plan.
 fn step(
     iut: &mut dyn Iut,
     now: Nanos,
-    outputs: &[u8],
+    outputs: Option<&[u8]>,
     events: &[BusEvent],
+    most: usize,
 ) -> Result<Answer, IutError> {
     for event in events {
         match event {
@@ -262,16 +284,23 @@ fn step(
             BusEvent::Status { status } => iut.controller_status(&status.into())?,
         }
     }
-    let inputs = iut.cycle(outputs, now)?;
-    let plan = iut.transmit_plan(now).ok_or_else(|| {
+    let inputs = match outputs {
+        Some(outputs) => iut.cycle(outputs, now)?,
+        None => Vec::new(),
+    };
+    // One past the most: whether the plan goes on.
+    let mut plan = iut.transmit_plan(now, most + 1).ok_or_else(|| {
         IutError::new(
             IutCause::Impossible,
-            "this device cannot tell its plan (protocol 2)",
+            "this device cannot tell its plan (protocols 2 and 3)",
         )
     })?;
+    let more = plan.len() > most;
+    plan.truncate(most);
     Ok(Answer::Stepped {
         inputs: Hex(inputs),
         plan: plan.into_iter().map(planned).collect(),
+        more,
     })
 }
 

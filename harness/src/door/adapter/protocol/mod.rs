@@ -61,6 +61,13 @@ pub enum Request {
         outputs: Hex,
         events: Vec<BusEvent>,
     },
+    /// Version 3, a record only (never a line): the rest of a plan a
+    /// `stepped` cut short, after the bus events since — no cycle.
+    #[serde(skip)]
+    Plan {
+        now_ns: Nanos,
+        events: Vec<BusEvent>,
+    },
     /// Client role: a PLC program starts for this interface (a fresh one
     /// after each PLC restart: a new process).
     Start {
@@ -96,6 +103,7 @@ impl Request {
             Request::TransmitComplete {} => "transmit_complete",
             Request::ControllerStatus { .. } => "controller_status",
             Request::Step { .. } => "step",
+            Request::Plan { .. } => "plan",
             Request::Start { .. } => "start",
             Request::Task { .. } => "task",
             Request::Bye {} => "bye",
@@ -110,6 +118,7 @@ impl Request {
                 | Request::PollTransmit { .. }
                 | Request::TransmitComplete {}
                 | Request::Step { .. }
+                | Request::Plan { .. }
         )
     }
 }
@@ -166,6 +175,10 @@ pub enum Answer {
     Stepped {
         inputs: Hex,
         plan: Vec<PlannedFrame>,
+        /// Version 3: the plan goes on past these frames; the harness asks
+        /// for the rest (`plan`) when it has started them.
+        #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+        more: bool,
     },
     /// Client role: the program runs, speaking this version; it may say
     /// whether it tells its application which Tx messages were sent, and
@@ -263,10 +276,10 @@ impl Answer {
         },
     };
     /// `stepped`: the input image and the plan of a version 2 step.
-    pub const STEPPED: Expected<(Hex, Vec<PlannedFrame>)> = Expected {
+    pub const STEPPED: Expected<(Hex, Vec<PlannedFrame>, bool)> = Expected {
         name: "stepped",
         take: |answer| match answer {
-            Answer::Stepped { inputs, plan } => Ok((inputs, plan)),
+            Answer::Stepped { inputs, plan, more } => Ok((inputs, plan, more)),
             other => Err(other),
         },
     };

@@ -129,6 +129,10 @@ impl<'a> Decoded<'a> {
                 events: self.events()?,
                 outputs: Hex(self.outputs),
             },
+            kind::PLAN => Request::Plan {
+                now_ns: time,
+                events: self.events()?,
+            },
             kind::TASK => {
                 let mut requests = Vec::new();
                 for (tag, slot) in self.slots() {
@@ -194,6 +198,7 @@ impl<'a> Decoded<'a> {
                 Answer::Stepped {
                     inputs: Hex(self.inputs),
                     plan,
+                    more: self.time == 1,
                 }
             }
             kind::TASKED => {

@@ -24,6 +24,7 @@ pub mod kind {
     pub const CONTROLLER_STATUS: u32 = 5;
     pub const STEP: u32 = 6;
     pub const TASK: u32 = 7;
+    pub const PLAN: u32 = 8;
     pub const OK: u32 = 101;
     pub const ERROR: u32 = 102;
     pub const INPUTS: u32 = 103;
@@ -325,6 +326,13 @@ pub fn encode_request(request: &Request) -> Result<Encoded, String> {
             }
             record
         }
+        Request::Plan { now_ns, events } => {
+            let mut record = Builder::new(kind::PLAN, *now_ns);
+            for event in events {
+                record.event(event);
+            }
+            record
+        }
         Request::Task {
             inputs,
             outputs,
@@ -372,8 +380,8 @@ pub fn encode_answer(answer: &Answer) -> Result<Encoded, String> {
             }
             record
         }
-        Answer::Stepped { inputs, plan } => {
-            let mut record = Builder::new(kind::STEPPED, 0).inputs(&inputs.0);
+        Answer::Stepped { inputs, plan, more } => {
+            let mut record = Builder::new(kind::STEPPED, u64::from(*more)).inputs(&inputs.0);
             for planned in plan {
                 match (&planned.frame, &planned.invalid) {
                     (Some(frame), _) => {

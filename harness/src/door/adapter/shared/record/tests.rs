@@ -76,6 +76,10 @@ fn every_hot_request_reads_back_as_written() {
                 },
             ],
         },
+        Request::Plan {
+            now_ns: 8,
+            events: vec![BusEvent::Started { at_ns: 7 }, BusEvent::Completed],
+        },
         Request::Task {
             inputs: Hex(vec![4; 12]),
             outputs: Hex(vec![5; 10]),
@@ -126,6 +130,7 @@ fn every_hot_answer_reads_back_as_written() {
                     not_before_ns: 6,
                 },
             ],
+            more: true,
         },
         Answer::Tasked {
             outputs: Hex(vec![3; 14]),
