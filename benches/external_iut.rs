@@ -33,6 +33,14 @@ fn main() {
     soak.bit_rates = BitRates::classic(1_000_000);
     let device = env!("CARGO_BIN_EXE_canif");
     let library = c_example();
+    // `canif device --stdio` over protocol `version`, on the harness's CPU or any.
+    let stdio = |version: u8, same_cpu: bool| {
+        IutKind::Door(Door::Exec {
+            command: format!("{device} device --stdio --protocol {version}"),
+            timeouts: Timeouts::with_request(std::time::Duration::from_millis(10_000)),
+            same_cpu,
+        })
+    };
     let iuts = [
         (
             "soft device in process",
@@ -58,38 +66,10 @@ fn main() {
                 }),
             }),
         ),
-        (
-            "canif device --stdio, protocol 3",
-            IutKind::Door(Door::Exec {
-                command: format!("{device} device --stdio --protocol 3"),
-                timeouts: Timeouts::with_request(std::time::Duration::from_millis(10_000)),
-                same_cpu: false,
-            }),
-        ),
-        (
-            "the same, IUT on the harness's CPU",
-            IutKind::Door(Door::Exec {
-                command: format!("{device} device --stdio --protocol 3"),
-                timeouts: Timeouts::with_request(std::time::Duration::from_millis(10_000)),
-                same_cpu: true,
-            }),
-        ),
-        (
-            "canif device --stdio, protocol 2",
-            IutKind::Door(Door::Exec {
-                command: format!("{device} device --stdio --protocol 2"),
-                timeouts: Timeouts::with_request(std::time::Duration::from_millis(10_000)),
-                same_cpu: true,
-            }),
-        ),
-        (
-            "canif device --stdio, protocol 1",
-            IutKind::Door(Door::Exec {
-                command: format!("{device} device --stdio --protocol 1"),
-                timeouts: Timeouts::with_request(std::time::Duration::from_millis(10_000)),
-                same_cpu: true,
-            }),
-        ),
+        ("canif device --stdio, protocol 3", stdio(3, false)),
+        ("the same, IUT on the harness's CPU", stdio(3, true)),
+        ("canif device --stdio, protocol 2", stdio(2, true)),
+        ("canif device --stdio, protocol 1", stdio(1, true)),
     ];
     // CANIF_BENCH_ONLY=TEXT: the in-process row and those whose label holds
     // TEXT (for profiling one door).

@@ -50,8 +50,6 @@ pub(crate) struct ExecClient {
     layout: ImageLayout,
     /// What its `started` answer declared.
     declaration: ClientDeclaration,
-    /// The version `started` agreed.
-    protocol: u64,
 }
 
 impl ExecClient {
@@ -80,6 +78,7 @@ impl ExecClient {
                 format!("speaks client protocol version {protocol} (this harness speaks 1 and 3)"),
             ));
         }
+        process.agree_shared(protocol == 3);
         let lines: Vec<String> = started
             .tells_sent
             .map(|tells| format!("tells-sent={}", if tells { "yes" } else { "no" }))
@@ -102,7 +101,6 @@ impl ExecClient {
             channel,
             layout,
             declaration,
-            protocol,
         })
     }
 }
@@ -151,12 +149,9 @@ impl Client for ExecClient {
             delivered,
             refused,
             sent,
-        } = match self.protocol {
-            3 => self
-                .process()
-                .exchange_shared(&[], &request, Answer::TASKED)?,
-            _ => self.process().exchange(&request, Answer::TASKED)?,
-        };
+        } = self
+            .process()
+            .exchange_record(&[], &request, Answer::TASKED)?;
         if outputs.0.len() != size {
             return Err(self.process().fail(
                 IutCause::Impossible,

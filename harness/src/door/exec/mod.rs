@@ -87,20 +87,15 @@ impl ExecIut {
         self.process.fail(cause, what)
     }
 
-    /// One request and its answer: in the shared mapping (version 3, after
-    /// the bus events gathered since the last record), or on the lines.
+    /// One request and its answer where the agreed version carries it; in
+    /// version 3 after the bus events gathered since the last record.
     fn exchange<T>(&mut self, request: &Request, expected: Expected<T>) -> Result<T, IutError> {
-        match self.version {
-            3 => {
-                // The buffer goes back, emptied, to gather the next events.
-                let mut events = std::mem::take(&mut self.events);
-                let answer = self.process.exchange_shared(&events, request, expected);
-                events.clear();
-                self.events = events;
-                answer
-            }
-            _ => self.process.exchange(request, expected),
-        }
+        // The buffer goes back, emptied, to gather the next events.
+        let mut events = std::mem::take(&mut self.events);
+        let answer = self.process.exchange_record(&events, request, expected);
+        events.clear();
+        self.events = events;
+        answer
     }
 
     /// The bus events wait for the next record or step instead of a line
@@ -149,6 +144,7 @@ impl ExecIut {
             ));
         }
         self.version = protocol;
+        self.process.agree_shared(protocol == 3);
         self.batched = protocol == 2 || (protocol == 3 && configured.steps != Some(false));
         self.events.clear();
         self.plan.clear();
@@ -172,7 +168,7 @@ impl ExecIut {
         };
         let (inputs, plan, more) = if self.version == 3 {
             self.process
-                .exchange_shared(&[], &request, Answer::STEPPED)?
+                .exchange_record(&[], &request, Answer::STEPPED)?
         } else {
             let line = self.process.exchange_line(&request)?;
             match serde_json::from_str::<SteppedLine>(&line) {
@@ -192,7 +188,7 @@ impl ExecIut {
         };
         let (_, plan, more) = self
             .process
-            .exchange_shared(&[], &request, Answer::STEPPED)?;
+            .exchange_record(&[], &request, Answer::STEPPED)?;
         self.take_plan(plan, more)
     }
 

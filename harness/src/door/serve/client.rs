@@ -12,7 +12,6 @@ use super::session::{self, Serves, Switch};
 use crate::door::adapter::protocol::{
     Answer, Config, Hex, Request, SharedOffer, WireFrame, WireMessage,
 };
-use crate::door::adapter::shared::IutEnd;
 use crate::door::client::{Client, TaskIo};
 use crate::door::lib::client::LibClient;
 
@@ -47,17 +46,12 @@ impl ClientServer<'_> {
         let declared = started.declaration();
         self.client = Some((started, layout));
         // Version 3 where offered and the mapping opens; else 1.
-        let shared = shared.filter(|_| protocol >= 3).map(IutEnd::open);
-        let protocol = match shared {
-            Some(Ok(end)) => {
-                self.switch = Some(Switch::ToShared(end));
-                3
-            }
-            _ => {
-                self.switch = Some(Switch::ToLines);
-                1
-            }
+        let switch = session::agree(protocol, shared);
+        let protocol = match switch {
+            Switch::ToShared(_) => 3,
+            _ => 1,
         };
+        self.switch = Some(switch);
         Answer::Started {
             protocol,
             tells_sent: None,

@@ -4,7 +4,6 @@
 use std::io::{BufRead, Write};
 
 use super::session::{self, Serves, Switch};
-use crate::door::adapter::shared::IutEnd;
 
 use canif_model::config::{Capabilities, InterfaceConfig};
 
@@ -129,13 +128,11 @@ impl<'a> Server<'a> {
                     (version, _) => version,
                 };
                 // Version 3 where the mapping opens; else the best below it.
-                self.switch = Some(Switch::ToLines);
-                if self.version == 3 {
-                    match shared.as_ref().map(IutEnd::open) {
-                        Some(Ok(end)) => self.switch = Some(Switch::ToShared(end)),
-                        _ => self.version = if self.steps { 2 } else { 1 },
-                    }
+                let switch = session::agree(self.version, shared.as_ref());
+                if self.version == 3 && matches!(switch, Switch::ToLines) {
+                    self.version = if self.steps { 2 } else { 1 };
                 }
+                self.switch = Some(switch);
                 return Some(self.configure(&capabilities.into(), &config.interface()));
             }
             (_, None) => return Some(Answer::error("configure first")),

@@ -18,14 +18,10 @@ use crate::door::adapter::CONTROL_FDS;
 /// answers on 4, as canif hands them over. The guard pages' fault report
 /// goes there too, where what the library prints cannot forge it.
 pub fn control_channel() -> std::io::Result<(std::io::BufReader<std::fs::File>, std::fs::File)> {
-    let open = |fd: i32, write: bool| {
-        std::fs::OpenOptions::new()
-            .read(!write)
-            .write(write)
-            .open(format!("/proc/self/fd/{fd}"))
-    };
-    let requests = open(CONTROL_FDS.0, false)?;
-    let answers = open(CONTROL_FDS.1, true)?;
+    // Our own descriptors for the ones handed over (as protocol 3's are).
+    let open = |fd: i32| canif_cabi::shared::inherited(fd).map(std::fs::File::from);
+    let requests = open(CONTROL_FDS.0)?;
+    let answers = open(CONTROL_FDS.1)?;
     canif_cabi::guard::report_to(&answers);
     Ok((std::io::BufReader::new(requests), answers))
 }

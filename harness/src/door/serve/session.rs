@@ -7,7 +7,7 @@
 use std::io::{BufRead, Write};
 use std::os::fd::AsFd;
 
-use crate::door::adapter::protocol::{Answer, BusEvent, Request};
+use crate::door::adapter::protocol::{Answer, BusEvent, Request, SharedOffer};
 use crate::door::adapter::shared::{IutEnd, Next};
 
 /// What serves the requests: a device or a client.
@@ -33,6 +33,15 @@ pub enum Switch {
     ToLines,
 }
 
+/// Version 3 where the harness offered it (`offered` at least 3, with its
+/// descriptors) and the mapping opens; the lines otherwise.
+pub fn agree(offered: u64, shared: Option<&SharedOffer>) -> Switch {
+    match shared.filter(|_| offered >= 3).map(IutEnd::open) {
+        Some(Ok(end)) => Switch::ToShared(end),
+        _ => Switch::ToLines,
+    }
+}
+
 /// Writes one answer as a line.
 pub fn write_answer(output: &mut impl Write, answer: &Answer) -> std::io::Result<()> {
     // Writing an internally tagged enum buffers nothing (only reading does).
@@ -52,11 +61,11 @@ pub fn run(
     mut output: impl Write,
 ) -> std::io::Result<()> {
     // Our own descriptor for the channel, to wait on beside the eventfd.
-    let line = canif_cabi::shared::inherited(line_fd).ok();
+    let line = canif_cabi::shared::inherited(line_fd)?;
     let mut shared: Option<IutEnd> = None;
     let mut bytes = Vec::new();
     loop {
-        if let (Some(end), Some(line)) = (shared.as_mut(), line.as_ref()) {
+        if let Some(end) = shared.as_mut() {
             match end.next(line.as_fd())? {
                 Next::Request(events, request) => {
                     // The events as version 1 sends them, each answered

@@ -17,7 +17,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use super::lines::{Line, LineReader};
-use super::protocol::{Answer, Expected, Request, SharedOffer};
+use super::protocol::{Answer, BusEvent, Expected, Request, SharedOffer};
 use super::shared::HarnessEnd;
 use super::CONTROL_FDS;
 
@@ -103,6 +103,8 @@ pub(crate) struct AdapterProcess {
     failed: Option<IutError>,
     /// Protocol 3's mapping and wake-ups, handed to the process at its start.
     shared: Option<HarnessEnd>,
+    /// The process agreed to version 3: the cycle's requests go there.
+    shared_agreed: bool,
 }
 
 impl AdapterProcess {
@@ -136,8 +138,10 @@ impl AdapterProcess {
             .process_group(0);
         // The control channel's far ends, kept open until the host has them.
         let mut far_ends: Vec<OwnedFd> = Vec::new();
-        let shared = HarnessEnd::new().map_err(|e| broken("shared memory", e))?;
-        let mut handed = shared.handed().to_vec();
+        // Where the system gives no memfd or eventfd, version 3 is not
+        // offered: the lines still are.
+        let shared = HarnessEnd::new().ok();
+        let mut handed: Vec<_> = shared.iter().flat_map(HarnessEnd::handed).collect();
         let control = match channel {
             Channel::Stdio => {
                 sh.stdin(Stdio::piped());
@@ -199,7 +203,8 @@ impl AdapterProcess {
             timeouts,
             started: false,
             failed: None,
-            shared: Some(shared),
+            shared,
+            shared_agreed: false,
         })
     }
 
@@ -207,6 +212,28 @@ impl AdapterProcess {
     /// once is never asked again).
     pub(crate) fn is_sound(&self) -> bool {
         self.failed.is_none()
+    }
+
+    /// What `configure` or `start` agreed: whether the requests of the
+    /// cycle go to the shared mapping ([`Self::exchange_record`]).
+    pub(crate) fn agree_shared(&mut self, agreed: bool) {
+        self.shared_agreed = agreed && self.shared.is_some();
+    }
+
+    /// A request of the cycle and its answer, where the agreed version
+    /// carries it: a record in the shared mapping (after `events`, a polled
+    /// device's bus events), or a line (`events` must then be empty: the
+    /// lines carry them as requests of their own).
+    pub(crate) fn exchange_record<T>(
+        &mut self,
+        events: &[BusEvent],
+        request: &Request,
+        expected: Expected<T>,
+    ) -> Result<T, IutError> {
+        match self.shared_agreed {
+            true => self.exchange_shared(events, request, expected),
+            false => self.exchange(request, expected),
+        }
     }
 
     /// What `configure` and `start` offer for protocol 3.

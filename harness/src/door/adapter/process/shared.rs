@@ -15,7 +15,7 @@ impl AdapterProcess {
     /// [`Self::exchange_line`] watches it for an answer: a host's report of
     /// an access past an image, a line nobody asked for, its end; and the
     /// per-request limit.
-    pub(crate) fn exchange_shared<T>(
+    pub(super) fn exchange_shared<T>(
         &mut self,
         events: &[BusEvent],
         request: &Request,
@@ -45,39 +45,45 @@ impl AdapterProcess {
                 break;
             }
             let line = self.lines.next(Duration::ZERO);
-            let what = match line {
+            let name = request.name();
+            let (cause, what) = match line {
                 Line::Silent if started.elapsed() < limit => continue,
                 Line::Silent => {
                     self.kill();
                     return Err(self.fail(
                         IutCause::Silent,
                         format!(
-                            "no answer to `{}` within {} ms, the per-request limit (--timeout-ms) (hung; killed)",
-                            request.name(),
+                            "no answer to `{name}` within {} ms, the per-request limit (--timeout-ms) (hung; killed)",
                             limit.as_millis()
                         ),
                     ));
                 }
+                // A host's report of an access past an image: `fail` says where.
                 Line::Text(line) if self.reports_outside(&line) => {
-                    format!("while answering `{}`", request.name())
+                    (IutCause::Gone, format!("while answering `{name}`"))
                 }
-                Line::Text(line) => format!(
-                    "printed a line on its channel while its answer to `{}` was due in shared memory: {}",
-                    request.name(),
-                    truncate(&line)
+                Line::Text(line) => (
+                    IutCause::Protocol,
+                    format!(
+                        "printed a line on its channel while its answer to `{name}` was due in shared memory: {}",
+                        truncate(&line)
+                    ),
                 ),
-                Line::Broken(what) => format!("{what} instead of answering `{}`", request.name()),
-                Line::Closed => match self.exit_status() {
-                    Some(status) => format!("exited ({status}) instead of answering `{}`", request.name()),
-                    None => format!("closed its channel instead of answering `{}` (still running; killed)", request.name()),
-                },
+                Line::Broken(what) => (
+                    IutCause::Protocol,
+                    format!("{what} instead of answering `{name}`"),
+                ),
+                Line::Closed => (
+                    IutCause::Gone,
+                    match self.exit_status() {
+                        Some(status) => format!("exited ({status}) instead of answering `{name}`"),
+                        None => format!(
+                            "closed its channel instead of answering `{name}` (still running; killed)"
+                        ),
+                    },
+                ),
             };
             self.kill();
-            let cause = match self.outside {
-                Some(_) => IutCause::Gone,
-                None if what.starts_with("exited") || what.starts_with("closed") => IutCause::Gone,
-                None => IutCause::Protocol,
-            };
             return Err(self.fail(cause, what));
         }
         let answer = match self.shared.as_mut() {

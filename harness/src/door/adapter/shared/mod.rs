@@ -13,7 +13,7 @@
 pub mod layout;
 pub mod record;
 
-use std::os::fd::{AsFd, BorrowedFd};
+use std::os::fd::BorrowedFd;
 use std::sync::atomic::Ordering::SeqCst;
 use std::time::{Duration, Instant};
 
@@ -69,6 +69,44 @@ fn spin_for(spin: Duration, done: impl Fn() -> bool) -> bool {
     }
 }
 
+/// How a side's wait for the other's record ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Turn {
+    /// The record came.
+    Came,
+    /// The other descriptor waited on is readable (or closed).
+    Other,
+    /// Neither within the time given.
+    TimedOut,
+}
+
+/// One side's wait for the other's record, the same on both sides: spin a
+/// moment, then set its asleep word, look once more, and sleep on its
+/// eventfd (watching `other` too) until `slice` has passed.
+fn wait_turn(
+    asleep: &std::sync::atomic::AtomicU32,
+    wake: &Wake,
+    spin: Duration,
+    came: impl Fn() -> bool,
+    other: Option<BorrowedFd<'_>>,
+    slice: Duration,
+) -> std::io::Result<Turn> {
+    if spin_for(spin.min(slice), &came) {
+        return Ok(Turn::Came);
+    }
+    asleep.store(1, SeqCst);
+    let woken = match came() {
+        true => Ok(Woken::Signalled),
+        false => wake.wait(other, slice),
+    };
+    asleep.store(0, SeqCst);
+    Ok(match woken? {
+        _ if came() => Turn::Came,
+        Woken::Other => Turn::Other,
+        Woken::Signalled | Woken::TimedOut => Turn::TimedOut,
+    })
+}
+
 /// Writes an encoded record at `at`, its images in their regions.
 fn store(map: &SharedMap, at: usize, encoded: &Encoded) -> Result<(), String> {
     if encoded.record.len() > layout::RECORD_ROOM {
@@ -97,9 +135,8 @@ fn store(map: &SharedMap, at: usize, encoded: &Encoded) -> Result<(), String> {
 fn load(map: &SharedMap, at: usize, buffer: &mut Vec<u8>) -> Result<(Vec<u8>, Vec<u8>), String> {
     buffer.resize(layout::record::ENTRIES, 0);
     map.read(at, buffer);
-    let (outputs_len, inputs_len) = Decoded::image_lens(buffer);
-    let count = u32::from_le_bytes(buffer[layout::record::COUNT].try_into().expect("4 bytes"));
-    let body = (count as usize)
+    let (count, outputs_len, inputs_len) = record::head(buffer);
+    let body = count
         .saturating_mul(layout::entry::SIZE)
         .min(layout::RECORD_ROOM - layout::record::ENTRIES);
     buffer.resize(layout::record::ENTRIES + body, 0);
@@ -191,16 +228,16 @@ impl HarnessEnd {
     /// Waits up to `slice` for the answer to the last request (spinning
     /// first where that can help); whether it came.
     pub(crate) fn wait(&self, slice: Duration) -> bool {
-        if spin_for(self.spin.min(slice), || self.answered()) {
-            return true;
-        }
-        let asleep = self.map.word(header::HARNESS_ASLEEP);
-        asleep.store(1, SeqCst);
-        let answered = self.answered()
-            || matches!(self.wake_harness.wait(None, slice), Ok(Woken::Signalled))
-                && self.answered();
-        asleep.store(0, SeqCst);
-        answered || self.answered()
+        let turn = wait_turn(
+            self.map.word(header::HARNESS_ASLEEP),
+            &self.wake_harness,
+            self.spin,
+            || self.answered(),
+            None,
+            slice,
+        );
+        // A failed poll(2) is a wait that saw nothing: the caller looks again.
+        matches!(turn, Ok(Turn::Came))
     }
 
     /// The answer, once [`Self::wait`] said it came.
@@ -264,24 +301,20 @@ impl IutEnd {
 
     /// Waits for the next request, or for `line` (the line channel) to
     /// become readable or close.
-    pub fn next(&mut self, line: impl AsFd) -> std::io::Result<Next> {
+    pub fn next(&mut self, line: BorrowedFd<'_>) -> std::io::Result<Next> {
         loop {
-            if !spin_for(self.spin, || self.posted()) {
-                let asleep = self.map.word(header::IUT_ASLEEP);
-                asleep.store(1, SeqCst);
-                let woken = if self.posted() {
-                    Woken::Signalled
-                } else {
-                    self.wake_iut
-                        .wait(Some(line.as_fd()), Duration::from_secs(1))?
-                };
-                asleep.store(0, SeqCst);
-                if woken == Woken::Other && !self.posted() {
-                    return Ok(Next::Line);
-                }
-                if !self.posted() {
-                    continue;
-                }
+            let turn = wait_turn(
+                self.map.word(header::IUT_ASLEEP),
+                &self.wake_iut,
+                self.spin,
+                || self.posted(),
+                Some(line),
+                Duration::from_secs(1),
+            )?;
+            match turn {
+                Turn::Came => {}
+                Turn::Other => return Ok(Next::Line),
+                Turn::TimedOut => continue,
             }
             self.seen = self.map.word(header::REQUEST_SEQ).load(SeqCst);
             let request = load(&self.map, layout::REQUEST_AT, &mut self.buffer)
@@ -296,13 +329,13 @@ impl IutEnd {
 
     /// Writes the answer to the request [`Self::next`] gave, and wakes the harness.
     pub fn answer(&mut self, answer: &Answer) {
-        let encoded = record::encode_answer(answer)
-            .or_else(|why| record::encode_answer(&Answer::error(why)))
-            .expect("an error answer encodes");
-        if let Err(why) = store(&self.map, layout::ANSWER_AT, &encoded) {
-            let error =
-                record::encode_answer(&Answer::error(why)).expect("an error answer encodes");
-            let _ = store(&self.map, layout::ANSWER_AT, &error);
+        let stored = record::encode_answer(answer)
+            .and_then(|encoded| store(&self.map, layout::ANSWER_AT, &encoded));
+        if let Err(why) = stored {
+            // An answer no record holds is answered as the error it is.
+            let error = Answer::error(why);
+            let encoded = record::encode_answer(&error).expect("an error answer encodes");
+            let _ = store(&self.map, layout::ANSWER_AT, &encoded);
         }
         self.map.word(header::ANSWER_SEQ).store(self.seen, SeqCst);
         if self.map.word(header::HARNESS_ASLEEP).load(SeqCst) != 0 {

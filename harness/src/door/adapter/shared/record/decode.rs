@@ -37,14 +37,6 @@ impl<'a> Decoded<'a> {
         })
     }
 
-    /// The lengths of the images a record's head gives.
-    pub fn image_lens(bytes: &[u8]) -> (usize, usize) {
-        (
-            get(bytes, record::OUTPUTS_LEN) as usize,
-            get(bytes, record::INPUTS_LEN) as usize,
-        )
-    }
-
     fn slots(&self) -> impl Iterator<Item = (u32, &'a [u8])> {
         self.entries
             .chunks_exact(entry::SIZE)

@@ -48,12 +48,24 @@ pub mod tag {
     pub const SENT: u32 = 11;
 }
 
-/// A record as bytes: its head and entries, and the images it carries.
+/// A record as bytes: its head and entries, and the images it carries
+/// (borrowed from the request or answer: they are copied once, into the
+/// mapping).
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct Encoded {
+pub struct Encoded<'a> {
     pub record: Vec<u8>,
-    pub outputs: Option<Vec<u8>>,
-    pub inputs: Option<Vec<u8>>,
+    pub outputs: Option<&'a [u8]>,
+    pub inputs: Option<&'a [u8]>,
+}
+
+/// The head's count and image lengths, read where the record lies: how
+/// much more there is to read.
+pub fn head(bytes: &[u8]) -> (usize, usize, usize) {
+    (
+        get(bytes, record::COUNT) as usize,
+        get(bytes, record::OUTPUTS_LEN) as usize,
+        get(bytes, record::INPUTS_LEN) as usize,
+    )
 }
 
 fn put(bytes: &mut [u8], at: std::ops::Range<usize>, value: u64) {
@@ -67,13 +79,19 @@ fn get(bytes: &[u8], at: std::ops::Range<usize>) -> u64 {
     u64::from_le_bytes(word)
 }
 
-struct Builder {
-    encoded: Encoded,
+struct Builder<'a> {
+    encoded: Encoded<'a>,
     count: usize,
 }
 
-impl Builder {
-    fn new(kind: u32, time: u64) -> Builder {
+/// Which image a record carries.
+enum Image {
+    Outputs,
+    Inputs,
+}
+
+impl<'a> Builder<'a> {
+    fn new(kind: u32, time: u64) -> Builder<'a> {
         // Room for a cycle's events at once: one allocation, not one per entry.
         let mut record = Vec::with_capacity(record::ENTRIES + 32 * entry::SIZE);
         record.resize(record::ENTRIES, 0);
@@ -88,23 +106,13 @@ impl Builder {
         }
     }
 
-    fn outputs(mut self, image: &[u8]) -> Self {
-        put(
-            &mut self.encoded.record,
-            record::OUTPUTS_LEN,
-            image.len() as u64,
-        );
-        self.encoded.outputs = Some(image.to_vec());
-        self
-    }
-
-    fn inputs(mut self, image: &[u8]) -> Self {
-        put(
-            &mut self.encoded.record,
-            record::INPUTS_LEN,
-            image.len() as u64,
-        );
-        self.encoded.inputs = Some(image.to_vec());
+    fn image(mut self, which: Image, image: &'a [u8]) -> Self {
+        let (length, slot) = match which {
+            Image::Outputs => (record::OUTPUTS_LEN, &mut self.encoded.outputs),
+            Image::Inputs => (record::INPUTS_LEN, &mut self.encoded.inputs),
+        };
+        *slot = Some(image);
+        put(&mut self.encoded.record, length, image.len() as u64);
         self
     }
 
@@ -143,7 +151,7 @@ impl Builder {
         slot[entry::DATA.start..entry::DATA.start + end].copy_from_slice(&text.as_bytes()[..end]);
     }
 
-    fn done(mut self) -> Result<Encoded, String> {
+    fn done(mut self) -> Result<Encoded<'a>, String> {
         if self.count > MAX_ENTRIES {
             return Err(format!(
                 "{} entries do not fit a record ({MAX_ENTRIES} at most)",
@@ -269,10 +277,10 @@ fn get_text(slot: &[u8]) -> Result<String, String> {
 /// events since the last record: what version 1 would send as `receive`,
 /// `transmit_complete` and `controller_status` requests first, each of them
 /// answered `ok`, in one record.
-pub fn encode_batch(events: &[BusEvent], request: &Request) -> Result<Encoded, String> {
+pub fn encode_batch<'a>(events: &[BusEvent], request: &'a Request) -> Result<Encoded<'a>, String> {
     let mut record = match request {
         Request::Cycle { now_ns, outputs } => {
-            Builder::new(kind::CYCLE, *now_ns).outputs(&outputs.0)
+            Builder::new(kind::CYCLE, *now_ns).image(Image::Outputs, &outputs.0)
         }
         Request::PollTransmit { now_ns } => Builder::new(kind::POLL_TRANSMIT, *now_ns),
         other => return Err(format!("`{}` takes no bus events before it", other.name())),
@@ -285,10 +293,10 @@ pub fn encode_batch(events: &[BusEvent], request: &Request) -> Result<Encoded, S
 
 /// A request of the hot path as a record; `configure`, `start` and `bye`
 /// stay on the line channel.
-pub fn encode_request(request: &Request) -> Result<Encoded, String> {
+pub fn encode_request(request: &Request) -> Result<Encoded<'_>, String> {
     let record = match request {
         Request::Cycle { now_ns, outputs } => {
-            Builder::new(kind::CYCLE, *now_ns).outputs(&outputs.0)
+            Builder::new(kind::CYCLE, *now_ns).image(Image::Outputs, &outputs.0)
         }
         Request::Receive { frame, end_ns } => {
             let mut record = Builder::new(kind::RECEIVE, *end_ns);
@@ -307,7 +315,7 @@ pub fn encode_request(request: &Request) -> Result<Encoded, String> {
             outputs,
             events,
         } => {
-            let mut record = Builder::new(kind::STEP, *now_ns).outputs(&outputs.0);
+            let mut record = Builder::new(kind::STEP, *now_ns).image(Image::Outputs, &outputs.0);
             for event in events {
                 match event {
                     BusEvent::Received { frame, end_ns } => {
@@ -339,8 +347,8 @@ pub fn encode_request(request: &Request) -> Result<Encoded, String> {
             requests,
         } => {
             let mut record = Builder::new(kind::TASK, 0)
-                .inputs(&inputs.0)
-                .outputs(&outputs.0);
+                .image(Image::Inputs, &inputs.0)
+                .image(Image::Outputs, &outputs.0);
             for message in requests {
                 put_message(record.entry(tag::MESSAGE), message);
             }
@@ -354,7 +362,7 @@ pub fn encode_request(request: &Request) -> Result<Encoded, String> {
 }
 
 /// An answer as a record.
-pub fn encode_answer(answer: &Answer) -> Result<Encoded, String> {
+pub fn encode_answer(answer: &Answer) -> Result<Encoded<'_>, String> {
     let record = match answer {
         Answer::Ok => Builder::new(kind::OK, 0),
         Answer::Error { message } => {
@@ -368,7 +376,7 @@ pub fn encode_answer(answer: &Answer) -> Result<Encoded, String> {
             );
             return Ok(record.encoded);
         }
-        Answer::Inputs { inputs } => Builder::new(kind::INPUTS, 0).inputs(&inputs.0),
+        Answer::Inputs { inputs } => Builder::new(kind::INPUTS, 0).image(Image::Inputs, &inputs.0),
         Answer::Transmit { frame, next_ns } => {
             let mut record = Builder::new(kind::TRANSMIT, next_ns.unwrap_or(u64::MAX));
             match frame {
@@ -381,7 +389,8 @@ pub fn encode_answer(answer: &Answer) -> Result<Encoded, String> {
             record
         }
         Answer::Stepped { inputs, plan, more } => {
-            let mut record = Builder::new(kind::STEPPED, u64::from(*more)).inputs(&inputs.0);
+            let mut record =
+                Builder::new(kind::STEPPED, u64::from(*more)).image(Image::Inputs, &inputs.0);
             for planned in plan {
                 match (&planned.frame, &planned.invalid) {
                     (Some(frame), _) => {
@@ -404,7 +413,7 @@ pub fn encode_answer(answer: &Answer) -> Result<Encoded, String> {
             refused,
             sent,
         } => {
-            let mut record = Builder::new(kind::TASKED, 0).outputs(&outputs.0);
+            let mut record = Builder::new(kind::TASKED, 0).image(Image::Outputs, &outputs.0);
             for message in delivered {
                 put_message(record.entry(tag::MESSAGE), message);
             }

@@ -18,8 +18,8 @@ fn frame(id: u32, data: &[u8]) -> WireFrame {
 
 fn round_request(request: Request) -> Request {
     let encoded = encode_request(&request).unwrap();
-    let outputs = encoded.outputs.clone().unwrap_or_default();
-    let inputs = encoded.inputs.clone().unwrap_or_default();
+    let outputs = encoded.outputs.unwrap_or_default().to_vec();
+    let inputs = encoded.inputs.unwrap_or_default().to_vec();
     let (events, request) = Decoded::new(&encoded.record, outputs, inputs)
         .unwrap()
         .batch()
@@ -30,8 +30,8 @@ fn round_request(request: Request) -> Request {
 
 fn round_answer(answer: Answer) -> Answer {
     let encoded = encode_answer(&answer).unwrap();
-    let outputs = encoded.outputs.clone().unwrap_or_default();
-    let inputs = encoded.inputs.clone().unwrap_or_default();
+    let outputs = encoded.outputs.unwrap_or_default().to_vec();
+    let inputs = encoded.inputs.unwrap_or_default().to_vec();
     Decoded::new(&encoded.record, outputs, inputs)
         .unwrap()
         .answer()
