@@ -199,11 +199,7 @@ fn the_terminal_is_certified_across_a_veth_pair() {
 #[test]
 fn an_independent_master_drives_the_terminal() {
     let test = "an_independent_master_drives_the_terminal";
-    let has_pysoem = Command::new("python3")
-        .args(["-c", "import pysoem"])
-        .output()
-        .is_ok_and(|o| o.status.success());
-    if !has_pysoem {
+    if !has_pysoem() {
         return skip(test, "no Python package pysoem (.ci/run installs it)");
     }
     let Some((pair, mut terminal)) = terminal_on_veth(test, 1) else {
@@ -233,6 +229,57 @@ fn an_independent_master_drives_the_terminal() {
         served.contains(" 123#CA1F"),
         "the terminal's side: {served}"
     );
+}
+
+/// A real EL6751 configuration starts canif's terminal: SOEM (pysoem)
+/// plays the start-up list a configurator derives from the EL6751's public
+/// description, in the real layout the SII gives, and exchanges a 29-bit
+/// message with its transaction number through the 166/154-byte image.
+#[test]
+fn a_real_start_up_list_configures_the_terminal() {
+    let test = "a_real_start_up_list_configures_the_terminal";
+    if !has_pysoem() {
+        return skip(test, "no Python package pysoem (.ci/run installs it)");
+    }
+    let Some((pair, mut terminal)) = terminal_on_veth(test, 3) else {
+        return;
+    };
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let script = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/python/pysoem_start_up.py"
+    );
+    let master = Command::new("timeout")
+        .args(["60", "python3", script, &pair.master])
+        .output()
+        .expect("python3 runs");
+    let _ = Command::new("kill")
+        .args(["-INT", &terminal.id().to_string()])
+        .status();
+    let served = wait_at_most(&mut terminal, std::time::Duration::from_secs(10));
+    let said = String::from_utf8_lossy(&master.stdout);
+    assert_eq!(
+        master.status.code(),
+        Some(0),
+        "{said}{}",
+        String::from_utf8_lossy(&master.stderr)
+    );
+    assert!(
+        said.contains("mapped 166 output and 154 input bytes"),
+        "{said}"
+    );
+    assert!(said.contains("Inputs.TransactionNumber 0x42"), "{said}");
+    assert!(
+        served.contains("01234567#CA1F"),
+        "the terminal's side: {served}"
+    );
+}
+
+fn has_pysoem() -> bool {
+    Command::new("python3")
+        .args(["-c", "import pysoem"])
+        .output()
+        .is_ok_and(|o| o.status.success())
 }
 
 /// A master whose source address is locally administered (a veth's, a

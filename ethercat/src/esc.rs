@@ -65,6 +65,10 @@ impl Esc {
         esc.memory[usize::from(register::PORT_DESCRIPTOR)] = 0x0F;
         esc.set16(register::FEATURES, 0b1100); // DC, 64-bit system time
         esc.set16(register::DL_STATUS, DL_STATUS);
+        // The ESC's reset values: 100 µs units, 100 ms without process data.
+        esc.set16(register::WATCHDOG_DIVIDER, 0x09C2);
+        esc.set16(register::WATCHDOG_TIME_PROCESS_DATA, 1000);
+        esc.set16(register::WATCHDOG_STATUS_PROCESS_DATA, 1);
         esc
     }
 
@@ -114,6 +118,13 @@ impl Esc {
         })
     }
 
+    /// The process-data watchdog's time in ns; `None` when a master set it to 0 (off).
+    pub fn process_data_watchdog(&self) -> Option<u64> {
+        let divider = u64::from(self.get16(register::WATCHDOG_DIVIDER)) + 2;
+        let time = u64::from(self.get16(register::WATCHDOG_TIME_PROCESS_DATA));
+        (time != 0).then_some(time * divider * 40)
+    }
+
     /// The system time the ESC shows: its local time plus the offset the master wrote.
     fn system_time(&self) -> u64 {
         self.system_time_at(self.local_time)
@@ -136,6 +147,7 @@ impl Esc {
             0x0000..0x0010,
             0x0110..0x0112,
             0x0130..0x0136,
+            0x0440..0x0442,
             0x0900..0x0920,
         ];
         let sm_status = (0x0800..0x0880).contains(&address) && address % 8 == 5;
@@ -174,12 +186,15 @@ impl Esc {
                 }
             }
             if range.contains(&usize::from(register::DC_RECEIVE_TIME_PORT0)) {
-                // A write to the port-0 receive time latches the time the frame passed.
+                // A write to the port-0 receive time latches the local time
+                // the frame passed, there and in the processing unit's
+                // register (0x0918 is local time, not system time: a master
+                // that computes a new offset from it must not find the old
+                // one inside).
                 let time = self.local_time as u32;
                 let at = usize::from(register::DC_RECEIVE_TIME_PORT0);
                 self.memory[at..at + 4].copy_from_slice(&time.to_le_bytes());
-                let ecat = self.system_time();
-                self.set64(register::DC_RECEIVE_TIME_ECAT, ecat);
+                self.set64(register::DC_RECEIVE_TIME_ECAT, self.local_time);
             }
             touched.written.push(range);
             count += if command.reads() { 2 } else { 1 };
@@ -187,12 +202,16 @@ impl Esc {
         count
     }
 
-    /// Logical addressing: each active FMMU overlapping the datagram moves its bytes.
+    /// Logical addressing: each active FMMU overlapping the datagram moves
+    /// its bytes. Writes take the datagram as it arrived and go before the
+    /// reads, whatever order the FMMUs are in: an LRW whose read FMMU comes
+    /// first must not write the inputs it just read into the outputs. An
+    /// FMMU a master points at registers changes only what a master may.
     fn logical(&mut self, datagram: &mut Datagram, touched: &mut Touched) -> u16 {
         let (start, len) = (u64::from(datagram.address), datagram.data.len() as u64);
-        let mut count = 0;
-        let fmmus: Vec<Fmmu> = self.fmmus().filter(|f| f.active).collect();
-        for fmmu in fmmus {
+        let command = datagram.command;
+        let mut windows = Vec::new();
+        for fmmu in self.fmmus().filter(|f| f.active) {
             let (from, to) = (
                 u64::from(fmmu.logical_start),
                 u64::from(fmmu.logical_start) + u64::from(fmmu.length),
@@ -204,19 +223,28 @@ impl Esc {
             let in_datagram = (lo - start) as usize..(hi - start) as usize;
             let physical = usize::from(fmmu.physical_start) + (lo - from) as usize;
             let physical = physical..physical + in_datagram.len();
-            if physical.end > MEMORY {
-                continue;
+            if physical.end <= MEMORY {
+                windows.push((fmmu, in_datagram, physical));
             }
-            let command = datagram.command;
-            if fmmu.reads() && command.reads() {
+        }
+        let mut count = 0;
+        if command.writes() {
+            for (_, in_datagram, physical) in windows.iter().filter(|w| w.0.writes()) {
+                let bytes = &datagram.data[in_datagram.clone()];
+                for (i, value) in bytes.iter().enumerate() {
+                    if Esc::writable(physical.start + i) {
+                        self.memory[physical.start + i] = *value;
+                    }
+                }
+                touched.written.push(physical.clone());
+                count |= 2;
+            }
+        }
+        if command.reads() {
+            for (_, in_datagram, physical) in windows.iter().filter(|w| w.0.reads()) {
                 datagram.data[in_datagram.clone()].copy_from_slice(&self.memory[physical.clone()]);
                 touched.read.push(physical.clone());
                 count |= 1;
-            }
-            if fmmu.writes() && command.writes() {
-                self.memory[physical.clone()].copy_from_slice(&datagram.data[in_datagram]);
-                touched.written.push(physical);
-                count |= 2;
             }
         }
         // An ESC counts a read and a write once each, however many FMMUs
@@ -396,5 +424,74 @@ mod tests {
             run(&mut esc, logical(Command::Lrd, 0, 4)).working_counter,
             0
         );
+    }
+
+    #[test]
+    fn an_lrw_writes_the_outputs_it_carried_even_when_the_read_fmmu_comes_first() {
+        let mut esc = Esc::new();
+        // FMMU 0 reads logical 0..4 from 0x1100, FMMU 1 writes the same
+        // logical bytes to 0x1000: the outputs are what the master sent.
+        let base = usize::from(crate::register::FMMU_BASE);
+        esc.memory[base..base + 16].copy_from_slice(&fmmu_record(0, 4, 0x1100, 1));
+        esc.memory[base + 16..base + 32].copy_from_slice(&fmmu_record(0, 4, 0x1000, 2));
+        esc.memory[0x1100..0x1104].copy_from_slice(&[9, 9, 9, 9]);
+        let mut lrw = Datagram::physical(Command::Lrw, 0, 0, vec![1, 2, 3, 4]);
+        lrw.address = 0;
+        esc.process(&mut lrw, &mut Touched::default());
+        assert_eq!(&esc.memory[0x1000..0x1004], &[1, 2, 3, 4]);
+        assert_eq!(lrw.data, [9, 9, 9, 9]);
+    }
+
+    #[test]
+    fn an_fmmu_on_read_only_registers_changes_nothing_there() {
+        let mut esc = Esc::new();
+        let base = usize::from(crate::register::FMMU_BASE);
+        // Logical 0..2 onto the ESC type register.
+        esc.memory[base..base + 16].copy_from_slice(&fmmu_record(0, 2, 0x0000, 2));
+        let mut lwr = Datagram::physical(Command::Lwr, 0, 0, vec![0xAA, 0xBB]);
+        lwr.address = 0;
+        esc.process(&mut lwr, &mut Touched::default());
+        assert_eq!(&esc.memory[0..2], &[0x11, 0x02]);
+    }
+
+    #[test]
+    fn the_processing_units_receive_time_is_local_time() {
+        let mut esc = Esc::new();
+        esc.set64(register::DC_SYSTEM_TIME_OFFSET, 1_000_000);
+        esc.local_time = 5_000;
+        run(
+            &mut esc,
+            Datagram::physical(Command::Bwr, 0, register::DC_RECEIVE_TIME_PORT0, vec![0; 4]),
+        );
+        // A master restarting reads the local time, not the old offset in it.
+        assert_eq!(esc.get64(register::DC_RECEIVE_TIME_ECAT), 5_000);
+    }
+
+    #[test]
+    fn the_watchdog_runs_on_the_reset_values_until_a_master_turns_it_off() {
+        let mut esc = Esc::new();
+        assert_eq!(esc.process_data_watchdog(), Some(100_000_000));
+        run(
+            &mut esc,
+            Datagram::physical(
+                Command::Bwr,
+                0,
+                register::WATCHDOG_TIME_PROCESS_DATA,
+                vec![0; 2],
+            ),
+        );
+        assert_eq!(esc.process_data_watchdog(), None);
+    }
+
+    /// An FMMU record: logical start, length, physical start, 1 read / 2 write, active.
+    fn fmmu_record(logical: u32, len: u16, physical: u16, kind: u8) -> Vec<u8> {
+        let mut record = vec![0u8; 16];
+        record[0..4].copy_from_slice(&logical.to_le_bytes());
+        record[4..6].copy_from_slice(&len.to_le_bytes());
+        record[7] = 7;
+        record[8..10].copy_from_slice(&physical.to_le_bytes());
+        record[11] = kind;
+        record[12] = 1;
+        record
     }
 }

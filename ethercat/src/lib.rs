@@ -9,6 +9,7 @@ pub mod esc;
 pub mod mailbox;
 pub mod register;
 pub mod sdo;
+pub mod sdo_info;
 pub mod sii;
 pub mod subdevice;
 pub mod sync0;

@@ -7,9 +7,9 @@ use std::fmt;
 /// Mailbox header (6 bytes) + CoE header (2 bytes).
 pub const HEADERS: usize = 8;
 /// Mailbox type of CoE.
-const TYPE_COE: u8 = 3;
+pub(crate) const TYPE_COE: u8 = 3;
 /// CoE services.
-const SERVICE_SDO_REQUEST: u16 = 2;
+pub(crate) const SERVICE_SDO_REQUEST: u16 = 2;
 const SERVICE_SDO_RESPONSE: u16 = 3;
 /// A segment carries at least 7 bytes; fewer are padding, counted in `n`.
 const SEGMENT_MIN: usize = 7;
@@ -143,7 +143,7 @@ fn body<'a>(bytes: &'a [u8], services: &[u16]) -> Result<(u16, &'a [u8]), Mailbo
 }
 
 /// A message: mailbox header (with `counter`), CoE header, `sdo`, padded to `mailbox_size`.
-fn message(service: u16, counter: u8, sdo: &[u8], mailbox_size: usize) -> Vec<u8> {
+pub(crate) fn message(service: u16, counter: u8, sdo: &[u8], mailbox_size: usize) -> Vec<u8> {
     let mut out = Vec::with_capacity(mailbox_size);
     out.extend_from_slice(&((sdo.len() + 2) as u16).to_le_bytes());
     out.extend_from_slice(&[0, 0, 0, TYPE_COE | (counter & 7) << 4]);

@@ -19,6 +19,12 @@ pub const SII_ACCESS: u16 = 0x0500;
 pub const SII_CONTROL: u16 = 0x0502;
 pub const SII_ADDRESS: u16 = 0x0504;
 pub const SII_DATA: u16 = 0x0508;
+/// Watchdog divider (0x0400, in 40 ns units less 2) and the process-data
+/// watchdog time (0x0420, in divider units), and its status (0x0440, bit 0
+/// clear once it expired).
+pub const WATCHDOG_DIVIDER: u16 = 0x0400;
+pub const WATCHDOG_TIME_PROCESS_DATA: u16 = 0x0420;
+pub const WATCHDOG_STATUS_PROCESS_DATA: u16 = 0x0440;
 pub const FMMU_BASE: u16 = 0x0600;
 pub const SYNC_MANAGER_BASE: u16 = 0x0800;
 /// Receive time on port 0: a write to it latches the local time.

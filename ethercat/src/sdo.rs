@@ -10,6 +10,10 @@ pub struct Entry {
     pub sub: u8,
     pub value: Vec<u8>,
     pub writable: bool,
+    /// What SDO Information calls it ("SubIndex nnn" when empty).
+    pub name: &'static str,
+    /// A VISIBLE STRING rather than a number or octets.
+    pub text: bool,
 }
 
 impl Entry {
@@ -18,6 +22,33 @@ impl Entry {
             sub,
             value,
             writable,
+            name: "",
+            text: false,
+        }
+    }
+
+    pub fn named(self, name: &'static str) -> Entry {
+        Entry { name, ..self }
+    }
+
+    pub fn text(self) -> Entry {
+        Entry { text: true, ..self }
+    }
+
+    /// A number (UNSIGNED8/16/32/64), by its width; else a string of octets.
+    pub fn unsigned(&self) -> bool {
+        !self.text && matches!(self.value.len(), 1 | 2 | 4 | 8)
+    }
+
+    /// The ETG.1000.6 data type (Table 63) SDO Information gives it.
+    pub fn data_type(&self) -> u16 {
+        match (self.text, self.value.len()) {
+            (true, _) => 0x0009,
+            (false, 1) => 0x0005,
+            (false, 2) => 0x0006,
+            (false, 4) => 0x0007,
+            (false, 8) => 0x001B,
+            _ => 0x000A,
         }
     }
 }
@@ -31,6 +62,16 @@ pub trait ObjectDictionary {
     /// Writes these entries of `index` together (one download), or refuses
     /// with an abort code; nothing is written when it refuses.
     fn write(&mut self, index: u16, values: &[(u8, Vec<u8>)]) -> Result<(), u32>;
+
+    /// Every object, in order, for SDO Information's OD list.
+    fn indices(&self) -> Vec<u16> {
+        Vec::new()
+    }
+
+    /// An object's name, for SDO Information.
+    fn name(&self, index: u16) -> String {
+        format!("Object {index:04X}")
+    }
 }
 
 /// A transfer split over several mailbox messages.
@@ -252,6 +293,27 @@ fn fetch(
         .ok_or(abort::NO_SUBINDEX)
 }
 
+/// A single entry's download at the entry's width. A number may come in
+/// another width than the dictionary's (1, 2 or 4 bytes) when its value
+/// fits: configurators write these objects at widths the public
+/// documentation does not give (docs/ethercat.md, an assumption); a value
+/// that does not fit is out of range, any other length a length error.
+fn fitted(entry: &Entry, data: &[u8]) -> Result<Vec<u8>, u32> {
+    let width = entry.value.len();
+    if data.len() == width {
+        return Ok(data.to_vec());
+    }
+    if !entry.unsigned() || !matches!(data.len(), 1 | 2 | 4) {
+        return Err(abort::LENGTH);
+    }
+    if data.iter().skip(width).any(|&b| b != 0) {
+        return Err(abort::VALUE_RANGE);
+    }
+    let mut value = data[..data.len().min(width)].to_vec();
+    value.resize(width, 0);
+    Ok(value)
+}
+
 /// Splits a download into entries by the sizes the dictionary gives, and writes them.
 fn store(
     dictionary: &mut dyn ObjectDictionary,
@@ -269,10 +331,8 @@ fn store(
         if !entry.writable {
             return Err(abort::READ_ONLY);
         }
-        if entry.value.len() != data.len() {
-            return Err(abort::LENGTH);
-        }
-        return dictionary.write(index, &[(sub, data.to_vec())]);
+        let value = fitted(entry, data)?;
+        return dictionary.write(index, &[(sub, value)]);
     }
     if sub > 1 {
         return Err(abort::UNSUPPORTED_ACCESS);
@@ -294,10 +354,15 @@ fn store(
         if rest.len() < size {
             return Err(abort::LENGTH);
         }
+        // A read-only entry a complete access carries unchanged is no write
+        // (a master writing a whole record sends its constants too).
         if !entry.writable {
-            return Err(abort::READ_ONLY);
+            if rest[..size] != entry.value[..] {
+                return Err(abort::READ_ONLY);
+            }
+        } else {
+            values.push((entry.sub, rest[..size].to_vec()));
         }
-        values.push((entry.sub, rest[..size].to_vec()));
         rest = &rest[size..];
     }
     if !rest.is_empty() {
@@ -456,6 +521,19 @@ mod tests {
             abort::COMMAND_SPECIFIER
         );
         assert_eq!(table.writes, 0);
+    }
+
+    #[test]
+    fn a_number_may_come_in_another_width_when_its_value_fits() {
+        let uint16 = Entry::new(0x21, vec![0, 0], true);
+        assert_eq!(fitted(&uint16, &[10]), Ok(vec![10, 0]));
+        assert_eq!(fitted(&uint16, &[150, 0, 0, 0]), Ok(vec![150, 0]));
+        assert_eq!(fitted(&uint16, &[0, 0, 1, 0]), Err(abort::VALUE_RANGE));
+        assert_eq!(fitted(&uint16, &[1, 2, 3]), Err(abort::LENGTH));
+        let row = Entry::new(1, vec![0; 10], true);
+        assert_eq!(fitted(&row, &[1, 2]), Err(abort::LENGTH));
+        let name = Entry::new(0, b"EL".to_vec(), true).text();
+        assert_eq!(fitted(&name, &[1]), Err(abort::LENGTH));
     }
 
     #[test]

@@ -19,25 +19,45 @@ pub struct Layout {
     pub mailbox_size: u16,
     pub outputs: u16,
     pub inputs: u16,
+    /// Process data in 1-buffer (mailbox) mode, else in 3-buffer mode.
+    pub one_buffer: bool,
 }
 
 impl Layout {
-    /// The layout of canif's terminals: 128-byte mailboxes, then outputs and inputs.
-    pub const TERMINAL: Layout = Layout {
+    /// The real EL6751's (its public object and register description):
+    /// mailboxes of 1024 bytes at 0x1000 and 0x1400, process data at 0x1800
+    /// and 0x2400 in 1-buffer mode, as the EL6751 runs its buffered queues
+    /// (000 §5.1.2: "Die EL6751 arbeitet im 1-Buffer-Betrieb").
+    pub const EL6751: Layout = Layout {
+        mailbox_out: 0x1000,
+        mailbox_in: 0x1400,
+        mailbox_size: 1024,
+        outputs: 0x1800,
+        inputs: 0x2400,
+        one_buffer: true,
+    };
+
+    /// A second layout, for proving that no master assumes the first:
+    /// 128-byte mailboxes, then outputs and inputs in 3-buffer mode.
+    pub const COMPACT: Layout = Layout {
         mailbox_out: 0x1000,
         mailbox_in: 0x1080,
         mailbox_size: 128,
         outputs: 0x1100,
         inputs: 0x1D00,
+        one_buffer: false,
     };
 
     /// SM0..SM3 as (start, length, control, type) of the SyncM category.
+    /// Control: mode (bits 0–1, 10 = 1-buffer), direction (bits 2–3),
+    /// the PDI event (bit 5) and, for the outputs, the watchdog (bit 6).
     pub fn sync_managers(&self) -> [(u16, u16, u8, u8); 4] {
+        let mode = if self.one_buffer { 0b10 } else { 0b00 };
         [
             (self.mailbox_out, self.mailbox_size, 0x26, 1),
             (self.mailbox_in, self.mailbox_size, 0x22, 2),
-            (self.outputs, 0, 0x64, 3),
-            (self.inputs, 0, 0x20, 4),
+            (self.outputs, 0, 0x64 | mode, 3),
+            (self.inputs, 0, 0x20 | mode, 4),
         ]
     }
 }
@@ -166,12 +186,12 @@ mod tests {
         // computed apart by a bit-by-bit script: a changed polynomial or start shows.
         assert_eq!(crc8(b"123456789"), 0xFB);
         assert_eq!(crc8(&[0; 14]), 0x30);
-        assert_eq!(image(&el6751(), &Layout::TERMINAL)[14], 0x30);
+        assert_eq!(image(&el6751(), &Layout::COMPACT)[14], 0x30);
     }
 
     #[test]
     fn identity_and_mailbox_sit_in_their_words() {
-        let image = image(&el6751(), &Layout::TERMINAL);
+        let image = image(&el6751(), &Layout::COMPACT);
         assert_eq!(word(&image, 0x08), 2);
         assert_eq!((word(&image, 0x0A), word(&image, 0x0B)), (0x3052, 0x1A5F));
         assert_eq!((word(&image, 0x18), word(&image, 0x19)), (0x1000, 128));
@@ -180,7 +200,7 @@ mod tests {
 
     #[test]
     fn categories_follow_one_another_to_the_end_marker() {
-        let image = image(&el6751(), &Layout::TERMINAL);
+        let image = image(&el6751(), &Layout::COMPACT);
         let mut at = 0x40;
         let mut kinds = Vec::new();
         loop {

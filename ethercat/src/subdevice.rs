@@ -6,6 +6,7 @@ use crate::esc::{Esc, Touched};
 use crate::mailbox::SdoRequest;
 use crate::register::{self, sii};
 use crate::sdo::{ObjectDictionary, SdoServer};
+use crate::sdo_info::{mailbox_error, InfoRequest, Kind};
 use crate::sii::{Identity, Layout};
 use crate::sync0::Sync0Schedule;
 use crate::wire::Frame;
@@ -41,8 +42,15 @@ pub mod al_status {
     pub const INVALID_MAILBOX_CONFIGURATION: u16 = 0x0016;
     pub const INVALID_OUTPUT_CONFIGURATION: u16 = 0x001D;
     pub const INVALID_INPUT_CONFIGURATION: u16 = 0x001E;
+    pub const SYNC_MANAGER_WATCHDOG: u16 = 0x001B;
     pub const INVALID_SYNC_CONFIGURATION: u16 = 0x0030;
+    pub const INVALID_SYNC_CYCLE_TIME: u16 = 0x0035;
 }
+
+/// The shortest SYNC0 cycle the terminal takes (an assumption: no source
+/// gives the EL6751's; a master asking for 1 ns would have it spend a host
+/// core on SYNC0 events).
+pub const MIN_SYNC0_CYCLE_NS: u32 = 100_000;
 
 /// How the application's cycle is started (003: SyncManager 2 event, or SYNC0/SYNC1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -80,7 +88,11 @@ pub struct SubDevice<A> {
     pub esc: Esc,
     pub application: A,
     eeprom: Vec<u8>,
+    layout: Layout,
     state: AlState,
+    /// Local time of the last complete outputs buffer (or of entering OP),
+    /// for the process-data watchdog.
+    outputs_seen: u64,
     sdo: SdoServer,
     /// How many SyncManager 2 events ran (for a report).
     pub cycles: u64,
@@ -129,11 +141,20 @@ fn overlap(a: &register::SyncManager, b: &register::SyncManager) -> bool {
 }
 
 impl<A: Application> SubDevice<A> {
+    /// A SubDevice whose SII gives the real EL6751's layout.
     pub fn new(identity: &Identity, application: A) -> SubDevice<A> {
+        SubDevice::with_layout(identity, Layout::EL6751, application)
+    }
+
+    /// A SubDevice whose SII gives `layout` (any layout within the ESC's
+    /// memory works: this is only what the SII advertises).
+    pub fn with_layout(identity: &Identity, layout: Layout, application: A) -> SubDevice<A> {
         let mut device = SubDevice {
             esc: Esc::new(),
             application,
-            eeprom: crate::sii::image(identity, &Layout::TERMINAL),
+            eeprom: crate::sii::image(identity, &layout),
+            layout,
+            outputs_seen: 0,
             state: AlState::Init,
             sdo: SdoServer::default(),
             cycles: 0,
@@ -144,6 +165,11 @@ impl<A: Application> SubDevice<A> {
         };
         device.set_status(AlState::Init, None);
         device
+    }
+
+    /// The layout its SII advertises.
+    pub fn layout(&self) -> Layout {
+        self.layout
     }
 
     /// The SII's content, as the ESC serves it.
@@ -163,6 +189,7 @@ impl<A: Application> SubDevice<A> {
         // comes just after it (the master sends its frame ahead of SYNC0).
         self.run_sync0(now, false);
         self.esc.local_time = now;
+        self.watch(now);
         let mut touched = Touched::default();
         for datagram in &mut frame.datagrams {
             match datagram.command {
@@ -189,6 +216,27 @@ impl<A: Application> SubDevice<A> {
     /// Runs the cycles of the SYNC0 events due by local time `now`.
     pub fn handle_timeout(&mut self, now: u64) {
         self.run_sync0(now, true);
+        self.watch(now);
+    }
+
+    /// The SyncManager watchdog: in OP, outputs not written for longer than
+    /// the process-data watchdog time take the terminal to SAFEOP with AL
+    /// status code 0x001B, as a real terminal (ETG.1000.6 Table 11), where
+    /// the outputs' SyncManager has its watchdog enabled (control bit 6).
+    fn watch(&mut self, now: u64) {
+        const WATCHDOG_ENABLED: u8 = 1 << 6;
+        if self.state != AlState::Op
+            || self.esc.sync_manager(OUTPUTS).control & WATCHDOG_ENABLED == 0
+        {
+            return;
+        }
+        let Some(time) = self.esc.process_data_watchdog() else {
+            return;
+        };
+        if now.saturating_sub(self.outputs_seen) > time {
+            self.esc.set16(register::WATCHDOG_STATUS_PROCESS_DATA, 0);
+            self.set_status(AlState::SafeOp, Some(al_status::SYNC_MANAGER_WATCHDOG));
+        }
     }
 
     /// SYNC0 events that came while nobody asked (a stalled host).
@@ -235,6 +283,8 @@ impl<A: Application> SubDevice<A> {
             && outputs.enabled()
             && touched.completed(&outputs.range())
         {
+            self.outputs_seen = now;
+            self.esc.set16(register::WATCHDOG_STATUS_PROCESS_DATA, 1);
             self.outputs_buffer.clear();
             // A SyncManager a master moved past the ESC's memory maps nothing.
             let written = self.esc.memory.get(outputs.range()).unwrap_or_default();
@@ -305,7 +355,11 @@ impl<A: Application> SubDevice<A> {
                 Ok(())
             }
             (PreOp, SafeOp) => self.start(),
-            (Op, SafeOp) | (SafeOp, Op) => Ok(()),
+            (Op, SafeOp) => Ok(()),
+            (SafeOp, Op) => {
+                self.outputs_seen = self.esc.local_time;
+                Ok(())
+            }
             _ => Err(al_status::INVALID_STATE_CHANGE),
         }
     }
@@ -377,6 +431,11 @@ impl<A: Application> SubDevice<A> {
                 },
             }
         };
+        if let Synchronization::DistributedClocks { sync0_cycle, .. } = synchronization {
+            if sync0_cycle < MIN_SYNC0_CYCLE_NS {
+                return Err(al_status::INVALID_SYNC_CYCLE_TIME);
+            }
+        }
         self.application.start(Start {
             outputs,
             inputs,
@@ -407,17 +466,29 @@ impl<A: Application> SubDevice<A> {
             return;
         };
         let counter = request.get(5).map_or(0, |b| b >> 4 & 7);
-        let answer = match SdoRequest::parse(request) {
-            Ok(request) => self.sdo.handle(&mut self.application, request, size),
-            // A message the server cannot read is answered with an abort of no object.
-            Err(_) => Some(crate::mailbox::SdoResponse::Abort {
-                index: 0,
-                sub: 0,
-                code: crate::mailbox::abort::COMMAND_SPECIFIER,
+        let answer = match crate::sdo_info::kind(request) {
+            Kind::Sdo => match SdoRequest::parse(request) {
+                Ok(request) => self
+                    .sdo
+                    .handle(&mut self.application, request, size)
+                    .map(|answer| answer.emit(counter, size)),
+                // A message the server cannot read is answered with an abort of no object.
+                Err(_) => Some(
+                    crate::mailbox::SdoResponse::Abort {
+                        index: 0,
+                        sub: 0,
+                        code: crate::mailbox::abort::COMMAND_SPECIFIER,
+                    }
+                    .emit(counter, size),
+                ),
+            },
+            Kind::Info => Some(match InfoRequest::parse(request) {
+                Some(asked) => crate::sdo_info::answer(&self.application, asked, counter, size),
+                None => crate::sdo_info::error(counter, mailbox_error::SERVICE_NOT_SUPPORTED, size),
             }),
+            Kind::Unsupported(detail) => Some(crate::sdo_info::error(counter, detail, size)),
         };
-        if let Some(answer) = answer {
-            let bytes = answer.emit(counter, size);
+        if let Some(bytes) = answer {
             // The answer fills the mailbox as the master set it now, as far
             // as it lies in the ESC's memory (a master may have moved or
             // shrunk it since PREOP).

@@ -64,11 +64,7 @@ fn measure(name: &str, iut: &IutKind) -> (f64, f64) {
 }
 
 fn emulated() -> Emulated {
-    Emulated {
-        faults: vec![],
-        choices: vec![],
-        link_fault: None,
-    }
+    Emulated::default()
 }
 
 fn veth() -> Option<(String, String)> {

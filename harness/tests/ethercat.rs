@@ -26,8 +26,8 @@ fn run(profile: &Profile, faults: Vec<Fault>, link_fault: Option<LinkFault>) -> 
         identity: None, // the suite takes it from the profile
         link: EthercatLink::Emulated(Emulated {
             faults,
-            choices: vec![],
             link_fault,
+            ..Emulated::default()
         }),
     });
     run_profile(profile, &iut, &Options::quick(7), |_| {})
@@ -158,11 +158,7 @@ fn a_survey_names_the_terminal_and_counts_a_soak() {
     let catalogue = Catalogue::embedded().unwrap();
     let profile = catalogue.profile("el6751-legacy").unwrap();
     let identity = profile.ethercat.unwrap();
-    let link = EthercatLink::Emulated(Emulated {
-        faults: vec![],
-        choices: vec![],
-        link_fault: None,
-    });
+    let link = EthercatLink::Emulated(Emulated::default());
     let pace = Pace::Every {
         period: std::time::Duration::from_millis(2),
         soak: std::time::Duration::from_millis(100),
@@ -180,6 +176,50 @@ fn a_survey_names_the_terminal_and_counts_a_soak() {
         "0x1C32:05 was not read back"
     );
     assert!(facts.worst_cycle_ns >= facts.mean_cycle_ns);
+    // The master configured the real EL6751's layout from the SII, and
+    // left the CAN status (0x1A85) out of the image it judges.
+    let starts: Vec<[u16; 2]> = facts.sync_managers.iter().map(|s| [s[0], s[1]]).collect();
+    assert_eq!(
+        starts[..2],
+        [[0x1000, 1024], [0x1400, 1024]],
+        "{:X?}",
+        facts.sync_managers
+    );
+    assert_eq!(
+        (starts[2][0], starts[3][0], facts.sync_managers[2][2] & 3),
+        (0x1800, 0x2400, 0b10),
+        "process data at 0x1800/0x2400 in 1-buffer mode: {:X?}",
+        facts.sync_managers
+    );
+    assert_eq!(facts.status_bytes, 6, "the CAN status behind the image");
+}
+
+/// canif's master takes the layout from the terminal's SII, never its own:
+/// the same terminal advertising a second layout (128-byte mailboxes,
+/// 3-buffer process data elsewhere) is configured there and conforms.
+#[test]
+fn canif_s_master_takes_the_layout_the_terminal_advertises() {
+    use canif_ethercat::sii::Layout;
+    use canif_harness::door::ethercat::{survey, Pace};
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("el6751-mdp").unwrap();
+    let emulated = Emulated {
+        layout: Layout::COMPACT,
+        ..Emulated::default()
+    };
+    let link = EthercatLink::Emulated(emulated.clone());
+    let facts = survey(profile, &link, Pace::Unpaced(10)).unwrap();
+    assert_eq!(
+        facts.sync_managers.iter().map(|s| s[0]).collect::<Vec<_>>(),
+        [0x1000, 0x1080, 0x1100, 0x1D00]
+    );
+    let iut = IutKind::Door(Door::Ethercat {
+        identity: None,
+        link: EthercatLink::Emulated(emulated),
+    });
+    let run = run_profile(profile, &iut, &Options::quick(7), |_| {});
+    assert!(run.failures.is_empty(), "{:#?}", run.failures.first());
+    assert_eq!(errors(&run), Vec::<String>::new());
 }
 
 /// With Distributed Clocks SYNC0 starts the terminal's cycle (003, PDX-005):

@@ -20,11 +20,7 @@ fn terminal() -> SubDevice<Terminal> {
     emulated_terminal(
         &profile.model_capabilities(),
         profile.ethercat.as_ref().unwrap(),
-        &Emulated {
-            faults: vec![],
-            choices: vec![],
-            link_fault: None,
-        },
+        &Emulated::default(),
     )
 }
 
@@ -98,6 +94,127 @@ fn the_real_el6751_layout_is_taken() {
         format!("{:?}", terminal.state()),
         "SafeOp",
         "AL status code {status:02X?}"
+    );
+}
+
+/// One datagram at local time `now`.
+fn one_at(terminal: &mut SubDevice<Terminal>, now: u64, command: u8, offset: u16, data: Vec<u8>) {
+    terminal
+        .process(&frame(&[(command, 0, offset, data)]), now)
+        .expect("an answer");
+}
+
+/// The real layout's mailboxes, then PREOP.
+fn to_pre_op(terminal: &mut SubDevice<Terminal>) {
+    one(terminal, BWR, 0x0800, sync_manager(0x1000, 1024, 0x26));
+    one(terminal, BWR, 0x0808, sync_manager(0x1400, 1024, 0x22));
+    one(terminal, BWR, 0x0120, vec![0x02, 0x00]);
+}
+
+/// PREOP, the real layout's process data (outputs' watchdog on, as the SII
+/// gives it), SAFEOP; the AL status code back.
+fn to_safe_op(terminal: &mut SubDevice<Terminal>) -> u16 {
+    to_pre_op(terminal);
+    let (outputs, inputs) = terminal.application.process_data();
+    one(
+        terminal,
+        BWR,
+        0x0810,
+        sync_manager(0x1800, outputs as u16, 0x66),
+    );
+    one(
+        terminal,
+        BWR,
+        0x0818,
+        sync_manager(0x2400, inputs as u16, 0x22),
+    );
+    one(terminal, BWR, 0x0120, vec![0x04, 0x00]);
+    let (code, _) = one(terminal, BRD, 0x0134, vec![0; 2]);
+    u16::from_le_bytes([code[0], code[1]])
+}
+
+/// A terminal whose outputs stop coming for longer than the process-data
+/// watchdog (100 ms at the ESC's reset values) goes to SAFEOP with AL
+/// status code 0x001B, as a real one; with the watchdog off it stays in OP.
+#[test]
+fn the_sync_manager_watchdog_takes_a_starved_terminal_to_safeop() {
+    for watchdog_on in [true, false] {
+        let mut terminal = terminal();
+        assert_eq!(to_safe_op(&mut terminal), 0);
+        if !watchdog_on {
+            one(&mut terminal, BWR, 0x0420, vec![0, 0]);
+        }
+        one(&mut terminal, BWR, 0x0120, vec![0x08, 0x00]);
+        let (outputs, _) = terminal.application.process_data();
+        one_at(&mut terminal, 1_000_000, BWR, 0x1800, vec![0; outputs]);
+        one_at(&mut terminal, 100_000_000, BRD, 0x0130, vec![0; 2]);
+        assert_eq!(format!("{:?}", terminal.state()), "Op");
+        one_at(&mut terminal, 101_000_001, BRD, 0x0130, vec![0; 2]);
+        let (code, _) = one(&mut terminal, BRD, 0x0134, vec![0; 2]);
+        let expected = if watchdog_on {
+            ("SafeOp", [0x1B, 0x00])
+        } else {
+            ("Op", [0, 0])
+        };
+        assert_eq!(
+            (
+                format!("{:?}", terminal.state()).as_str(),
+                [code[0], code[1]]
+            ),
+            expected,
+            "watchdog on: {watchdog_on}"
+        );
+    }
+}
+
+/// A SYNC0 cycle of 1 ns would have the terminal spend a core on SYNC0
+/// events: refused with 0x0035 (invalid sync cycle time).
+#[test]
+fn a_sync0_cycle_no_terminal_could_keep_is_refused() {
+    let mut terminal = terminal();
+    to_pre_op(&mut terminal);
+    one(&mut terminal, BWR, 0x09A0, 1u32.to_le_bytes().to_vec());
+    one(&mut terminal, BWR, 0x0981, vec![0b011]);
+    assert_eq!(to_safe_op(&mut terminal), 0x0035);
+    assert_eq!(format!("{:?}", terminal.state()), "PreOp");
+}
+
+/// SDO Information lists the dictionary a configurator reads; FoE, which
+/// the terminal does not speak, gets a mailbox error, not silence.
+#[test]
+fn sdo_information_lists_the_dictionary_and_foe_gets_a_mailbox_error() {
+    let mut terminal = terminal();
+    to_pre_op(&mut terminal);
+    // Get OD list (op code 1), all objects (list type 1).
+    let mut request = vec![8, 0, 0, 0, 0, 0x13, 0x00, 0x80, 1, 0, 0, 0, 1, 0];
+    request.resize(1024, 0);
+    one(&mut terminal, BWR, 0x1000, request);
+    let (answer, _) = one(&mut terminal, BRD, 0x1400, vec![0; 1024]);
+    assert_eq!(
+        (answer[5] & 0x0F, answer[8]),
+        (3, 2),
+        "{:02X?}",
+        &answer[..16]
+    );
+    let length = usize::from(u16::from_le_bytes([answer[0], answer[1]]));
+    let listed: Vec<u16> = answer[14..6 + length]
+        .chunks(2)
+        .map(|w| u16::from_le_bytes([w[0], w[1]]))
+        .collect();
+    for index in [
+        0x1000, 0x1018, 0x1A85, 0x1C32, 0x1C33, 0x6001, 0x7001, 0x8000, 0xF000, 0xF108,
+    ] {
+        assert!(listed.contains(&index), "{index:#06x} not in {listed:04X?}");
+    }
+    // FoE read request (mailbox type 4).
+    let mut foe = vec![6, 0, 0, 0, 0, 0x24, 0, 0, 0, 0, 0, 0];
+    foe.resize(1024, 0);
+    one(&mut terminal, BWR, 0x1000, foe);
+    let (answer, _) = one(&mut terminal, BRD, 0x1400, vec![0; 1024]);
+    assert_eq!(
+        &answer[5..10],
+        &[0x20, 1, 0, 2, 0],
+        "mailbox error, unsupported protocol"
     );
 }
 

@@ -79,7 +79,7 @@ pub(crate) fn ethercat_terminal(
     let emulated = Emulated {
         faults,
         choices,
-        link_fault: None,
+        ..Emulated::default()
     };
     let can = match bus.map(canif_kernel::BusSpec::parse).transpose() {
         Ok(spec) => spec.map(|spec| spec.iut),

@@ -236,11 +236,7 @@ pub(crate) fn esi(
     let terminal = emulated_terminal(
         &profile.model_capabilities(),
         identity,
-        &Emulated {
-            faults: vec![],
-            choices: vec![],
-            link_fault: None,
-        },
+        &Emulated::default(),
     );
     out.push_str(&esi::esi(identity, &terminal));
     out.push('\n');

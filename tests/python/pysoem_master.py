@@ -42,9 +42,10 @@ def main(interface):
         print("configured: 11-bit, 2 Tx and 2 Rx slots")
         size = master.config_map()
         outputs, inputs = len(terminal.output), len(terminal.input)
-        # 6 header bytes + 2 x 10 (Tx); 6 + 2 x 10 (Rx), as 003 lays the image out.
-        if (outputs, inputs) != (26, 26):
-            fail(f"mapped {outputs} output and {inputs} input bytes, 26 and 26 expected")
+        # 6 header bytes + 2 x 10 (Tx); 6 + 2 x 10 (Rx), as 003 lays the
+        # image out, then the 6 bytes of CAN status (0x1A85).
+        if (outputs, inputs) != (26, 32):
+            fail(f"mapped {outputs} output and {inputs} input bytes, 26 and 32 expected")
         print(f"mapped {outputs} output and {inputs} input bytes ({size} in all)")
         if master.state_check(pysoem.SAFEOP_STATE, 50_000) != pysoem.SAFEOP_STATE:
             fail(f"not in SAFEOP: AL status code {terminal.al_status:#06x}")

@@ -69,17 +69,21 @@ impl RunReport {
             );
         }
         if !self.meta.terminals.is_empty() {
-            md.push_str("\n| EtherCAT terminal | identity (vendor, product, revision, serial) | 0x1C32:05 | idle cycles | period | missed | mean | worst |\n|---|---|---|---|---|---|---|---|\n");
+            md.push_str("\n| EtherCAT terminal | identity (vendor, product, revision, serial) | SyncManagers 0–3 | process data out/in (CAN status) | 0x1C32:05 | idle cycles | period | missed | mean | worst |\n|---|---|---|---|---|---|---|---|---|---|\n");
             for t in &self.meta.terminals {
                 let _ = writeln!(
                     md,
-                    "| {} ({}) | {:#010x}, {:#010x}, {:#010x}, {} | {} | {} | {} | {} | {} µs | {} µs |",
+                    "| {} ({}) | {:#010x}, {:#010x}, {:#010x}, {} | {} | {}/{} ({}) | {} | {} | {} | {} | {} µs | {} µs |",
                     t.profile,
                     t.name,
                     t.vendor_id,
                     t.product_code,
                     t.revision,
                     t.serial,
+                    t.layout(),
+                    t.output_bytes,
+                    t.input_bytes,
+                    t.status_bytes,
                     t.local_cycle_ns
                         .map_or("not answered".into(), |ns| format!("{ns} ns")),
                     t.cycles,

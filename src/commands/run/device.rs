@@ -94,12 +94,16 @@ fn survey_terminals(
         match canif_harness::door::ethercat::survey(profile, link, pace) {
             Ok(facts) => {
                 errln!(
-                    "{}: {} vendor {:#010x} product {:#010x} revision {:#010x}, 0x1C32:05 {}, an idle cycle {} µs (worst {} µs)",
+                    "{}: {} vendor {:#010x} product {:#010x} revision {:#010x}, SyncManagers {}, {} output and {} input bytes ({} of CAN status), 0x1C32:05 {}, an idle cycle {} µs (worst {} µs)",
                     profile.name,
                     facts.name,
                     facts.vendor_id,
                     facts.product_code,
                     facts.revision,
+                    facts.layout(),
+                    facts.output_bytes,
+                    facts.input_bytes,
+                    facts.status_bytes,
                     facts.local_cycle_ns.map_or("not answered".into(), |ns| format!("{ns} ns")),
                     facts.mean_cycle_ns / 1_000,
                     facts.worst_cycle_ns / 1_000

@@ -7,7 +7,6 @@
 use std::io::Cursor;
 
 use canif_ethercat::sdo::ObjectDictionary;
-use canif_ethercat::sii::Layout;
 use canif_ethercat::subdevice::SubDevice;
 use canif_softdevice::ethercat::Terminal;
 use canif_spec::EthercatIdentity;
@@ -138,7 +137,7 @@ fn device(
             .write_text_content(BytesText::new(value))
             .map(|_| ())
     };
-    let layout = Layout::TERMINAL;
+    let layout = terminal.layout();
     xml.create_element("Device")
         .with_attribute(("Physics", "YY"))
         .write_inner_content(|xml| {

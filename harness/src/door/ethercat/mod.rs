@@ -15,16 +15,19 @@ pub mod objects;
 #[cfg(feature = "socketcan")]
 pub mod served;
 mod start_up;
+mod survey;
 #[cfg(feature = "socketcan")]
 mod veth;
 
 use std::cell::Cell;
 use std::sync::{Arc, Mutex};
 
+use canif_ethercat::sii::Layout;
 use canif_ethercat::{Identity, SubDevice};
 use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_model::exchange::ExchangeMode;
 use canif_model::frame::Frame;
+use canif_model::image::ImageLayout;
 use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 use canif_softdevice::ethercat::{Terminal, TerminalIdentity};
@@ -39,6 +42,7 @@ use coe::Mailboxes;
 pub use link::LinkFault;
 use link::{lock, InterfaceMaster, MemoryMaster, Peer, SharedTerminal};
 use start_up::{configure, master_error, request_safe_op, Sync0Clock, SYNC0_CYCLE_NS};
+pub use survey::{survey, Pace, TerminalFacts};
 
 const MAX_SUBDEVICES: usize = 16;
 const MAX_PDI: usize = 4096;
@@ -54,6 +58,20 @@ pub struct Emulated {
     pub choices: Vec<Choice>,
     /// A fault of the link or of the ESC, for canif's own tests.
     pub link_fault: Option<LinkFault>,
+    /// The SyncManager layout its SII advertises: the real EL6751's, or a
+    /// second one to show that canif's master assumes none.
+    pub layout: Layout,
+}
+
+impl Default for Emulated {
+    fn default() -> Self {
+        Emulated {
+            faults: Vec::new(),
+            choices: Vec::new(),
+            link_fault: None,
+            layout: Layout::EL6751,
+        }
+    }
 }
 
 /// Where canif's master finds the terminal.
@@ -76,11 +94,7 @@ pub enum EthercatLink {
 impl EthercatLink {
     /// `emulated`, `emulated@MASTER_IFACE,TERMINAL_IFACE` or `IFACE[@POSITION]`.
     pub fn parse(text: &str) -> Result<EthercatLink, String> {
-        let emulated = Emulated {
-            faults: vec![],
-            choices: vec![],
-            link_fault: None,
-        };
+        let emulated = Emulated::default();
         if text == "emulated" {
             return Ok(EthercatLink::Emulated(emulated));
         }
@@ -172,107 +186,6 @@ impl Master {
     }
 }
 
-/// An EtherCAT terminal as canif's master found it: the report's own entry.
-#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub struct TerminalFacts {
-    pub profile: String,
-    pub name: String,
-    pub vendor_id: u32,
-    pub product_code: u32,
-    pub revision: u32,
-    pub serial: u32,
-    /// `0x1C32:05` read back after setting `0x1C32:08` (000 §5); none where it did not answer.
-    pub local_cycle_ns: Option<u32>,
-    /// Idle cycles timed after bring-up, and one cycle's exchange (LRW and input read), wall clock.
-    pub cycles: u64,
-    pub mean_cycle_ns: u64,
-    pub worst_cycle_ns: u64,
-    /// A soak's real-time period (`--ethercat-soak-s`), and the cycles that
-    /// ended after the next one was due; none when the cycles were not paced.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub period_ns: Option<u64>,
-    #[serde(default)]
-    pub missed_cycles: u64,
-}
-
-/// How a survey exchanges its idle cycles.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Pace {
-    /// This many cycles, one after the other.
-    Unpaced(u32),
-    /// One cycle every `period` for `soak`, as a real-time task would: a
-    /// cycle that ends after the next one's start missed its deadline.
-    Every {
-        period: std::time::Duration,
-        soak: std::time::Duration,
-    },
-}
-
-/// Brings the terminal up once with the profile's first interface, runs
-/// idle PLC cycles at `pace`, and reads `0x1C32:05`: who the terminal is and
-/// how its exchange performs, for the run's report.
-pub fn survey(
-    profile: &canif_spec::Profile,
-    link: &EthercatLink,
-    pace: Pace,
-) -> Result<TerminalFacts, BuildError> {
-    use std::time::{Duration, Instant};
-    let caps = &profile.model_capabilities();
-    let identity = &profile.ethercat.ok_or_else(|| {
-        BuildError::Failed(IutError::new(
-            IutCause::NotStarted,
-            format!(
-                "{} is no EtherCAT terminal: it gives no identity",
-                profile.name
-            ),
-        ))
-    })?;
-    let config = InterfaceConfig::new(caps.first_format(), 1);
-    let mut iut = build(caps, &config, identity, link)?;
-    let outputs = vec![0u8; iut.output_len()];
-    let (period, cycles) = match pace {
-        Pace::Unpaced(cycles) => (None, u64::from(cycles)),
-        Pace::Every { period, soak } => (
-            Some(period),
-            (soak.as_nanos() / period.as_nanos().max(1)) as u64,
-        ),
-    };
-    let (mut total, mut worst, mut missed) = (0u64, 0u64, 0u64);
-    let started = Instant::now();
-    for n in 0..cycles {
-        if let Some(period) = period {
-            let due = started + period * n as u32;
-            if let Some(wait) = due.checked_duration_since(Instant::now()) {
-                std::thread::sleep(wait);
-            }
-        }
-        let began = Instant::now();
-        iut.cycle(
-            &outputs,
-            n * period.map_or(1_000_000, |p| p.as_nanos() as u64),
-        )
-        .map_err(BuildError::Failed)?;
-        let took = began.elapsed().as_nanos() as u64;
-        total += took;
-        worst = worst.max(took);
-        if let Some(period) = period {
-            let next = started + period * (n as u32 + 1);
-            if Instant::now() > next + Duration::ZERO {
-                missed += 1;
-            }
-        }
-    }
-    iut.read_local_cycle();
-    let mut facts = iut.facts.clone();
-    facts.profile = profile.name.clone();
-    facts.cycles = cycles;
-    facts.mean_cycle_ns = total / cycles.max(1);
-    facts.worst_cycle_ns = worst;
-    facts.period_ns = period.map(|p| p.as_nanos() as u64);
-    facts.missed_cycles = missed;
-    Ok(facts)
-}
-
 /// The terminal on the other end of canif's master.
 pub struct EthercatIut {
     master: Master,
@@ -286,6 +199,9 @@ pub struct EthercatIut {
     serving: Option<veth::Serving>,
     /// What the previous cycle's SyncManager 2 event left in the inputs.
     previous_inputs: Option<Vec<u8>>,
+    /// The CAN interface's share of the inputs: what follows (the CAN
+    /// status, 003: "the cycle ends with the CAN status") is the terminal's own.
+    interface_inputs: usize,
     /// How the played master exchanges the process data (LRW by default).
     telegrams: ExchangeMode,
     /// What the last LRW showed the terminal doing wrong, for the lockstep.
@@ -311,7 +227,7 @@ pub fn emulated_terminal(
             revision: identity.revision,
             serial: 1,
         },
-        "EL6751 (canif)",
+        "EL6751",
         offer,
         caps.rx_queue_depth,
         caps.tx_queue_depth,
@@ -325,7 +241,7 @@ pub fn emulated_terminal(
     if let Some(LinkFault::AlError(code)) = emulated.link_fault {
         terminal.refuse_start_with(code);
     }
-    let mut subdevice = SubDevice::new(
+    let mut subdevice = SubDevice::with_layout(
         &Identity {
             vendor_id: identity.vendor_id,
             product_code: identity.product_code,
@@ -333,6 +249,7 @@ pub fn emulated_terminal(
             serial: 1,
             name: "EL6751".into(),
         },
+        emulated.layout,
         terminal,
     );
     subdevice.cycles_on_frames = emulated.link_fault == Some(LinkFault::CyclesOnFrames);
@@ -445,7 +362,25 @@ pub fn build(
     let group = master
         .drive(group.into_op(md))
         .map_err(|e| BuildError::Failed(master_error(e, "SAFEOP → OP")))?;
+    let interface_inputs = ImageLayout::new(config, caps.info_data).input_size();
+    let mut facts = facts;
+    facts.sync_managers = master.drive(start_up::sync_managers(md, station));
+    if let Ok(sub) = group.subdevice(md, position) {
+        facts.output_bytes = sub.outputs_raw().len();
+        facts.input_bytes = sub.inputs_raw().len();
+    }
+    facts.status_bytes = facts.input_bytes.saturating_sub(interface_inputs);
+    if facts.input_bytes < interface_inputs {
+        return Err(BuildError::Failed(IutError::new(
+            IutCause::Impossible,
+            format!(
+                "the terminal mapped {} input bytes; the configuration's image has {interface_inputs}",
+                facts.input_bytes
+            ),
+        )));
+    }
     Ok(EthercatIut {
+        interface_inputs,
         master,
         group,
         position,
@@ -536,10 +471,12 @@ impl Iut for EthercatIut {
                 ),
             ));
         }
-        match self.dc.is_some() {
+        let mut inputs = match self.dc.is_some() {
             true => self.exchange_around_sync0(outputs, now),
             false => self.exchange(self.telegrams, outputs, now),
-        }
+        }?;
+        inputs.truncate(self.interface_inputs);
+        Ok(inputs)
     }
 
     fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) -> Result<(), IutError> {

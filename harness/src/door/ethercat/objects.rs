@@ -27,25 +27,24 @@ fn count(n: u8) -> Vec<u8> {
     vec![n, 0]
 }
 
+/// `0x8000:20` as docs/ethercat.md lays it out: one bit per frame format
+/// of TwinCAT's dialog (the public example's 0x0008 is 29-bit with
+/// transaction numbers), the queue, the time stamp.
 fn flags(config: &InterfaceConfig) -> u16 {
-    let mut flags = 0u16;
-    match config.format {
-        FrameFormat::Base11 => {}
-        FrameFormat::Extended29 => flags |= 1,
-        FrameFormat::Fd => flags |= 1 << 1,
-    }
-    if config.transaction_number {
-        flags |= 1 << 2;
-    }
-    match config.queue {
-        QueueMode::Standard => {}
-        QueueMode::Optimized => flags |= 1 << 3,
-        QueueMode::Fast => flags |= 1 << 4,
-    }
-    if config.time_stamp {
-        flags |= 1 << 5;
-    }
-    flags
+    let format = match (config.format, config.transaction_number) {
+        (FrameFormat::Base11, false) => 0,
+        (FrameFormat::Extended29, false) => 1 << 2,
+        (FrameFormat::Extended29, true) => 1 << 3,
+        (FrameFormat::Base11, true) => 1 << 4,
+        (FrameFormat::Fd, _) => 1 << 5,
+    };
+    let queue = match config.queue {
+        QueueMode::Standard => 0,
+        QueueMode::Optimized => 1 << 0,
+        QueueMode::Fast => 1 << 1,
+    };
+    let stamp = if config.time_stamp { 1 << 6 } else { 0 };
+    format | queue | stamp
 }
 
 /// The three downloads, in the order the documentation gives.
@@ -117,19 +116,20 @@ mod tests {
     }
 
     #[test]
-    fn the_interface_record_carries_flags_slots_and_depths() {
-        let mut config = InterfaceConfig::new(FrameFormat::Base11, 10);
-        config.queue = QueueMode::Optimized;
+    fn the_interface_record_reads_the_public_example() {
+        // ETHERCAT.md's example: flags 0x0008 (29-bit with transaction
+        // numbers), 10 and 10 slots, queues of 150.
+        let mut config = InterfaceConfig::new(FrameFormat::Extended29, 10);
+        config.transaction_number = true;
         let caps = Capabilities {
             rx_queue_depth: 150,
-            tx_queue_depth: 64,
+            tx_queue_depth: 150,
             ..Capabilities::everything()
         };
         let interface = &downloads(&caps, &config)[1];
-        // ETHERCAT.md's example: flags 0x0008 (the optimized queue here), 10 and 10 slots.
         assert_eq!(
             interface.data,
-            [0x24, 0, 0x08, 0, 10, 0, 10, 0, 150, 0, 64, 0]
+            [0x24, 0, 0x08, 0, 10, 0, 10, 0, 150, 0, 150, 0]
         );
     }
 }

@@ -14,7 +14,7 @@ use crate::error::{IutCause, IutError};
 /// The AL status's error flag.
 const AL_ERROR: u16 = 0x10;
 /// AL status codes with which a terminal refuses a configuration (not a broken exchange).
-const REFUSALS: [u16; 3] = [0x001D, 0x001E, 0x0030];
+const REFUSALS: [u16; 4] = [0x001D, 0x001E, 0x0030, 0x0035];
 
 /// The meaning of the AL status codes ETG.1000.6 Table 11 gives.
 fn al_status_text(code: u16) -> &'static str {
@@ -28,6 +28,7 @@ fn al_status_text(code: u16) -> &'static str {
         0x001D => "invalid output configuration",
         0x001E => "invalid input configuration",
         0x0030 => "invalid DC SYNC configuration",
+        0x0035 => "invalid DC sync cycle time",
         _ => "no meaning in ETG.1000.6",
     }
 }
@@ -180,10 +181,32 @@ pub(super) async fn configure(
             .await
             .map_err(failed)?;
     }
+    // The process-data watchdog off: a harness that stalls (a busy
+    // machine) is no fault of the terminal's, and must not take it to
+    // SAFEOP with 0x001B in the middle of a run.
+    Command::fpwr(station, register::WATCHDOG_TIME_PROCESS_DATA)
+        .send(md, 0u16)
+        .await
+        .map_err(|e| BuildError::Failed(master_error(e, "turning the watchdog off")))?;
     // 000 §5: with 0x1C32:08 set the terminal measures its cycle into 0x1C32:05,
     // read back for the report; a terminal that refuses it reports none.
     let _ = mailboxes
         .download(md, objects::SYNC_OUTPUTS, objects::MEASURE_SUB, &[1, 0])
         .await;
     Ok(())
+}
+
+/// SyncManagers 0–3 as configured: start, length, control byte (for the
+/// report; a terminal that does not answer shows none).
+pub(super) async fn sync_managers(md: &ethercrab::MainDevice<'_>, station: u16) -> Vec<[u16; 3]> {
+    let mut out = Vec::new();
+    for n in 0..4 {
+        let at = register::SYNC_MANAGER_BASE + n * register::SYNC_MANAGER_LEN;
+        let Ok(raw) = Command::fprd(station, at).receive_slice(md, 8).await else {
+            return Vec::new();
+        };
+        let sm = register::SyncManager::parse(&raw);
+        out.push([sm.start, sm.length, u16::from(sm.control)]);
+    }
+    out
 }
