@@ -82,6 +82,25 @@ impl PacketSocket {
         Ok(())
     }
 
+    /// As [`PacketSocket::recv`], but looks without sleeping for `spin`
+    /// first: a thread asleep in poll(2) takes tens of microseconds to wake
+    /// on a virtual machine, as long as the frame's whole round trip.
+    pub fn recv_spinning(
+        &self,
+        buffer: &mut [u8],
+        spin: Duration,
+        timeout: Duration,
+    ) -> io::Result<Option<usize>> {
+        let began = std::time::Instant::now();
+        while began.elapsed() < spin {
+            if let Some(n) = self.recv(buffer, Duration::ZERO)? {
+                return Ok(Some(n));
+            }
+            std::hint::spin_loop();
+        }
+        self.recv(buffer, timeout)
+    }
+
     /// The next frame that arrived (not one this machine sent), waiting at
     /// most `timeout`; `None` when none came.
     pub fn recv(&self, buffer: &mut [u8], timeout: Duration) -> io::Result<Option<usize>> {

@@ -128,18 +128,29 @@ impl EthercatIut {
         self.exchange(self.telegrams, outputs, now)
     }
 
-    /// The input SyncManager's bytes, read by its registers (FPRD).
+    /// The input SyncManager's bytes (FPRD), where its registers say it
+    /// lies: read once, since a master does not move it in OP (a round trip
+    /// less per cycle).
     fn read_input_sync_manager(&mut self) -> Result<Vec<u8>, IutError> {
         let (md, station) = (self.master.maindevice(), self.station);
+        let known = self.input_sync_manager;
         let fresh = self.master.drive(async {
-            let sm = Command::fprd(station, SM3).receive_slice(md, 8).await?;
-            let sm = canif_ethercat::register::SyncManager::parse(&sm);
-            Command::fprd(station, sm.start)
-                .receive_slice(md, sm.length)
+            let (start, length) = match known {
+                Some(at) => at,
+                None => {
+                    let sm = Command::fprd(station, SM3).receive_slice(md, 8).await?;
+                    let sm = canif_ethercat::register::SyncManager::parse(&sm);
+                    (sm.start, sm.length)
+                }
+            };
+            Command::fprd(station, start)
+                .receive_slice(md, length)
                 .await
-                .map(|inputs| inputs.to_vec())
+                .map(|inputs| ((start, length), inputs.to_vec()))
         });
-        fresh.map_err(|e| master_error(e, "reading the input SyncManager"))
+        let (at, inputs) = fresh.map_err(|e| master_error(e, "reading the input SyncManager"))?;
+        self.input_sync_manager = Some(at);
+        Ok(inputs)
     }
 
     /// The logical windows, read from the terminal the first time.

@@ -193,10 +193,79 @@ impl MemoryMaster {
     }
 }
 
-/// A master on a network interface: ethercrab's own raw-socket task carries
-/// its frames, in a thread of its own; one per interface for the process's life.
+/// A master on a network interface. With Linux sockets the calling thread
+/// carries its frames itself through a raw packet socket, as the in-memory
+/// master does to its peer: each frame handed to a second thread and back
+/// (ethercrab's own task) cost two wake-ups across threads per round trip.
 pub(super) struct InterfaceMaster {
     pub(super) maindevice: MainDevice<'static>,
+    #[cfg(feature = "socketcan")]
+    wire: Mutex<Wire>,
+}
+
+/// The socket under a master, and the frames it waits answers for.
+#[cfg(feature = "socketcan")]
+struct Wire {
+    tx: PduTx<'static>,
+    rx: PduRx<'static>,
+    socket: canif_kernel::PacketSocket,
+    buffer: Vec<u8>,
+    in_flight: usize,
+    /// Since when no answer came while frames were in flight.
+    silent_since: Option<std::time::Instant>,
+}
+
+#[cfg(feature = "socketcan")]
+impl Wire {
+    /// Sends what the master queued, then takes what came back: waits (up
+    /// to a slice) only while answers are due, so a timer the master waits
+    /// on still fires; answers overdue past the master's own timeouts are
+    /// given up.
+    fn pump(&mut self, cx: &mut std::task::Context<'_>) {
+        const SLICE: Duration = Duration::from_millis(1);
+        // An answer usually comes within tens of microseconds: looked for
+        // awake, it is not delayed by a sleeping thread's wake-up.
+        const SPIN: Duration = Duration::from_micros(200);
+        self.tx.replace_waker(cx.waker());
+        while let Some(frame) = self.tx.next_sendable_frame() {
+            let socket = &self.socket;
+            let sent = frame.send_blocking(|bytes| {
+                socket
+                    .send(bytes)
+                    .map(|()| bytes.len())
+                    .map_err(|_| ethercrab::error::Error::SendFrame)
+            });
+            if sent.is_ok() {
+                self.in_flight += 1;
+            }
+        }
+        let mut wait = if self.in_flight > 0 {
+            SLICE
+        } else {
+            Duration::ZERO
+        };
+        while let Ok(Some(n)) = self
+            .socket
+            .recv_spinning(&mut self.buffer, SPIN.min(wait), wait)
+        {
+            if let Ok(ethercrab::ReceiveAction::Processed) =
+                self.rx.receive_frame(&self.buffer[..n])
+            {
+                self.in_flight = self.in_flight.saturating_sub(1);
+                self.silent_since = None;
+            }
+            wait = Duration::ZERO;
+        }
+        if self.in_flight > 0 {
+            let since = *self
+                .silent_since
+                .get_or_insert_with(std::time::Instant::now);
+            if since.elapsed() > Duration::from_secs(2) {
+                (self.in_flight, self.silent_since) = (0, None);
+            }
+            cx.waker().wake_by_ref();
+        }
+    }
 }
 
 type Masters = std::sync::Mutex<std::collections::HashMap<String, &'static InterfaceMaster>>;
@@ -214,17 +283,47 @@ impl InterfaceMaster {
         let storage: &'static PduStorage<MAX_FRAMES, MAX_PDU_DATA> =
             Box::leak(Box::new(PduStorage::new()));
         let (tx, rx, pdu_loop) = storage.try_split().expect("a fresh storage splits");
-        let task = ethercrab::std::tx_rx_task(interface, tx, rx)?;
-        std::thread::Builder::new()
-            .name(format!("ethercat-{interface}"))
-            .spawn(move || async_io::block_on(task))?;
-        let master: &'static InterfaceMaster = Box::leak(Box::new(InterfaceMaster {
-            maindevice: MainDevice::new(pdu_loop, real_timeouts(), config()),
-        }));
+        let maindevice = MainDevice::new(pdu_loop, real_timeouts(), config());
+        #[cfg(feature = "socketcan")]
+        let master = {
+            let socket =
+                canif_kernel::PacketSocket::open(interface, canif_ethercat::wire::ETHERTYPE)
+                    .map_err(|e| std::io::Error::other(e.to_string()))?;
+            InterfaceMaster {
+                maindevice,
+                wire: Mutex::new(Wire {
+                    tx,
+                    rx,
+                    socket,
+                    buffer: vec![0; 2048],
+                    in_flight: 0,
+                    silent_since: None,
+                }),
+            }
+        };
+        #[cfg(not(feature = "socketcan"))]
+        let master = {
+            let task = ethercrab::std::tx_rx_task(interface, tx, rx)?;
+            std::thread::Builder::new()
+                .name(format!("ethercat-{interface}"))
+                .spawn(move || async_io::block_on(task))?;
+            InterfaceMaster { maindevice }
+        };
+        let master: &'static InterfaceMaster = Box::leak(Box::new(master));
         masters.insert(interface.to_string(), master);
         Ok(master)
     }
 
+    #[cfg(feature = "socketcan")]
+    pub(super) fn drive<T>(&self, operation: impl Future<Output = T>) -> T {
+        let pump = std::future::poll_fn(|cx| {
+            self.wire.lock().unwrap_or_else(|e| e.into_inner()).pump(cx);
+            Poll::<T>::Pending
+        });
+        async_io::block_on(futures_lite::future::or(operation, pump))
+    }
+
+    #[cfg(not(feature = "socketcan"))]
     pub(super) fn drive<T>(&self, operation: impl Future<Output = T>) -> T {
         async_io::block_on(operation)
     }
@@ -238,7 +337,7 @@ fn real_timeouts() -> Timeouts {
         state_transition: Duration::from_secs(5),
         pdu: Duration::from_secs(1),
         eeprom: Duration::from_secs(1),
-        wait_loop_delay: Duration::from_millis(1),
+        wait_loop_delay: Duration::from_micros(100),
         mailbox_echo: Duration::from_millis(500),
         mailbox_response: Duration::from_secs(2),
     }

@@ -208,6 +208,8 @@ pub struct EthercatIut {
     deviation: Option<crate::door::iut::Deviation>,
     /// Where the logical image maps the terminal (read once, for LWR and LRD).
     windows: Option<exchange::Windows>,
+    /// Where the input SyncManager lies, start and length (read once).
+    input_sync_manager: Option<(u16, u16)>,
     /// With Distributed Clocks: the master's telegrams around each SYNC0.
     dc: Option<exchange::DcMaster>,
     pub facts: TerminalFacts,
@@ -392,6 +394,7 @@ pub fn build(
         telegrams: ExchangeMode::Lrw,
         deviation: None,
         windows: None,
+        input_sync_manager: None,
         dc: matches!(
             config.synchronization,
             canif_model::config::Synchronization::DistributedClocks { .. }

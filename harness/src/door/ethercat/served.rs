@@ -23,6 +23,11 @@ use crate::error::BusError;
 /// the master sends (also how often `stop` is asked).
 const CAN_POLL: Duration = Duration::from_micros(200);
 
+/// How long the terminal looks for the next frame awake before it sleeps: a
+/// master's next telegram usually follows within this, and a thread woken
+/// from poll(2) would add tens of microseconds to its round trip.
+const SPIN: Duration = Duration::from_micros(200);
+
 /// What a served terminal saw.
 #[derive(Debug, Default, Clone, PartialEq, Eq)]
 pub struct Served {
@@ -52,7 +57,10 @@ pub fn answer_frames(
     let mut served = Served::default();
     let mut buffer = vec![0u8; 2048];
     while !stop() {
-        let Some(n) = socket.recv(&mut buffer, wait).map_err(failed)? else {
+        let Some(n) = socket
+            .recv_spinning(&mut buffer, SPIN.min(wait), wait)
+            .map_err(failed)?
+        else {
             between();
             continue;
         };
