@@ -192,24 +192,20 @@ fn the_terminal_is_certified_across_a_veth_pair() {
     assert!(said.contains("FAIL el6751-mdp::FLT-001"), "{said}");
 }
 
-/// A second, independent master (SOEM, through the Python package pysoem)
-/// scans, configures and runs canif's terminal across a veth pair, and the
-/// CAN message its process image asked for shows on the terminal's side:
-/// the terminal is not tuned to ethercrab.
-#[test]
-fn an_independent_master_drives_the_terminal() {
-    let test = "an_independent_master_drives_the_terminal";
+/// A SOEM script (pysoem) against `canif device --ethercat` across a fresh
+/// veth pair: what the script printed (it exited 0) and what the terminal
+/// served; `None` where this machine cannot (said as a skip).
+fn soem_against_the_terminal(test: &str, tag: u32, script: &str) -> Option<(String, String)> {
     if !has_pysoem() {
-        return skip(test, "no Python package pysoem (.ci/run installs it)");
+        skip(test, "no Python package pysoem (.ci/run installs it)");
+        return None;
     }
-    let Some((pair, mut terminal)) = terminal_on_veth(test, 1) else {
-        return;
-    };
+    let (pair, mut terminal) = terminal_on_veth(test, tag)?;
     // It opens its socket before it says so on stderr.
     std::thread::sleep(std::time::Duration::from_millis(500));
-    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/python/pysoem_master.py");
+    let script = format!("{}/tests/python/{script}", env!("CARGO_MANIFEST_DIR"));
     let master = Command::new("timeout")
-        .args(["60", "python3", script, &pair.master])
+        .args(["60", "python3", &script, &pair.master])
         .output()
         .expect("python3 runs");
     // SIGINT: the terminal says what it served and exits.
@@ -217,13 +213,26 @@ fn an_independent_master_drives_the_terminal() {
         .args(["-INT", &terminal.id().to_string()])
         .status();
     let served = wait_at_most(&mut terminal, std::time::Duration::from_secs(10));
-    let said = String::from_utf8_lossy(&master.stdout);
+    let said = String::from_utf8_lossy(&master.stdout).to_string();
     assert_eq!(
         master.status.code(),
         Some(0),
         "{said}{}",
         String::from_utf8_lossy(&master.stderr)
     );
+    Some((said, served))
+}
+
+/// A second, independent master (SOEM, through the Python package pysoem)
+/// scans, configures and runs canif's terminal across a veth pair, and the
+/// CAN message its process image asked for shows on the terminal's side:
+/// the terminal is not tuned to ethercrab.
+#[test]
+fn an_independent_master_drives_the_terminal() {
+    let test = "an_independent_master_drives_the_terminal";
+    let Some((said, served)) = soem_against_the_terminal(test, 1, "pysoem_master.py") else {
+        return;
+    };
     assert!(said.contains("Inputs.TxCounter confirmed 1"), "{said}");
     assert!(
         served.contains(" 123#CA1F"),
@@ -238,32 +247,9 @@ fn an_independent_master_drives_the_terminal() {
 #[test]
 fn a_real_start_up_list_configures_the_terminal() {
     let test = "a_real_start_up_list_configures_the_terminal";
-    if !has_pysoem() {
-        return skip(test, "no Python package pysoem (.ci/run installs it)");
-    }
-    let Some((pair, mut terminal)) = terminal_on_veth(test, 3) else {
+    let Some((said, served)) = soem_against_the_terminal(test, 3, "pysoem_start_up.py") else {
         return;
     };
-    std::thread::sleep(std::time::Duration::from_millis(500));
-    let script = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/tests/python/pysoem_start_up.py"
-    );
-    let master = Command::new("timeout")
-        .args(["60", "python3", script, &pair.master])
-        .output()
-        .expect("python3 runs");
-    let _ = Command::new("kill")
-        .args(["-INT", &terminal.id().to_string()])
-        .status();
-    let served = wait_at_most(&mut terminal, std::time::Duration::from_secs(10));
-    let said = String::from_utf8_lossy(&master.stdout);
-    assert_eq!(
-        master.status.code(),
-        Some(0),
-        "{said}{}",
-        String::from_utf8_lossy(&master.stderr)
-    );
     assert!(
         said.contains("mapped 166 output and 154 input bytes"),
         "{said}"

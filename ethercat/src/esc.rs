@@ -364,18 +364,8 @@ mod tests {
     fn lrw_reads_inputs_and_writes_outputs_through_the_fmmus_counting_three() {
         let mut esc = Esc::new();
         // FMMU0: logical 0..4 → 0x1100 (write); FMMU1: logical 4..6 → 0x1D00 (read).
-        let fmmu = |logical: u32, len: u16, physical: u16, kind: u8| {
-            let mut b = vec![0u8; 16];
-            b[0..4].copy_from_slice(&logical.to_le_bytes());
-            b[4..6].copy_from_slice(&len.to_le_bytes());
-            b[7] = 7;
-            b[8..10].copy_from_slice(&physical.to_le_bytes());
-            b[11] = kind;
-            b[12] = 1;
-            b
-        };
-        esc.memory[0x600..0x610].copy_from_slice(&fmmu(0, 4, 0x1100, 2));
-        esc.memory[0x610..0x620].copy_from_slice(&fmmu(4, 2, 0x1D00, 1));
+        esc.memory[0x600..0x610].copy_from_slice(&fmmu_record(0, 4, 0x1100, 2));
+        esc.memory[0x610..0x620].copy_from_slice(&fmmu_record(4, 2, 0x1D00, 1));
         esc.memory[0x1D00..0x1D02].copy_from_slice(&[7, 8]);
         let mut lrw = Datagram::physical(Command::Lrw, 0, 0, vec![1, 2, 3, 4, 0, 0]);
         lrw.address = 0;
@@ -391,18 +381,9 @@ mod tests {
     fn logical_working_counters_follow_the_command() {
         let mut esc = Esc::new();
         // FMMU 0 writes logical 0..4 to 0x1000, FMMU 1 reads logical 4..8 from 0x1100.
-        let fmmu = |logical: u32, physical: u16, kind: u8| {
-            let mut record = vec![0u8; 16];
-            record[0..4].copy_from_slice(&logical.to_le_bytes());
-            record[4..6].copy_from_slice(&4u16.to_le_bytes());
-            record[8..10].copy_from_slice(&physical.to_le_bytes());
-            record[11] = kind;
-            record[12] = 1;
-            record
-        };
         let base = usize::from(crate::register::FMMU_BASE);
-        esc.memory[base..base + 16].copy_from_slice(&fmmu(0, 0x1000, 2));
-        esc.memory[base + 16..base + 32].copy_from_slice(&fmmu(4, 0x1100, 1));
+        esc.memory[base..base + 16].copy_from_slice(&fmmu_record(0, 4, 0x1000, 2));
+        esc.memory[base + 16..base + 32].copy_from_slice(&fmmu_record(4, 4, 0x1100, 1));
         let logical = |command, address, len| Datagram {
             address,
             ..Datagram::physical(command, 0, 0, vec![0; len])

@@ -13,15 +13,12 @@ import sys
 import time
 
 import pysoem
+from soem_steps import fail, map_and_start, patient
 
-
-def fail(what):
-    print(f"FAIL {what}")
-    sys.exit(1)
 
 
 def main(interface):
-    master = pysoem.Master()
+    master = patient(pysoem.Master())
     master.open(interface)
     try:
         found = master.config_init()
@@ -40,22 +37,9 @@ def main(interface):
         terminal.sdo_write(0x8000, 0, struct.pack("<BxHHHHH", 0x24, 0, 2, 2, rx_depth, tx_depth), ca=True)
         terminal.sdo_write(0x8001, 0, bytes([0, 0]), ca=True)
         print("configured: 11-bit, 2 Tx and 2 Rx slots")
-        size = master.config_map()
-        outputs, inputs = len(terminal.output), len(terminal.input)
         # 6 header bytes + 2 x 10 (Tx); 6 + 2 x 10 (Rx), as 003 lays the
         # image out, then the 6 bytes of CAN status (0x1A85).
-        if (outputs, inputs) != (26, 32):
-            fail(f"mapped {outputs} output and {inputs} input bytes, 26 and 32 expected")
-        print(f"mapped {outputs} output and {inputs} input bytes ({size} in all)")
-        if master.state_check(pysoem.SAFEOP_STATE, 50_000) != pysoem.SAFEOP_STATE:
-            fail(f"not in SAFEOP: AL status code {terminal.al_status:#06x}")
-        master.state = pysoem.OP_STATE
-        master.send_processdata()
-        master.receive_processdata(2000)
-        master.write_state()
-        if master.state_check(pysoem.OP_STATE, 50_000) != pysoem.OP_STATE:
-            fail("not in OP")
-        print("OP")
+        map_and_start(master, terminal, (26, 32))
         # One message: TxCounter 1, RxCounter 0, NoOfTxMessages 1, then COB ID
         # word (length 2, id 0x123 in bits 5-15) and the data.
         message = struct.pack("<H8s", (0x123 << 5) | 2, bytes([0xCA, 0x1F]))

@@ -17,6 +17,7 @@ import struct
 import sys
 
 import pysoem
+from soem_steps import fail, map_and_start, patient
 
 U8, U16, U32 = "<B", "<H", "<I"
 
@@ -46,13 +47,9 @@ START_UP = [
 FILTERS = bytes([1, 0]) + bytes.fromhex("01000000 0000 FFFFFF1F".replace(" ", ""))
 
 
-def fail(what):
-    print(f"FAIL {what}")
-    sys.exit(1)
-
 
 def main(interface):
-    master = pysoem.Master()
+    master = patient(pysoem.Master())
     master.open(interface)
     try:
         if master.config_init() != 1:
@@ -93,20 +90,7 @@ def main(interface):
                 fail(f"a Tx queue of 151 aborted with {error.abort_code:#010x}, not 0x06090030")
         print("a Tx queue of 151 refused with 0x06090030")
 
-        master.config_map()
-        outputs, inputs = len(terminal.output), len(terminal.input)
-        if (outputs, inputs) != (166, 154):
-            fail(f"mapped {outputs} output and {inputs} input bytes, 166 and 154 expected")
-        print(f"mapped {outputs} output and {inputs} input bytes")
-        if master.state_check(pysoem.SAFEOP_STATE, 50_000) != pysoem.SAFEOP_STATE:
-            fail(f"not in SAFEOP: AL status code {terminal.al_status:#06x}")
-        master.state = pysoem.OP_STATE
-        master.send_processdata()
-        master.receive_processdata(2000)
-        master.write_state()
-        if master.state_check(pysoem.OP_STATE, 50_000) != pysoem.OP_STATE:
-            fail("not in OP")
-        print("OP")
+        map_and_start(master, terminal, (166, 154))
 
         # One 29-bit message with transaction number 0x42: TxCounter 1,
         # RxCounter 0, NoOfTxMessages 1, then transaction number, length,
