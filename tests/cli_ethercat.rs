@@ -332,3 +332,32 @@ fn wait_at_most(child: &mut std::process::Child, limit: std::time::Duration) -> 
     let _ = child.wait();
     out
 }
+
+/// SIGTERM ends `canif device --ethercat` at once, saying what it served
+/// (issue 35: a terminal hung by a master once ignored the first one).
+#[test]
+fn sigterm_ends_the_terminal_at_once() {
+    let test = "sigterm_ends_the_terminal_at_once";
+    let Some((_pair, mut terminal)) = terminal_on_veth(test, 4) else {
+        return;
+    };
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let _ = Command::new("kill")
+        .args(["-TERM", &terminal.id().to_string()])
+        .status();
+    // A readiness bound, not a speed: a terminal that ignores SIGTERM is
+    // killed after it and found still running.
+    let began = std::time::Instant::now();
+    while terminal.try_wait().ok().flatten().is_none()
+        && began.elapsed() < std::time::Duration::from_secs(10)
+    {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let status = terminal.try_wait().ok().flatten();
+    let _ = terminal.kill();
+    let _ = terminal.wait();
+    assert!(
+        status.is_some_and(|s| s.success()),
+        "canif device --ethercat did not end on SIGTERM: {status:?}"
+    );
+}
