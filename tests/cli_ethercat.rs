@@ -256,6 +256,10 @@ fn a_real_start_up_list_configures_the_terminal() {
     );
     assert!(said.contains("Inputs.TransactionNumber 0x42"), "{said}");
     assert!(
+        said.contains("0x7001:01 and 0x6001:04 read the image"),
+        "{said}"
+    );
+    assert!(
         served.contains("01234567#CA1F"),
         "the terminal's side: {served}"
     );

@@ -13,7 +13,7 @@ import sys
 import time
 
 import pysoem
-from soem_steps import fail, map_and_start, patient
+from soem_steps import back_to_init, fail, map_and_start, patient
 
 
 
@@ -56,8 +56,7 @@ def main(interface):
         if not confirmed:
             fail(f"Inputs.TxCounter never confirmed 1: inputs {bytes(terminal.input).hex()}")
         print("Inputs.TxCounter confirmed 1")
-        master.state = pysoem.INIT_STATE
-        master.write_state()
+        back_to_init(master)
     finally:
         master.close()
 

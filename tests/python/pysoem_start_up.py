@@ -17,7 +17,7 @@ import struct
 import sys
 
 import pysoem
-from soem_steps import fail, map_and_start, patient
+from soem_steps import back_to_init, fail, map_and_start, patient
 
 U8, U16, U32 = "<B", "<H", "<I"
 
@@ -108,10 +108,16 @@ def main(interface):
         else:
             fail(f"Inputs.TxCounter/TransactionNumber never confirmed 1/0x42: {seen}")
         print("Inputs.TxCounter confirmed 1, Inputs.TransactionNumber 0x42")
+        # The image objects read what the last cycle left (0x7001:01 the
+        # TxCounter written, 0x6001:04 the transaction number confirmed).
+        tx_counter = struct.unpack(U16, terminal.sdo_read(0x7001, 0x01))[0]
+        transaction = struct.unpack(U16, terminal.sdo_read(0x6001, 0x04))[0]
+        if (tx_counter, transaction) != (1, 0x42):
+            fail(f"0x7001:01 {tx_counter}, 0x6001:04 {transaction:#x}: not the image's 1 and 0x42")
+        print("0x7001:01 and 0x6001:04 read the image")
         status = bytes(terminal.input[148:154])
         print(f"CAN status {status.hex()}")
-        master.state = pysoem.INIT_STATE
-        master.write_state()
+        back_to_init(master)
     finally:
         master.close()
 

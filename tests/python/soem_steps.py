@@ -36,3 +36,9 @@ def map_and_start(master, terminal, expected):
     if master.state_check(pysoem.OP_STATE, 50_000) != pysoem.OP_STATE:
         fail("not in OP")
     print("OP")
+
+
+def back_to_init(master):
+    """INIT, then the socket closed: the terminal is left as it was found."""
+    master.state = pysoem.INIT_STATE
+    master.write_state()

@@ -118,61 +118,75 @@ impl Terminal {
         ]
     }
 
-    /// `0x700z`: the outputs as the last cycle had them (zeros for the
-    /// format not configured).
-    fn outputs_object(&self, index: u16) -> Vec<Entry> {
-        let current = self.image_objects().0 == index;
-        let image: &[u8] = if current { &self.last_outputs } else { &[] };
-        let size = match (current, index) {
-            (true, _) => self.geometries().0.size,
-            (false, object::OUTPUTS_11) => MsgGeometry::tx(Format::Std11, false).size,
-            (false, _) => MsgGeometry::tx(Format::Ext29, false).size,
-        };
-        let slots = self.draft.tx_slots;
-        let mut out = vec![ro(0, vec![3 + slots])];
-        for (sub, at, name) in [
-            (1, header::TX_COUNTER, "TX Counter"),
-            (2, header::RX_COUNTER, "RX Counter"),
-            (3, header::NO_OF_MESSAGES, "Number of TX Messages"),
-        ] {
-            out.push(ro(sub, slice(image, at, 2)).named(name));
-        }
-        for n in 0..slots {
-            let at = header::MESSAGES + usize::from(n) * size;
-            out.push(ro(4 + n, slice(image, at, size)));
-        }
-        out
-    }
-
-    /// `0x600z`: the inputs of the last cycle (zeros for the format not configured).
-    fn inputs_object(&self, index: u16) -> Vec<Entry> {
-        let current = self.image_objects().1 == index;
-        let image: &[u8] = match (current, &self.device) {
-            (true, Some(device)) => &device.input,
+    /// `0x700z` (outputs) and `0x600z` (inputs): the image as the last
+    /// cycle left it (zeros for the format not configured): the three
+    /// counters, for the inputs the transaction number, then one message per slot.
+    fn image_object(&self, index: u16, inputs: bool) -> Vec<Entry> {
+        let (outputs_object, inputs_object) = self.image_objects();
+        let current = index
+            == if inputs {
+                inputs_object
+            } else {
+                outputs_object
+            };
+        let image: &[u8] = match (current, inputs, &self.device) {
+            (true, false, _) => &self.last_outputs,
+            (true, true, Some(device)) => &device.input,
             _ => &[],
         };
-        let size = match (current, index) {
-            (true, _) => self.geometries().1.size,
-            (false, object::INPUTS_11) => MsgGeometry::rx(Format::Std11, false).size,
-            (false, _) => MsgGeometry::rx(Format::Ext29, false).size,
+        let (tx, rx) = self.geometries();
+        let size = match (current, inputs) {
+            (true, false) => tx.size,
+            (true, true) => rx.size,
+            (false, _) => {
+                let format = match index {
+                    object::OUTPUTS_11 | object::INPUTS_11 => Format::Std11,
+                    _ => Format::Ext29,
+                };
+                match inputs {
+                    false => MsgGeometry::tx(format, false).size,
+                    true => MsgGeometry::rx(format, false).size,
+                }
+            }
         };
-        let first = match current && self.has_tn() {
-            true => header::MESSAGES_AFTER_TRANSACTION_NUMBER,
-            false => header::MESSAGES,
+        let with_tn = current && self.has_tn();
+        let (first_sub, first_at, slots, count_name) = match inputs {
+            false => (
+                4,
+                header::MESSAGES,
+                self.draft.tx_slots,
+                "Number of TX Messages",
+            ),
+            true if with_tn => (
+                5,
+                header::MESSAGES_AFTER_TRANSACTION_NUMBER,
+                self.draft.rx_slots,
+                "Number of RX Messages",
+            ),
+            true => (
+                5,
+                header::MESSAGES,
+                self.draft.rx_slots,
+                "Number of RX Messages",
+            ),
         };
-        let tn = if current && self.has_tn() { image } else { &[] };
-        let slots = self.draft.rx_slots;
-        let mut out = vec![ro(0, vec![4 + slots])];
+        let mut out = vec![ro(0, vec![first_sub - 1 + slots])];
         for (sub, at, name) in [
             (1, header::TX_COUNTER, "TX Counter"),
             (2, header::RX_COUNTER, "RX Counter"),
-            (3, header::NO_OF_MESSAGES, "Number of RX Messages"),
+            (3, header::NO_OF_MESSAGES, count_name),
         ] {
             out.push(ro(sub, slice(image, at, 2)).named(name));
         }
-        out.push(ro(4, slice(tn, header::TRANSACTION_NUMBER, 2)).named("TX Transaction Number"));
+        if inputs {
+            let tn: &[u8] = if with_tn { image } else { &[] };
+            out.push(
+                ro(4, slice(tn, header::TRANSACTION_NUMBER, 2)).named("TX Transaction Number"),
+            );
+        }
         for n in 0..slots {
-            out.push(ro(5 + n, slice(image, first + usize::from(n) * size, size)));
+            let at = first_at + usize::from(n) * size;
+            out.push(ro(first_sub + n, slice(image, at, size)));
         }
         out
     }
@@ -364,8 +378,8 @@ impl ObjectDictionary for Terminal {
             object::STATUS_PDO_MAP => Terminal::status_mapping(),
             object::SYNC_OUTPUTS => self.sync_parameters(false, configurable),
             object::SYNC_INPUTS => self.sync_parameters(true, configurable),
-            object::OUTPUTS_11 | object::OUTPUTS_29 => self.outputs_object(index),
-            object::INPUTS_11 | object::INPUTS_29 => self.inputs_object(index),
+            object::OUTPUTS_11 | object::OUTPUTS_29 => self.image_object(index, false),
+            object::INPUTS_11 | object::INPUTS_29 => self.image_object(index, true),
             object::INTERFACE => {
                 let d = &self.draft;
                 let rw = |sub, value: u16, name| {
