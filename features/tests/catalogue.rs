@@ -125,6 +125,35 @@ fn a_failing_check_blames_only_the_tags_it_witnesses() {
     }
 }
 
+/// A device that keeps one message fewer than its depth fails the scenario
+/// written for the depth on the depth's own statement (RXQ-001), not only on
+/// the loss it causes (RXQ-003): the messages a flood leaves are the queue's
+/// depth's to decide.
+#[test]
+fn a_queue_one_message_short_fails_the_depth_it_breaks() {
+    let scenario = scenarios()
+        .unwrap()
+        .into_iter()
+        .find(|s| s.name == "The EL6751 keeps 150 messages while the PLC does not read")
+        .expect("the EL6751's scenario of queue-depth.feature");
+    let target = Target {
+        iut: IutKind::SoftDevice {
+            faults: vec![Fault::RxQueueOneShort],
+            choices: vec![],
+        },
+        profile: "el6751-mdp".into(),
+        caps: canif_model::config::Capabilities::everything(),
+    };
+    match run_scenario(&scenario.file, scenario.line, target) {
+        ScenarioOutcome::Failed { witness, report } => assert_eq!(
+            blame::narrow_tags(&scenario.requirements, &witness),
+            ["RXQ-001", "RXQ-003"],
+            "{report}"
+        ),
+        other => panic!("expected a failure, got {other:?}"),
+    }
+}
+
 /// A failure whose check witnesses none of the scenario's tags (or nothing
 /// at all) blames every tag: never less than was exercised.
 #[test]

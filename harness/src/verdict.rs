@@ -221,6 +221,9 @@ pub enum NotRunReason {
     /// The IUT refused the interface its checks need, which the profile
     /// offers (a failure of its own): the interface, and the IUT's words.
     Refused { interface: String, reason: String },
+    /// Its checks ended at a failure blamed on other requirements before
+    /// they could judge it (the check that stopped).
+    StoppedEarlier(Evidence),
 }
 
 /// What an implementation did not show, so that a requirement had nothing to judge.
@@ -236,6 +239,10 @@ impl fmt::Display for NotRunReason {
             NotRunReason::NotSelected => f.write_str("not selected"),
             NotRunReason::Selection(flags) => write!(f, "left out by the selection ({flags})"),
             NotRunReason::LeftOut(what) => f.write_str(what),
+            NotRunReason::StoppedEarlier(check) => write!(
+                f,
+                "its check stopped at an earlier failure of other requirements ({check})"
+            ),
             NotRunReason::Refused { interface, reason } => write!(
                 f,
                 "the IUT refuses the interface its checks need ({interface}), which the profile offers: {reason}"
@@ -324,7 +331,12 @@ pub fn judge(
                     .iter()
                     .filter(|id| !finding.requirements.contains(id));
                 match &finding.rest {
-                    Rest::Stopped => {}
+                    Rest::Stopped => {
+                        let why = NotRunReason::StoppedEarlier(check.evidence.clone());
+                        for id in rest {
+                            unjudged.entry(id).or_insert_with(|| why.clone());
+                        }
+                    }
                     Rest::Held => {
                         for id in rest {
                             passed.entry(id).or_default().push(check.evidence.clone());
@@ -454,6 +466,30 @@ mod tests {
         assert_eq!(verdicts["FD-BIT-002"].kind(), VerdictKind::NotApplicable);
         assert_eq!(verdicts["HS-TX-001"].kind(), VerdictKind::Fail);
         assert_eq!(verdicts["HS-TX-006"].kind(), VerdictKind::Fail);
+    }
+
+    /// A check that stopped at a failure blamed elsewhere judged nothing
+    /// more: what else it covers is not run because of that failure, never
+    /// "not selected" (nothing was left out by a selection).
+    #[test]
+    fn what_a_stopped_check_did_not_reach_is_not_run_because_it_stopped() {
+        let catalogue = catalogue();
+        let profile = catalogue.profile("el6751-mdp").unwrap();
+        let checks = [check(
+            "queue depth",
+            &["RXQ-001", "RXQ-003"],
+            CheckResult::Fail(finding(&["RXQ-003"])),
+        )];
+        let reach = Reach {
+            here: ["RXQ-001".to_string(), "RXQ-003".to_string()].into(),
+            ..Reach::default()
+        };
+        let verdicts = judge(&catalogue, profile, &checks, &reach);
+        assert_eq!(verdicts["RXQ-003"].kind(), VerdictKind::Fail);
+        assert_eq!(
+            verdicts["RXQ-001"].reason().unwrap(),
+            "its check stopped at an earlier failure of other requirements (gherkin: queue depth)"
+        );
     }
 
     #[test]

@@ -32,10 +32,11 @@ pub enum Fault {
     Sync1Late,
     InfoDataTwoBytesLate,
     RxMessagesAfterReservedWord,
+    RxQueueOneShort,
 }
 
 impl Fault {
-    pub const ALL: [Fault; 30] = [
+    pub const ALL: [Fault; 31] = [
         Fault::AckBeforeAccept,
         Fault::OverwritesUnacknowledgedRx,
         Fault::FdLengthRoundsDown,
@@ -66,6 +67,7 @@ impl Fault {
         Fault::Sync1Late,
         Fault::InfoDataTwoBytesLate,
         Fault::RxMessagesAfterReservedWord,
+        Fault::RxQueueOneShort,
     ];
 
     /// The name used on the command line.
@@ -101,6 +103,7 @@ impl Fault {
             Fault::Sync1Late => "sync1-late",
             Fault::InfoDataTwoBytesLate => "info-data-two-bytes-late",
             Fault::RxMessagesAfterReservedWord => "rx-messages-after-reserved-word",
+            Fault::RxQueueOneShort => "rx-queue-one-short",
         }
     }
 
@@ -137,6 +140,7 @@ impl Fault {
             Fault::Sync1Late => "sends the first message of a batch 2 µs after SYNC1",
             Fault::InfoDataTwoBytesLate => "places InfoData two bytes after the last Rx message",
             Fault::RxMessagesAfterReservedWord => "leaves room for a TransactionNumber the interface does not have: Rx messages start at byte 8",
+            Fault::RxQueueOneShort => "stores one received message fewer than its device keeps locally (149 on an EL6751, 511 on a CCAT master)",
         }
     }
 

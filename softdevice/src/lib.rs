@@ -505,6 +505,8 @@ impl SoftDevice {
         }
         let room = if self.settings.queue == Queue::Fast {
             usize::from(self.settings.rx_slots)
+        } else if self.has(Fault::RxQueueOneShort) {
+            self.settings.rx_fifo_depth - 1
         } else {
             self.settings.rx_fifo_depth
         };

@@ -41,12 +41,16 @@ pub const RX_IDLE_COUNT: &[ReqId] = req_ids!["HS-RX-009"];
 pub const RX_STALE_SLOTS: &[ReqId] = req_ids!["HS-RX-008"];
 /// Both moved, to different values.
 pub const RX_COUNTING: &[ReqId] = req_ids!["HS-RX-005", "HS-RX-006"];
+/// The messages delivered, or their order: the local queue's depth (how
+/// many it keeps) decides which survive a flood.
 pub const RX_SET: &[ReqId] = req_ids![
     "HS-RX-001",
     "HS-RX-002",
     "HS-RX-004",
     "HS-RX-007",
     "BQ-002",
+    "RXQ-001",
+    "RXQ-002",
     "RXQ-003",
     "RXQ-004",
     "RXQ-005",

@@ -50,3 +50,33 @@ pub fn kill_matrix<S: SelfCheck>(
         })
         .collect()
 }
+
+/// The requirements of side `S`'s suite that a test judges (whatever their
+/// status: an assumption is judged too) and that no fault failed, given the
+/// ids the faults failed: statements the self-check has not yet shown it catches a
+/// breach of. In catalogue order.
+pub fn unreached<'a, S: SelfCheck>(
+    catalogue: &'a Catalogue,
+    failed: impl IntoIterator<Item = impl AsRef<str>>,
+) -> Vec<&'a str> {
+    let failed: std::collections::BTreeSet<String> = failed
+        .into_iter()
+        .map(|id| id.as_ref().to_string())
+        .collect();
+    catalogue
+        .requirements()
+        .filter(|r| r.side == S::SIDE && r.suite == S::SUITE)
+        .filter(|r| r.verification == canif_spec::Verification::Test)
+        .map(|r| r.id.as_str())
+        .filter(|id| !failed.contains(*id))
+        .collect()
+}
+
+impl<F> KillRow<F> {
+    /// Every requirement the fault failed on some profile.
+    pub fn failed(&self) -> impl Iterator<Item = &str> {
+        self.caught
+            .iter()
+            .flat_map(|(_, ids)| ids.iter().map(String::as_str))
+    }
+}

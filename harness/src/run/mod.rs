@@ -14,7 +14,7 @@ mod rng;
 mod selection;
 
 pub use interface::interface;
-pub use kill::{kill_matrix, KillRow, SelfCheck};
+pub use kill::{kill_matrix, unreached, KillRow, SelfCheck};
 pub use profile::{run_profile, ProfileRun, Side};
 pub use ring::{Ring, CONTEXT};
 pub use rng::Rng;

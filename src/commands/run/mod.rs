@@ -411,10 +411,19 @@ pub(crate) fn self_check(catalogue: &Catalogue, seed: u64) -> Result<ExitCode, S
         generated_cycles: 150,
         ..canif_harness::device::Options::quick(seed)
     };
-    let devices = canif_harness::run::kill_matrix(catalogue, &options, |fault| {
+    let mut devices = canif_harness::run::kill_matrix(catalogue, &options, |fault| {
         errln!("running {fault} on every profile")
     });
+    let plan = Plan::new(catalogue.profiles.iter().collect(), options, None)?;
+    for row in &mut devices {
+        errln!("running {} in the Gherkin scenarios", row.fault.name());
+        add_gherkin_failures(&plan, catalogue, row);
+    }
     let uncaught = print_kill_table("device fault", &devices, |f| f.name());
+    let device_unreached = print_unreached::<canif_harness::device::Options>(
+        catalogue,
+        devices.iter().flat_map(KillRow::failed),
+    );
     let clients = canif_harness::run::kill_matrix(
         catalogue,
         &canif_harness::client::suite::ClientOptions {
@@ -425,7 +434,74 @@ pub(crate) fn self_check(catalogue: &Catalogue, seed: u64) -> Result<ExitCode, S
     );
     sayln!();
     let clients_uncaught = print_kill_table("client fault", &clients, |f| f.name());
-    Ok(ExitCode::from(u8::from(uncaught + clients_uncaught > 0)))
+    let client_unreached = print_unreached::<canif_harness::client::suite::ClientOptions>(
+        catalogue,
+        clients.iter().flat_map(KillRow::failed),
+    );
+    let short = uncaught + clients_uncaught + device_unreached + client_unreached;
+    Ok(ExitCode::from(u8::from(short > 0)))
+}
+
+/// What the Gherkin scenarios failed with the device fault of `row`, added
+/// to what its lockstep scenarios failed: a run blames both, and some
+/// statements only a scenario tagged with them isolates (RXQ-001's depth).
+fn add_gherkin_failures(
+    plan: &Plan<'_, canif_harness::device::Options>,
+    catalogue: &Catalogue,
+    row: &mut KillRow<canif_softdevice::Fault>,
+) {
+    let faulty = UnderTest::Device(canif_harness::device::IutKind::SoftDevice {
+        faults: vec![row.fault],
+        choices: vec![],
+    });
+    for (profile_name, run) in plan.run_gherkin(&faulty) {
+        let canif_harness::GherkinOutcome::Fail { blamed, .. } = run.outcome else {
+            continue;
+        };
+        let Some(profile) = catalogue.profile(&profile_name) else {
+            continue;
+        };
+        let applies = |id: &String| {
+            catalogue
+                .requirement(id)
+                .is_some_and(|r| profile.lacks(&r.capabilities).is_empty())
+        };
+        let caught = match row
+            .caught
+            .iter_mut()
+            .find(|(name, _)| *name == profile_name)
+        {
+            Some((_, ids)) => ids,
+            None => {
+                row.caught.push((profile_name.clone(), Vec::new()));
+                &mut row.caught.last_mut().expect("just pushed").1
+            }
+        };
+        for id in blamed.into_iter().filter(applies) {
+            if !caught.contains(&id) {
+                caught.push(id);
+            }
+        }
+    }
+}
+
+/// The side's requirements no fault failed, listed (issue 36: every
+/// requirement is shown able to fail); how many.
+fn print_unreached<'a, S: canif_harness::run::SelfCheck>(
+    catalogue: &Catalogue,
+    failed: impl IntoIterator<Item = &'a str>,
+) -> usize {
+    let unreached = canif_harness::run::unreached::<S>(catalogue, failed);
+    match unreached.as_slice() {
+        [] => sayln!("\nevery {} requirement is failed by some fault", S::SIDE),
+        ids => sayln!(
+            "\n{} {} requirements no fault fails yet: {}",
+            ids.len(),
+            S::SIDE,
+            ids.join(", ")
+        ),
+    }
+    unreached.len()
 }
 
 /// One kill matrix as Markdown: each fault, the profiles it was caught on and
