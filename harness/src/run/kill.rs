@@ -55,10 +55,10 @@ pub fn kill_matrix<S: SelfCheck>(
 /// status: an assumption is judged too) and that no fault failed, given the
 /// ids the faults failed: statements the self-check has not yet shown it catches a
 /// breach of. In catalogue order.
-pub fn unreached<'a, S: SelfCheck>(
-    catalogue: &'a Catalogue,
+pub fn unreached<S: SelfCheck>(
+    catalogue: &Catalogue,
     failed: impl IntoIterator<Item = impl AsRef<str>>,
-) -> Vec<&'a str> {
+) -> Vec<&str> {
     let failed: std::collections::BTreeSet<String> = failed
         .into_iter()
         .map(|id| id.as_ref().to_string())
