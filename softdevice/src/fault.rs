@@ -33,10 +33,16 @@ pub enum Fault {
     InfoDataTwoBytesLate,
     RxMessagesAfterReservedWord,
     RxQueueOneShort,
+    QueueTakes29Bit,
+    QueueTakesTransactionNumber,
+    QueueTakesFilters,
+    TimeStampOn11Bit,
+    TransactionNumberOn11Bit,
+    SlotCountUnbounded,
 }
 
 impl Fault {
-    pub const ALL: [Fault; 31] = [
+    pub const ALL: [Fault; 37] = [
         Fault::AckBeforeAccept,
         Fault::OverwritesUnacknowledgedRx,
         Fault::FdLengthRoundsDown,
@@ -68,6 +74,12 @@ impl Fault {
         Fault::InfoDataTwoBytesLate,
         Fault::RxMessagesAfterReservedWord,
         Fault::RxQueueOneShort,
+        Fault::QueueTakes29Bit,
+        Fault::QueueTakesTransactionNumber,
+        Fault::QueueTakesFilters,
+        Fault::TimeStampOn11Bit,
+        Fault::TransactionNumberOn11Bit,
+        Fault::SlotCountUnbounded,
     ];
 
     /// The name used on the command line.
@@ -104,6 +116,12 @@ impl Fault {
             Fault::InfoDataTwoBytesLate => "info-data-two-bytes-late",
             Fault::RxMessagesAfterReservedWord => "rx-messages-after-reserved-word",
             Fault::RxQueueOneShort => "rx-queue-one-short",
+            Fault::QueueTakes29Bit => "queue-takes-29-bit",
+            Fault::QueueTakesTransactionNumber => "queue-takes-transaction-number",
+            Fault::QueueTakesFilters => "queue-takes-filters",
+            Fault::TimeStampOn11Bit => "time-stamp-on-11-bit",
+            Fault::TransactionNumberOn11Bit => "transaction-number-on-11-bit",
+            Fault::SlotCountUnbounded => "slot-count-unbounded",
         }
     }
 
@@ -141,6 +159,12 @@ impl Fault {
             Fault::InfoDataTwoBytesLate => "places InfoData two bytes after the last Rx message",
             Fault::RxMessagesAfterReservedWord => "leaves room for a TransactionNumber the interface does not have: Rx messages start at byte 8",
             Fault::RxQueueOneShort => "stores one received message fewer than its device keeps locally (149 on an EL6751, 511 on a CCAT master)",
+            Fault::QueueTakes29Bit => "accepts the Optimized and the Fast CAN Queue with 29-bit identifiers",
+            Fault::QueueTakesTransactionNumber => "accepts the Optimized and the Fast CAN Queue with a transaction number",
+            Fault::QueueTakesFilters => "accepts filters with the Optimized and the Fast CAN Queue",
+            Fault::TimeStampOn11Bit => "accepts the time stamp on the 11-bit interface",
+            Fault::TransactionNumberOn11Bit => "accepts the transaction number on the 11-bit interface where it has it only in 29-bit mode",
+            Fault::SlotCountUnbounded => "accepts more message slots than the device has (33 of 32)",
         }
     }
 

@@ -82,7 +82,13 @@ pub struct SoftDevice {
 impl SoftDevice {
     /// Starts the device with `settings`; refuses what the device does not offer.
     pub fn new(settings: Settings) -> Result<Self, SettingsError> {
-        settings.check()?;
+        Self::with_faults(settings, &[])
+    }
+
+    /// [`Self::new`] with `faults` switched on from the start, those of the
+    /// configuration's check among them.
+    pub fn with_faults(settings: Settings, faults: &[Fault]) -> Result<Self, SettingsError> {
+        settings.check(faults)?;
         let has_tn = settings.transaction_number || settings.format == Format::Fd;
         let tx_geo = MsgGeometry::tx(settings.format, has_tn);
         let rx_geo = MsgGeometry::rx(
@@ -116,7 +122,7 @@ impl SoftDevice {
             recv_fifo: VecDeque::new(),
             deferred_tx: None,
             controller,
-            faults: Vec::new(),
+            faults: faults.to_vec(),
             choices: Vec::new(),
             settings,
         })

@@ -1,5 +1,7 @@
 //! What the device is set up as, and what it refuses (000/001 §2, §3, §5.1.2; 003).
 
+use crate::Fault;
+
 /// The message format chosen in TwinCAT.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
@@ -98,8 +100,11 @@ impl std::fmt::Display for SettingsError {
 impl std::error::Error for SettingsError {}
 
 impl Settings {
-    pub(crate) fn check(&self) -> Result<(), SettingsError> {
+    /// Refuses what the device does not offer; `faults` (the self-check's)
+    /// let through what one of them accepts by mistake.
+    pub(crate) fn check(&self, faults: &[Fault]) -> Result<(), SettingsError> {
         let refuse = |why: &str| Err(SettingsError(why.to_string()));
+        let lenient = |fault: Fault| faults.contains(&fault);
         let o = &self.offer;
         let format_ok = match self.format {
             Format::Std11 => o.std11,
@@ -118,7 +123,10 @@ impl Settings {
             if !offered {
                 return refuse("queue mode not offered");
             }
-            if self.format != Format::Std11 || self.transaction_number || !self.filters.is_empty() {
+            if (self.format != Format::Std11 && !lenient(Fault::QueueTakes29Bit))
+                || (self.transaction_number && !lenient(Fault::QueueTakesTransactionNumber))
+                || (!self.filters.is_empty() && !lenient(Fault::QueueTakesFilters))
+            {
                 return refuse(
                     "fast/optimized queue: 11-bit only, no transaction number, no filters",
                 );
@@ -138,21 +146,27 @@ impl Settings {
         }
         if self.transaction_number
             && (!o.transaction_number
-                || (o.transaction_number_29bit_only && self.format == Format::Std11))
+                || (o.transaction_number_29bit_only
+                    && self.format == Format::Std11
+                    && !lenient(Fault::TransactionNumberOn11Bit)))
         {
             return refuse("transaction number not offered here");
         }
         if self.time_stamp
-            && (!o.time_stamp || self.format == Format::Std11 || !self.transaction_number)
+            && (!o.time_stamp
+                || (self.format == Format::Std11 && !lenient(Fault::TimeStampOn11Bit))
+                || !self.transaction_number)
         {
             return refuse("time stamp needs 29-bit mode with transaction number");
         }
         if self.format == Format::Fd && !(self.transaction_number && self.time_stamp) {
             return refuse("FD structures carry transaction number and time stamp");
         }
-        if !(1..=o.max_slots).contains(&self.tx_slots)
-            || !(1..=o.max_slots).contains(&self.rx_slots)
-        {
+        let most = match lenient(Fault::SlotCountUnbounded) {
+            true => o.max_slots.saturating_add(1),
+            false => o.max_slots,
+        };
+        if !(1..=most).contains(&self.tx_slots) || !(1..=most).contains(&self.rx_slots) {
             return refuse("slot count out of range");
         }
         if self.dc_sync1_shift.is_some() && (!o.distributed_clocks || self.queue != Queue::Fast) {

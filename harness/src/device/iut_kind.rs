@@ -58,11 +58,8 @@ impl IutKind {
                 )))
             }
             IutKind::SoftDevice { faults, choices } => {
-                let mut device =
-                    SoftDevice::new(soft_settings(caps, config)).map_err(|e| refused(&e))?;
-                for fault in faults {
-                    device.inject(*fault);
-                }
+                let mut device = SoftDevice::with_faults(soft_settings(caps, config), faults)
+                    .map_err(|e| refused(&e))?;
                 for choice in choices {
                     device.choose(*choice);
                 }

@@ -389,7 +389,9 @@ pub fn profile_for(fault: canif_softdevice::Fault) -> &'static str {
         | BrsEsiSwapped
         | ReceiveFifoNotReported
         | BrsWithoutEdlSendsFd
-        | InfoDataTwoBytesLate => "fc532x",
+        | InfoDataTwoBytesLate
+        | TimeStampOn11Bit => "fc532x",
+        TransactionNumberOn11Bit => "el6751-legacy",
         ExtendedFlagMissing
         | TransactionNumberOfFirstFrame
         | TransactionNumberOnHandover

@@ -266,11 +266,8 @@ impl Application for Terminal {
             Synchronization::SyncManager2 => None,
             Synchronization::DistributedClocks { sync1_shift, .. } => Some(u64::from(sync1_shift)),
         };
-        let mut device =
-            SoftDevice::new(settings).map_err(|_| al_status::INVALID_SYNC_CONFIGURATION)?;
-        for fault in &self.faults {
-            device.inject(*fault);
-        }
+        let mut device = SoftDevice::with_faults(settings, &self.faults)
+            .map_err(|_| al_status::INVALID_SYNC_CONFIGURATION)?;
         for choice in &self.choices {
             device.choose(*choice);
         }
