@@ -39,10 +39,13 @@ pub enum Fault {
     TimeStampOn11Bit,
     TransactionNumberOn11Bit,
     SlotCountUnbounded,
+    AcceptsEveryFormat,
+    TransactionNumberNotOffered,
+    RefusesThirtyTwoSlots,
 }
 
 impl Fault {
-    pub const ALL: [Fault; 37] = [
+    pub const ALL: [Fault; 40] = [
         Fault::AckBeforeAccept,
         Fault::OverwritesUnacknowledgedRx,
         Fault::FdLengthRoundsDown,
@@ -80,6 +83,9 @@ impl Fault {
         Fault::TimeStampOn11Bit,
         Fault::TransactionNumberOn11Bit,
         Fault::SlotCountUnbounded,
+        Fault::AcceptsEveryFormat,
+        Fault::TransactionNumberNotOffered,
+        Fault::RefusesThirtyTwoSlots,
     ];
 
     /// The name used on the command line.
@@ -122,6 +128,9 @@ impl Fault {
             Fault::TimeStampOn11Bit => "time-stamp-on-11-bit",
             Fault::TransactionNumberOn11Bit => "transaction-number-on-11-bit",
             Fault::SlotCountUnbounded => "slot-count-unbounded",
+            Fault::AcceptsEveryFormat => "accepts-every-format",
+            Fault::TransactionNumberNotOffered => "transaction-number-not-offered",
+            Fault::RefusesThirtyTwoSlots => "refuses-thirty-two-slots",
         }
     }
 
@@ -165,6 +174,9 @@ impl Fault {
             Fault::TimeStampOn11Bit => "accepts the time stamp on the 11-bit interface",
             Fault::TransactionNumberOn11Bit => "accepts the transaction number on the 11-bit interface where it has it only in 29-bit mode",
             Fault::SlotCountUnbounded => "accepts more message slots than the device has (33 of 32)",
+            Fault::AcceptsEveryFormat => "accepts every frame format, those its device does not offer too",
+            Fault::TransactionNumberNotOffered => "accepts the transaction number on a device that does not offer it",
+            Fault::RefusesThirtyTwoSlots => "refuses 32 message slots, which its device offers",
         }
     }
 

@@ -111,7 +111,7 @@ impl Settings {
             Format::Ext29 => o.ext29,
             Format::Fd => o.fd,
         };
-        if !format_ok {
+        if !format_ok && !lenient(Fault::AcceptsEveryFormat) {
             return refuse("frame format not offered");
         }
         if self.queue != Queue::Buffered {
@@ -145,7 +145,7 @@ impl Settings {
             }
         }
         if self.transaction_number
-            && (!o.transaction_number
+            && ((!o.transaction_number && !lenient(Fault::TransactionNumberNotOffered))
                 || (o.transaction_number_29bit_only
                     && self.format == Format::Std11
                     && !lenient(Fault::TransactionNumberOn11Bit)))
@@ -162,9 +162,13 @@ impl Settings {
         if self.format == Format::Fd && !(self.transaction_number && self.time_stamp) {
             return refuse("FD structures carry transaction number and time stamp");
         }
-        let most = match lenient(Fault::SlotCountUnbounded) {
-            true => o.max_slots.saturating_add(1),
-            false => o.max_slots,
+        let most = match (
+            lenient(Fault::SlotCountUnbounded),
+            lenient(Fault::RefusesThirtyTwoSlots),
+        ) {
+            (true, _) => o.max_slots.saturating_add(1),
+            (_, true) => o.max_slots.min(31),
+            _ => o.max_slots,
         };
         if !(1..=most).contains(&self.tx_slots) || !(1..=most).contains(&self.rx_slots) {
             return refuse("slot count out of range");

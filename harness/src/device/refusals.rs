@@ -17,7 +17,10 @@ use crate::verdict::{NotRunReason, Rest};
 fn refusal_ids(error: &ConfigError) -> &'static [ReqId] {
     use ConfigError::*;
     match error {
-        FormatNotOffered(_) => req_ids!["PROF-002", "PROF-006", "PROF-007", "PROF-009"],
+        // Each format's own statement of who lacks it.
+        FormatNotOffered(FrameFormat::Base11) => req_ids!["PROF-002", "PROF-006"],
+        FormatNotOffered(FrameFormat::Extended29) => req_ids!["PROF-002", "PROF-009"],
+        FormatNotOffered(FrameFormat::Fd) => req_ids!["PROF-002", "PROF-007"],
         QueueModeNotOffered(_) => req_ids!["PROF-002"],
         QueueModeNeedsBase11(_) => req_ids!["BQ-003", "PROF-003"],
         QueueModeWithoutTransactionNumber(_) => req_ids!["BQ-005", "PROF-003"],
@@ -37,6 +40,10 @@ fn refusal_ids(error: &ConfigError) -> &'static [ReqId] {
 /// What a device breaks when it refuses a configuration its profile offers:
 /// it does not offer what the feature matrix says (PROF-001).
 pub const OFFERED_REFUSED: &[ReqId] = req_ids!["PROF-001"];
+
+/// What a device breaks when it refuses an offered configuration at one slot
+/// count and takes it at another: the slot range first, then PROF-001.
+const SLOT_COUNT_REFUSED: &[ReqId] = req_ids!["LAY-GEN-007", "PROF-011", "PROF-001"];
 
 /// A scenario that could not start because the IUT refused its interface,
 /// which the profile offers: a failure of [`OFFERED_REFUSED`], and the rest
@@ -146,7 +153,9 @@ fn grid() -> impl Iterator<Item = InterfaceConfig> {
 pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
     let mut checked = 0;
     let mut configure = kind.configurer();
-    let mut mismatches: Vec<Failure> = Vec::new();
+    let mut mismatches: Vec<(InterfaceConfig, Failure)> = Vec::new();
+    // The configurations the IUT took, to tell a refused slot count apart.
+    let mut taken: Vec<InterfaceConfig> = Vec::new();
     let mut outcome = None;
     for config in grid() {
         checked += 1;
@@ -159,10 +168,30 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
                 break;
             }
         };
+        if actual.is_ok() {
+            taken.push(config.clone());
+        }
         if expected.is_ok() != actual.is_ok() {
-            mismatches.push(mismatch(&config, expected, actual));
+            mismatches.push((config.clone(), mismatch(&config, expected, actual)));
         }
     }
+    let same_but_slots = |a: &InterfaceConfig, b: &InterfaceConfig| {
+        InterfaceConfig {
+            tx_slots: b.tx_slots,
+            rx_slots: b.rx_slots,
+            ..a.clone()
+        } == *b
+    };
+    let mismatches: Vec<Failure> = mismatches
+        .into_iter()
+        .map(|(config, mut failure)| {
+            let offered = failure.requirements == OFFERED_REFUSED;
+            if offered && taken.iter().any(|t| same_but_slots(&config, t)) {
+                failure.requirements = SLOT_COUNT_REFUSED.to_vec();
+            }
+            failure
+        })
+        .collect();
     let outcome = outcome.unwrap_or_else(|| {
         let Some(mut first) = mismatches.first().cloned() else {
             return Outcome::Pass;
@@ -171,8 +200,9 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
             .iter()
             .flat_map(|m| m.requirements.iter().copied())
             .collect();
-        blamed.sort();
-        blamed.dedup();
+        // In the order blamed (the statement before PROF-001), each once.
+        let mut seen = std::collections::BTreeSet::new();
+        blamed.retain(|id| seen.insert(*id));
         first.requirements = blamed;
         if mismatches.len() > 1 {
             first.what = format!(

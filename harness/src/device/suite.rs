@@ -392,6 +392,8 @@ pub fn profile_for(fault: canif_softdevice::Fault) -> &'static str {
         | InfoDataTwoBytesLate
         | TimeStampOn11Bit => "fc532x",
         TransactionNumberOn11Bit => "el6751-legacy",
+        AcceptsEveryFormat => "fc510x-before-fw2.14",
+        TransactionNumberNotOffered => "ccat-before-fw1.17",
         ExtendedFlagMissing
         | TransactionNumberOfFirstFrame
         | TransactionNumberOnHandover
