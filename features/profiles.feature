@@ -60,6 +60,18 @@ Feature: Device profiles and what they refuse
       | ccat-before-fw1.17 | refuses |
       | ccat               | accepts |
 
+  @PROF-008
+  Scenario Outline: CCAT has the transaction number from firmware 1.17, with or without time stamps
+    Given the device profile <profile>
+    And the interface is set up for 29-bit messages with 4 slots
+    And transaction numbers are on
+    Then the device <verdict> the configuration
+
+    Examples:
+      | profile            | verdict |
+      | ccat-before-fw1.17 | refuses |
+      | ccat               | accepts |
+
   @PROF-011 @LAY-GEN-007 @ERR-R2
   Scenario Outline: 1 to 32 slots
     Given the device profile el6751-mdp

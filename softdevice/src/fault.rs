@@ -42,10 +42,12 @@ pub enum Fault {
     AcceptsEveryFormat,
     TransactionNumberNotOffered,
     RefusesThirtyTwoSlots,
+    AcceptsMalformedFilter,
+    FdWithoutTransactionNumber,
 }
 
 impl Fault {
-    pub const ALL: [Fault; 40] = [
+    pub const ALL: [Fault; 42] = [
         Fault::AckBeforeAccept,
         Fault::OverwritesUnacknowledgedRx,
         Fault::FdLengthRoundsDown,
@@ -86,6 +88,8 @@ impl Fault {
         Fault::AcceptsEveryFormat,
         Fault::TransactionNumberNotOffered,
         Fault::RefusesThirtyTwoSlots,
+        Fault::AcceptsMalformedFilter,
+        Fault::FdWithoutTransactionNumber,
     ];
 
     /// The name used on the command line.
@@ -131,6 +135,8 @@ impl Fault {
             Fault::AcceptsEveryFormat => "accepts-every-format",
             Fault::TransactionNumberNotOffered => "transaction-number-not-offered",
             Fault::RefusesThirtyTwoSlots => "refuses-thirty-two-slots",
+            Fault::AcceptsMalformedFilter => "accepts-malformed-filter",
+            Fault::FdWithoutTransactionNumber => "fd-without-transaction-number",
         }
     }
 
@@ -177,6 +183,8 @@ impl Fault {
             Fault::AcceptsEveryFormat => "accepts every frame format, those its device does not offer too",
             Fault::TransactionNumberNotOffered => "accepts the transaction number on a device that does not offer it",
             Fault::RefusesThirtyTwoSlots => "refuses 32 message slots, which its device offers",
+            Fault::AcceptsMalformedFilter => "accepts a filter row whose range ends before it starts or that reaches past 29 bits",
+            Fault::FdWithoutTransactionNumber => "accepts the CAN FD interface without the transaction number and time stamp its structures carry",
         }
     }
 

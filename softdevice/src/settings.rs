@@ -140,7 +140,7 @@ impl Settings {
                 FilterRule::Range { low, high, .. } => low > high || high > 0x1FFF_FFFF,
                 FilterRule::Mask { code, mask, .. } => (code | mask) > 0x1FFF_FFFF,
             };
-            if bad {
+            if bad && !lenient(Fault::AcceptsMalformedFilter) {
                 return refuse("malformed filter row");
             }
         }
@@ -159,7 +159,10 @@ impl Settings {
         {
             return refuse("time stamp needs 29-bit mode with transaction number");
         }
-        if self.format == Format::Fd && !(self.transaction_number && self.time_stamp) {
+        if self.format == Format::Fd
+            && !(self.transaction_number && self.time_stamp)
+            && !lenient(Fault::FdWithoutTransactionNumber)
+        {
             return refuse("FD structures carry transaction number and time stamp");
         }
         let most = match (

@@ -390,7 +390,8 @@ pub fn profile_for(fault: canif_softdevice::Fault) -> &'static str {
         | ReceiveFifoNotReported
         | BrsWithoutEdlSendsFd
         | InfoDataTwoBytesLate
-        | TimeStampOn11Bit => "fc532x",
+        | TimeStampOn11Bit
+        | FdWithoutTransactionNumber => "fc532x",
         TransactionNumberOn11Bit => "el6751-legacy",
         AcceptsEveryFormat => "fc510x-before-fw2.14",
         TransactionNumberNotOffered => "ccat-before-fw1.17",
