@@ -26,3 +26,14 @@ Feature: Buffered and Optimized CAN Queue
     Examples: Optimized
       | queue     |
       | Optimized |
+
+  @HS-TX-008 @base11
+  Scenario: A batch the local send queue has no room for waits, and nothing is lost
+    Given the interface is set up for 11-bit messages with 32 slots
+    And the bus is blocked
+    When the PLC sends 96 messages
+    And 5 cycles pass
+    Then Inputs.TxCounter is 2
+    When the bus is released
+    And 40 cycles pass
+    Then the bus carries 96 frames

@@ -44,10 +44,11 @@ pub enum Fault {
     RefusesThirtyTwoSlots,
     AcceptsMalformedFilter,
     FdWithoutTransactionNumber,
+    DropsWhatDoesNotFit,
 }
 
 impl Fault {
-    pub const ALL: [Fault; 42] = [
+    pub const ALL: [Fault; 43] = [
         Fault::AckBeforeAccept,
         Fault::OverwritesUnacknowledgedRx,
         Fault::FdLengthRoundsDown,
@@ -90,6 +91,7 @@ impl Fault {
         Fault::RefusesThirtyTwoSlots,
         Fault::AcceptsMalformedFilter,
         Fault::FdWithoutTransactionNumber,
+        Fault::DropsWhatDoesNotFit,
     ];
 
     /// The name used on the command line.
@@ -137,6 +139,7 @@ impl Fault {
             Fault::RefusesThirtyTwoSlots => "refuses-thirty-two-slots",
             Fault::AcceptsMalformedFilter => "accepts-malformed-filter",
             Fault::FdWithoutTransactionNumber => "fd-without-transaction-number",
+            Fault::DropsWhatDoesNotFit => "drops-what-does-not-fit",
         }
     }
 
@@ -185,6 +188,7 @@ impl Fault {
             Fault::RefusesThirtyTwoSlots => "refuses 32 message slots, which its device offers",
             Fault::AcceptsMalformedFilter => "accepts a filter row whose range ends before it starts or that reaches past 29 bits",
             Fault::FdWithoutTransactionNumber => "accepts the CAN FD interface without the transaction number and time stamp its structures carry",
+            Fault::DropsWhatDoesNotFit => "acknowledges a batch its send queue has no room for, keeping only what fits",
         }
     }
 

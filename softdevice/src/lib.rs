@@ -239,7 +239,10 @@ impl SoftDevice {
             return;
         }
         if busy > 0 && busy + count > self.settings.tx_fifo_depth {
-            return; // no room: acknowledge later
+            if !self.has(Fault::DropsWhatDoesNotFit) {
+                return; // no room: acknowledge later
+            }
+            count = self.settings.tx_fifo_depth.saturating_sub(busy);
         }
         self.copy_batch_n(output, now, count);
         put16(&mut self.input, header::TX_COUNTER, requested);
