@@ -8,7 +8,7 @@ use canif_harness::client::faulty::ClientFault;
 use canif_harness::client::suite::{ClientKind, ClientOptions};
 use canif_harness::run::{kill_matrix, run_profile, unreached};
 use canif_harness::Outcome;
-use canif_spec::{Catalogue, Side};
+use canif_spec::Catalogue;
 
 fn options() -> ClientOptions {
     ClientOptions {
