@@ -128,13 +128,6 @@ impl SoftDevice {
         })
     }
 
-    /// Switches a fault on (for the suite's self-check).
-    pub fn inject(&mut self, fault: Fault) {
-        if !self.faults.contains(&fault) {
-            self.faults.push(fault);
-        }
-    }
-
     fn has(&self, fault: Fault) -> bool {
         self.faults.contains(&fault)
     }
