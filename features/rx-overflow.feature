@@ -18,6 +18,10 @@ Feature: Rx queue overflow and silent loss
     And node 0x01 transmits 0x106 with data 06
     And node 0x01 transmits 0x107 with data 07
     And node 0x01 transmits 0x108 with data 08
+    And node 0x01 transmits 0x109 with data 09
+    And node 0x01 transmits 0x10A with data 0A
+    And node 0x01 transmits 0x10B with data 0B
+    And node 0x01 transmits 0x10C with data 0C
     And 4 cycles pass
     Then the PLC has received 0x101, 0x102, 0x103, 0x104, 0x105, 0x106
 

@@ -117,10 +117,10 @@ pub const KILL_TABLE: [(Fault, &[&str]); 43] = [
         Fault::TimeStampInMicroseconds,
         &["TS-001", "TS-003", "TS-004"],
     ),
-    (
-        Fault::HeadDropWhenFull,
-        &["HS-RX-007", "RXQ-003", "RXQ-004", "RXQ-006"],
-    ),
+    // Which frames a full queue loses is assumption RXQ-004's (G4) alone:
+    // the head drop still loses frames without indication (RXQ-003) and
+    // fills every slot (RXQ-006), in the order received (HS-RX-007).
+    (Fault::HeadDropWhenFull, &["RXQ-004"]),
     (
         Fault::FilterLastMatchWins,
         &["FLT-001", "FLT-005", "FLT-006"],

@@ -66,6 +66,11 @@ pub const RX_SET: &[ReqId] = req_ids![
     "FLT-008",
     "FLT-009",
 ];
+/// The device delivered a frame the model lost to its full local Rx queue:
+/// it dropped others than the newest, which is what assumption RXQ-004 (G4's
+/// tail drop) decides and no normative statement does (RXQ-003 says only
+/// that frames are lost).
+pub const RX_DROP_POLICY: &[ReqId] = req_ids!["RXQ-004"];
 pub const TRANSACTION_NUMBER: &[ReqId] = req_ids!["TN-002", "TN-003"];
 pub const COB_WORD: &[ReqId] = req_ids!["LAY-11-002", "LAY-11-003", "LAY-11-004", "LAY-GEN-003"];
 /// A multi-byte field with its bytes swapped.

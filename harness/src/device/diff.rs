@@ -98,6 +98,9 @@ pub struct InputCheck<'a> {
     /// Whether a frame was on the bus lately (a slot holding one carries a real,
     /// wrong frame; anything else is a frame the IUT encoded wrongly).
     pub was_on_bus: &'a dyn Fn(&Frame) -> bool,
+    /// Whether the model lost a frame lately to its full local Rx queue: a
+    /// device delivering it kept what the tail drop of G4 drops.
+    pub lost_by_model: &'a dyn Fn(&Frame) -> bool,
     pub time_stamp_tolerance: Nanos,
     pub rx: RxState,
     /// What the device declared of the freedoms the checks otherwise skip.
@@ -274,8 +277,15 @@ impl InputCheck<'_> {
             (Some(expected), Some(actual)) => expected != actual && (self.was_on_bus)(&actual),
             _ => false,
         };
+        // A frame the model's tail drop lost (with the Fast CAN Queue a
+        // loss is a cycle's overflow, not a queue's policy).
+        let kept_what_the_model_dropped = different_frame
+            && !self.rx.fast
+            && parsed(a).is_some_and(|actual| (self.lost_by_model)(&actual));
         let has_own_length = !matches!(message.length, LengthField::InCobIdWord);
-        Some(if different_frame {
+        Some(if kept_what_the_model_dropped {
+            blame::RX_DROP_POLICY
+        } else if different_frame {
             blame::RX_SET
         } else if message.cob_id.len() == 2 && e.cob_id_word() != a.cob_id_word() {
             if e.cob_id_word().0.swap_bytes() == a.cob_id_word().0 {
@@ -422,6 +432,7 @@ mod tests {
         InputCheck {
             layout,
             was_on_bus: &|_| false,
+            lost_by_model: &|_| false,
             time_stamp_tolerance: 0,
             rx: RxState {
                 before: 0,
@@ -561,5 +572,30 @@ mod tests {
         // Bits above the 11 kept in a standard identifier (LAY-29-006).
         let high = Frame::classic(CanId::Standard(0x123 | 0x800), &[1, 2]).unwrap();
         assert_eq!(frame_difference(&a, &high, false), blame::TX_ID_RESERVED);
+    }
+
+    /// Issue 36: a device that kept a frame the model's tail drop lost broke
+    /// the assumption that decides which frames a full queue loses (RXQ-004),
+    /// not the statement that frames are lost (RXQ-003); another real frame
+    /// in the slot is the message set's.
+    #[test]
+    fn a_frame_the_model_dropped_is_charged_to_the_drop_policy() {
+        let layout = layout(FrameFormat::Base11);
+        let expected = image(layout, &[frame(0x123, &[1])]);
+        let kept = image(layout, &[frame(0x456, &[2])]);
+        let on_bus = |_: &Frame| true;
+        let dropped = |f: &Frame| f.id == CanId::Standard(0x456);
+        let blamed = |lost_by_model: &dyn Fn(&Frame) -> bool| {
+            InputCheck {
+                was_on_bus: &on_bus,
+                lost_by_model,
+                ..check(&layout, 0)
+            }
+            .compare(&expected, &kept)
+            .unwrap()
+            .candidates
+        };
+        assert_eq!(blamed(&dropped), blame::RX_DROP_POLICY);
+        assert_eq!(blamed(&|_| false), blame::RX_SET);
     }
 }

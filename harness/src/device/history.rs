@@ -43,6 +43,8 @@ pub struct History {
     bus: Ring<Logged>,
     /// Frames other nodes sent lately.
     recent_rx: Ring<Frame>,
+    /// Of those, the frames the model lost to a full local Rx queue.
+    recent_lost: Ring<Frame>,
 }
 
 impl Default for History {
@@ -51,6 +53,7 @@ impl Default for History {
             cycles: Ring::context(),
             bus: Ring::new(BUS_LOG),
             recent_rx: Ring::new(RECENT_RX),
+            recent_lost: Ring::new(RECENT_RX),
         }
     }
 }
@@ -89,6 +92,17 @@ impl History {
         if !from_iut {
             self.recent_rx.push(frame);
         }
+    }
+
+    /// The model lost `frame`, received from another node, to its full
+    /// local Rx queue (tail drop, G4).
+    pub fn model_lost(&mut self, frame: Frame) {
+        self.recent_lost.push(frame);
+    }
+
+    /// Whether the model lately lost `frame` to its full local Rx queue.
+    pub fn lost_by_model_lately(&self, frame: &Frame) -> bool {
+        self.recent_lost.iter().any(|f| f == frame)
     }
 
     /// Whether another node sent `frame` lately.

@@ -328,6 +328,7 @@ impl<B: Bus + ?Sized> Lockstep<B> {
                 InputCheck {
                     layout: &layout,
                     was_on_bus: &|f| history.received_lately(f),
+                    lost_by_model: &|f| history.lost_by_model_lately(f),
                     time_stamp_tolerance: self.time_stamp_tolerance,
                     rx,
                     declared: self.rules.declared_rx,

@@ -3,7 +3,7 @@
 //! [`Difference`]. Buses drive a `Pair`; they never touch the two devices
 //! directly.
 
-use canif_model::device::Device;
+use canif_model::device::{Device, RxOutcome};
 use canif_model::frame::Frame;
 use canif_model::image::{ImageLayout, LengthField, OutputImage};
 use canif_model::Nanos;
@@ -343,8 +343,8 @@ impl Pair {
         }
         if from_iut {
             self.model.handle_transmit_complete();
-        } else {
-            self.model.handle_received(frame, end);
+        } else if self.model.handle_received(frame, end) == RxOutcome::Lost {
+            self.history.model_lost(frame);
         }
         self.history.frame(self.cycle, from_iut, frame, end);
         if let Some(ended) = self.ended.as_mut() {
