@@ -27,7 +27,7 @@ Feature: The PLC side of the CAN interface
     Then the client broke no requirement in any task
     And the bus carries every message the application asked for, once and in order
 
-  @base11 @CL-RX-001 @CL-RX-002 @CL-RX-003
+  @base11 @CL-RX-001 @CL-RX-002 @CL-RX-003 @CL-RX-004
   Scenario: The client reads exactly NoOfRxMessages and copies Inputs.RxCounter
     Given the client's interface is set up for 11-bit messages with 4 slots
     And the master is "separate-input-update"

@@ -320,6 +320,15 @@ fn the_plc_side_on_the_command_line() {
             "unknown client fault",
         ),
         (&["run", "--iut", "reference"], "add --side plc"),
+        // Issue 36: a statement of the other side says where it is judged.
+        (
+            &["run", "--side", "plc", "--requirement", "HS-TX-001"],
+            "binds the device side, not the plc side: `canif run --side device --requirement HS-TX-001` judges it; this side's own statement: CL-TX-001",
+        ),
+        (
+            &["run", "--requirement", "CL-RX-004"],
+            "`canif run --side plc --requirement CL-RX-004` judges it",
+        ),
         (
             &["run", "--side", "plc", "--cases", "9"],
             "--cases applies to the device side",
@@ -336,5 +345,34 @@ fn the_plc_side_on_the_command_line() {
         .lines()
         .any(|l| l.contains("device restart") && l.contains("CL-RST-002")));
     assert!(listed.lines().any(|l| l.contains("plc-client.feature")));
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// Issue 36: the manual's rule "Es müssen immer alle Daten ausgelesen werden"
+/// (000 §6) is the PLC side's own requirement: selected by its id, a client
+/// that acknowledges a batch half read fails it, and the copy rule passes.
+#[test]
+fn a_client_acknowledging_a_half_read_batch_fails_the_read_all_rule() {
+    let dir = std::env::temp_dir().join(format!("canif-read-all-{}", std::process::id()));
+    let dir_text = dir.to_str().unwrap().to_string();
+    let output = canif(&[
+        "run",
+        "--side",
+        "plc",
+        "--profile",
+        "fc510x",
+        "--requirement",
+        "CL-RX-004",
+        "--fault",
+        "acknowledges-after-first-message",
+        "--report",
+        &dir_text,
+    ]);
+    let said = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{said}");
+    let report = report(&dir);
+    let verdicts = &report["profiles"][0]["verdicts"];
+    assert_eq!(verdicts["CL-RX-004"]["verdict"], "fail", "{verdicts}");
+    assert_ne!(verdicts["CL-RX-001"]["verdict"], "fail", "{verdicts}");
     let _ = std::fs::remove_dir_all(dir);
 }

@@ -23,7 +23,15 @@ const CAUGHT: &[(ClientFault, &str, &str)] = &[
     (
         ClientFault::AcknowledgesAfterFirstMessage,
         "exactly NoOfRxMessages",
-        "CL-RX-001",
+        "CL-RX-004",
+    ),
+    // With nothing sent Inputs.TxCounter stays 0: the wrong copy leaves
+    // Outputs.RxCounter as it was, so it reads the batch again (the lockstep,
+    // sending as well, catches the copy itself on CL-RX-001).
+    (
+        ClientFault::AcknowledgesWithTxCounter,
+        "exactly NoOfRxMessages",
+        "CL-RX-002",
     ),
     // Out of step after the restart, its own counter is judged by what its
     // application sees (P1): the batch it reads again.

@@ -154,6 +154,7 @@ fn scenario(
         covers.push(ReqId::new("CL-FQ-001"));
     } else {
         covers.push(ReqId::new("CL-RX-001"));
+        covers.push(ReqId::new("CL-RX-004"));
     }
     if config.transaction_number {
         covers.push(ReqId::new("CL-TN-001"));
@@ -185,7 +186,13 @@ const SENDING: &[ReqId] = req_ids![
 ];
 
 /// What only a client that receives is judged on.
-const RECEIVING: &[ReqId] = req_ids!["CL-RX-001", "CL-RX-002", "CL-RX-003", "CL-FQ-001"];
+const RECEIVING: &[ReqId] = req_ids![
+    "CL-RX-001",
+    "CL-RX-002",
+    "CL-RX-003",
+    "CL-RX-004",
+    "CL-FQ-001"
+];
 
 /// The identifiers a several-stream application sends on: few, so that
 /// each stream has frames to keep in order.

@@ -35,10 +35,11 @@ pub enum ClientFault {
     RestartReadsAllSlots,
     IgnoresRxCounterZero,
     SentOnAcknowledge,
+    AcknowledgesWithTxCounter,
 }
 
 impl ClientFault {
-    pub const ALL: [ClientFault; 18] = [
+    pub const ALL: [ClientFault; 19] = [
         ClientFault::SendSample000,
         ClientFault::DecodeOverNoOfTxMessages,
         ClientFault::OwnRxCounter,
@@ -57,6 +58,7 @@ impl ClientFault {
         ClientFault::RestartReadsAllSlots,
         ClientFault::IgnoresRxCounterZero,
         ClientFault::SentOnAcknowledge,
+        ClientFault::AcknowledgesWithTxCounter,
     ];
 
     pub fn name(self) -> &'static str {
@@ -79,6 +81,7 @@ impl ClientFault {
             ClientFault::RestartReadsAllSlots => "restart-reads-all-slots",
             ClientFault::IgnoresRxCounterZero => "ignores-rx-counter-zero",
             ClientFault::SentOnAcknowledge => "sent-on-acknowledge",
+            ClientFault::AcknowledgesWithTxCounter => "acknowledges-with-tx-counter",
         }
     }
 
@@ -129,6 +132,9 @@ impl ClientFault {
             }
             ClientFault::SentOnAcknowledge => {
                 "tells its application a batch was sent once Inputs.TxCounter acknowledges it, not once Inputs.TransactionNumber names it"
+            }
+            ClientFault::AcknowledgesWithTxCounter => {
+                "acknowledges Rx by copying Inputs.TxCounter into Outputs.RxCounter: the wrong counter copied"
             }
         }
     }
@@ -359,6 +365,9 @@ impl FaultyClient {
                 self.own_rx_counter = own;
             }
             Some(ClientFault::FastQueueRereads) if self.queue == QueueMode::Fast => {}
+            Some(ClientFault::AcknowledgesWithTxCounter) => {
+                outputs.set_rx_counter(image.tx_counter())
+            }
             _ => outputs.set_rx_counter(seen),
         }
         Ok(())

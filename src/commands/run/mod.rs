@@ -94,6 +94,30 @@ impl<'c, S: Side> Plan<'c, S> {
         {
             return Ok(());
         }
+        // A statement of the other side: say where it is judged, and this side's own.
+        for id in &selection.requirements {
+            let Some(requirement) = catalogue.requirement(id) else {
+                continue;
+            };
+            if requirement.side != S::SIDE {
+                let own: Vec<&str> = requirement
+                    .related
+                    .iter()
+                    .filter(|r| catalogue.requirement(r).is_some_and(|r| r.side == S::SIDE))
+                    .map(String::as_str)
+                    .collect();
+                let own = match own.is_empty() {
+                    true => String::new(),
+                    false => format!("; this side's own statement: {}", own.join(", ")),
+                };
+                return Err(stop!(
+                    "--requirement {id} binds the {} side, not the {} side: `canif run --side {} --requirement {id}` judges it{own}",
+                    requirement.side,
+                    S::SIDE,
+                    requirement.side,
+                ));
+            }
+        }
         Err(stop!(
             "{} matches no check on {}; `canif list scenarios` lists them",
             selection.flags(),

@@ -27,6 +27,7 @@ pub(super) const TX_ONCE: &[ReqId] = req_ids!["CL-TX-003"];
 pub(super) const TX_ENCODING: &[ReqId] = req_ids!["CL-TX-004"];
 pub(super) const TX_COUNT: &[ReqId] = req_ids!["CL-TX-005"];
 pub(super) const RX_ACKNOWLEDGE: &[ReqId] = req_ids!["CL-RX-001"];
+pub(super) const RX_READ_ALL: &[ReqId] = req_ids!["CL-RX-004"];
 pub(super) const RX_ONCE: &[ReqId] = req_ids!["CL-RX-002"];
 pub(super) const RX_DECODING: &[ReqId] = req_ids!["CL-RX-003"];
 pub(super) const IMAGE_BOUNDS: &[ReqId] = req_ids!["CL-IMG-001"];
@@ -36,13 +37,17 @@ pub(super) const DEVICE_RESTART: &[ReqId] = req_ids!["CL-RST-002"];
 pub(super) const TRANSACTION_NUMBERS: &[ReqId] = req_ids!["CL-TN-001"];
 pub(super) const SENT_REPORTS: &[ReqId] = req_ids!["CL-TN-002"];
 
+/// How many of the messages the device entered last the judge remembers:
+/// more than the slots of many batches, which a stale slot can hold.
+const ENTERED_KEPT: usize = 1024;
+
 /// The row of a client's diagram a breach of `requirements` is about.
 pub(super) fn row_of(requirements: &[ReqId]) -> crate::outcome::TaskRow {
     use crate::outcome::TaskRow;
     let about = |ids: &[ReqId]| requirements.iter().any(|id| ids.contains(id));
     if about(TX_REQUEST) || about(TX_UNTOUCHED) {
         TaskRow::TxCounter
-    } else if about(RX_ACKNOWLEDGE) {
+    } else if about(RX_ACKNOWLEDGE) || about(RX_READ_ALL) {
         TaskRow::RxCounter
     } else if about(TX_COUNT) || about(IMAGE_BOUNDS) {
         TaskRow::NoOfTxMessages
@@ -132,6 +137,10 @@ pub(super) struct Judge {
     rx: VecDeque<RxBatch>,
     /// The batch delivered last, to tell a duplicate from a wrong message.
     last_delivered: Option<RxBatch>,
+    /// The messages the device entered lately, to tell a message of an
+    /// earlier batch (a stale slot read, CL-RX-002) from a wrong decoding
+    /// (CL-RX-003).
+    entered_lately: VecDeque<MessageRepr>,
     /// The device's RxCounter after its last cycle.
     device_rx_counter: u16,
     /// The RxCounter of the last input image the client was handed.
@@ -205,6 +214,7 @@ impl Judge {
             pending: None,
             rx: VecDeque::new(),
             last_delivered: None,
+            entered_lately: VecDeque::new(),
             device_rx_counter: 0,
             seen_rx_counter: 0,
             restart_batch: None,
@@ -242,7 +252,10 @@ impl Judge {
         let messages = (0..count)
             .filter_map(|slot| image.rx_message(slot))
             .map(|view| MessageRepr::parse_clamped(&view).0)
-            .collect();
+            .collect::<VecDeque<_>>();
+        self.entered_lately.extend(messages.iter().copied());
+        let excess = self.entered_lately.len().saturating_sub(ENTERED_KEPT);
+        self.entered_lately.drain(..excess);
         self.rx.push_back(RxBatch::new(counter, messages));
     }
 

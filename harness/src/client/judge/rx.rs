@@ -9,7 +9,7 @@ use canif_model::image::{InputImage, MessageRepr, OutputImage};
 
 use super::{
     breach, Breach, Judge, RestartChoice, FAST_QUEUE, PLC_RESTART, RX_ACKNOWLEDGE, RX_DECODING,
-    RX_ONCE,
+    RX_ONCE, RX_READ_ALL,
 };
 
 /// A batch the device entered in the input image.
@@ -81,15 +81,25 @@ impl Judge {
                 delivered = &delivered[n..];
             }
         }
+        // What the slots past NoOfRxMessages hold: a client reading them
+        // delivers no message of this batch, however right its decoding.
+        let in_use = usize::from(inputs.no_of_rx_messages()).min(self.layout.rx_slots);
+        let stale: Vec<MessageRepr> = (in_use..self.layout.rx_slots)
+            .filter_map(|slot| inputs.rx_message(slot))
+            .map(|view| MessageRepr::parse_clamped(&view).0)
+            .collect();
         for message in delivered {
-            // P3 allows one batch; more is the restart's fault.
-            self.take_delivered(message)
+            // P3 allows one batch: a message delivered twice, out of order,
+            // from a stale slot or never entered beyond it is the restart's
+            // fault; a message decoded wrongly is a decoding fault, restart
+            // or not.
+            self.take_delivered(message, &stale)
                 .map_err(|breach| match restart_batch {
-                    Some(_) => Breach {
+                    Some(_) if [RX_ONCE, FAST_QUEUE].contains(&breach.requirements) => Breach {
                         requirements: PLC_RESTART,
                         ..breach
                     },
-                    None => breach,
+                    _ => breach,
                 })?;
         }
         // P1: out of step after a restart, a counter of the client's own
@@ -110,7 +120,7 @@ impl Judge {
             let undelivered = self.rx.front().is_some_and(|b| b.counter == counter);
             if undelivered && restart_batch.is_none() {
                 return breach(
-                    RX_ACKNOWLEDGE,
+                    RX_READ_ALL,
                     "messages read before the acknowledge",
                     format!("NoOfRxMessages = {}", inputs.no_of_rx_messages()),
                     format!(
@@ -181,7 +191,11 @@ impl Judge {
         Ok(())
     }
 
-    fn take_delivered(&mut self, message: &MessageRepr) -> Result<(), Breach> {
+    fn take_delivered(
+        &mut self,
+        message: &MessageRepr,
+        stale: &[MessageRepr],
+    ) -> Result<(), Breach> {
         if self.byte_stream {
             // The next bytes of its identifier, however the client cut them.
             if let Some(batch) = self.rx.front_mut() {
@@ -228,12 +242,21 @@ impl Judge {
             .iter()
             .flat_map(|b| b.messages.iter())
             .any(|m| m == message);
+        let earlier = self.entered_lately.contains(message) || stale.contains(message);
         let (ids, what) = match (again, later, expected) {
             (true, _, _) if self.queue == QueueMode::Fast => {
                 (FAST_QUEUE, "a message delivered twice")
             }
             (true, _, _) => (RX_ONCE, "a message delivered twice"),
             (_, true, _) => (RX_ONCE, "a message delivered out of order"),
+            _ if earlier && self.queue == QueueMode::Fast => (
+                FAST_QUEUE,
+                "a slot past NoOfRxMessages or of an earlier batch read",
+            ),
+            _ if earlier => (
+                RX_ONCE,
+                "a slot past NoOfRxMessages or of an earlier batch read",
+            ),
             (_, _, None) => (RX_ONCE, "a message the device never entered"),
             _ => (
                 RX_DECODING,

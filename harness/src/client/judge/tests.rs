@@ -176,3 +176,63 @@ fn a_byte_stream_is_cut_where_the_client_cut_it() {
     assert_eq!(super::tx::cut(pending.clone(), &message(1, &[2])), pending);
     assert_eq!(super::tx::cut(pending.clone(), &message(3, &[1])), pending);
 }
+
+/// Issue 36: in a restarted program's first batch, a message decoded
+/// otherwise than the device wrote it is a decoding fault (CL-RX-003), not
+/// the restart's (CL-RST-001 allows a batch twice or dropped, nothing else).
+#[test]
+fn a_wrong_decoding_after_a_plc_restart_is_charged_to_the_decoding() {
+    let layout = layout();
+    let mut judge = Judge::new(layout, QueueMode::Standard, &Default::default());
+    let mut inputs = vec![0; layout.input_size()];
+    let mut image = InputImage::new_checked(&mut inputs[..], layout).unwrap();
+    image.set_rx_counter(1);
+    image.set_no_of_rx_messages(1);
+    request(0x181)
+        .emit(&mut image.rx_message_mut(0).unwrap())
+        .unwrap();
+    judge.device_cycle(&inputs);
+    judge.plc_restarted(0);
+    let idle = outputs(0, &[]);
+    let mut acknowledged = idle.clone();
+    OutputImage::new_checked(&mut acknowledged[..layout.output_size()], layout)
+        .unwrap()
+        .set_rx_counter(1);
+    let wrongly_decoded = [request(0x182)];
+    let twice = [request(0x181), request(0x181)];
+    for (delivered, blamed) in [(&wrongly_decoded[..], RX_DECODING), (&twice, PLC_RESTART)] {
+        let seen = TaskSeen {
+            delivered,
+            ..task(&inputs, &idle[..layout.output_size()], &acknowledged)
+        };
+        let breaches = judge.clone().task(1, seen, 100);
+        assert_eq!(breaches.first().map(|b| b.requirements), Some(blamed));
+    }
+}
+
+/// Issue 36: a client that reads a slot past NoOfRxMessages delivers no
+/// message of the batch, however right its decoding: CL-RX-002, not the
+/// decoding's CL-RX-003.
+#[test]
+fn a_stale_slot_read_is_charged_to_the_delivery_not_the_decoding() {
+    let layout = layout();
+    let mut judge = Judge::new(layout, QueueMode::Standard, &Default::default());
+    let mut inputs = vec![0; layout.input_size()];
+    let mut image = InputImage::new_checked(&mut inputs[..], layout).unwrap();
+    image.set_rx_counter(1);
+    image.set_no_of_rx_messages(1);
+    for (slot, id) in [(0, 0x181), (1, 0x199)] {
+        request(id)
+            .emit(&mut image.rx_message_mut(slot).unwrap())
+            .unwrap();
+    }
+    judge.device_cycle(&inputs);
+    let idle = outputs(0, &[]);
+    let delivered = [request(0x199), request(0x181)];
+    let seen = TaskSeen {
+        delivered: &delivered,
+        ..task(&inputs, &idle[..layout.output_size()], &idle)
+    };
+    let breach = judge.task(1, seen, 100).into_iter().next().unwrap();
+    assert_eq!(breach.requirements, RX_ONCE, "{breach:?}");
+}
