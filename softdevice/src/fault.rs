@@ -13,6 +13,8 @@ pub enum Fault {
     TimeStampInMicroseconds,
     HeadDropWhenFull,
     FilterLastMatchWins,
+    FilterRangeEndExcluded,
+    FilterUnmatchedAccepted,
     FastQueueWaitsForAck,
     CounterDoesNotWrap,
     RxCounterCountsEmptyCycles,
@@ -48,7 +50,7 @@ pub enum Fault {
 }
 
 impl Fault {
-    pub const ALL: [Fault; 43] = [
+    pub const ALL: [Fault; 45] = [
         Fault::AckBeforeAccept,
         Fault::OverwritesUnacknowledgedRx,
         Fault::FdLengthRoundsDown,
@@ -60,6 +62,8 @@ impl Fault {
         Fault::TimeStampInMicroseconds,
         Fault::HeadDropWhenFull,
         Fault::FilterLastMatchWins,
+        Fault::FilterRangeEndExcluded,
+        Fault::FilterUnmatchedAccepted,
         Fault::FastQueueWaitsForAck,
         Fault::CounterDoesNotWrap,
         Fault::RxCounterCountsEmptyCycles,
@@ -108,6 +112,8 @@ impl Fault {
             Fault::TimeStampInMicroseconds => "time-stamp-in-microseconds",
             Fault::HeadDropWhenFull => "head-drop-when-full",
             Fault::FilterLastMatchWins => "filter-last-match-wins",
+            Fault::FilterRangeEndExcluded => "filter-range-end-excluded",
+            Fault::FilterUnmatchedAccepted => "filter-unmatched-accepted",
             Fault::FastQueueWaitsForAck => "fast-queue-waits-for-ack",
             Fault::CounterDoesNotWrap => "counter-does-not-wrap",
             Fault::RxCounterCountsEmptyCycles => "rx-counter-counts-empty-cycles",
@@ -157,6 +163,10 @@ impl Fault {
             Fault::TimeStampInMicroseconds => "writes receive time stamps in microseconds",
             Fault::HeadDropWhenFull => "drops the oldest frame when the local Rx queue is full",
             Fault::FilterLastMatchWins => "lets the last matching filter row decide",
+            Fault::FilterRangeEndExcluded => "takes a range row's last identifier as outside it",
+            Fault::FilterUnmatchedAccepted => {
+                "lets a frame no filter row matches through although the table has acceptance rows"
+            }
             Fault::FastQueueWaitsForAck => "waits for the Rx acknowledge in the Fast CAN Queue",
             Fault::CounterDoesNotWrap => "stops the counters at 0xFFFF instead of wrapping",
             Fault::RxCounterCountsEmptyCycles => "increments RxCounter in cycles without new messages",

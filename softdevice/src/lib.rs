@@ -497,11 +497,7 @@ impl SoftDevice {
             Format::Fd => true,
         };
         if !fits
-            || !settings::filter_passes(
-                &self.settings.filters,
-                frame.id,
-                self.has(Fault::FilterLastMatchWins),
-            )
+            || !settings::filter_passes(&self.settings.filters, frame.id, |fault| self.has(fault))
         {
             return false;
         }

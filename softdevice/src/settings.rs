@@ -44,9 +44,11 @@ pub enum FilterRule {
 }
 
 impl FilterRule {
-    fn hit(&self, id: u32) -> Option<bool> {
+    fn hit(&self, id: u32, end_excluded: bool) -> Option<bool> {
         match *self {
-            FilterRule::Range { accept, low, high } => (low..=high).contains(&id).then_some(accept),
+            FilterRule::Range { accept, low, high } => {
+                ((low..=high).contains(&id) && !(end_excluded && id == high)).then_some(accept)
+            }
             FilterRule::Mask { accept, code, mask } => ((id ^ code) & mask == 0).then_some(accept),
         }
     }
@@ -59,13 +61,15 @@ impl FilterRule {
     }
 }
 
-pub(crate) fn filter_passes(rules: &[FilterRule], id: u32, last_match_wins: bool) -> bool {
-    let verdict = if last_match_wins {
-        rules.iter().rev().find_map(|r| r.hit(id))
-    } else {
-        rules.iter().find_map(|r| r.hit(id))
+pub(crate) fn filter_passes(rules: &[FilterRule], id: u32, has: impl Fn(Fault) -> bool) -> bool {
+    let hit = |r: &FilterRule| r.hit(id, has(Fault::FilterRangeEndExcluded));
+    let verdict = match has(Fault::FilterLastMatchWins) {
+        true => rules.iter().rev().find_map(hit),
+        false => rules.iter().find_map(hit),
     };
-    verdict.unwrap_or_else(|| !rules.iter().any(FilterRule::accepts))
+    verdict.unwrap_or_else(|| {
+        has(Fault::FilterUnmatchedAccepted) || !rules.iter().any(FilterRule::accepts)
+    })
 }
 
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -4,6 +4,9 @@
 
 use canif_spec::{req_ids, ReqId};
 
+use canif_model::filter::{self, FilterAction, FilterMatch, FilterRow};
+use canif_model::frame::CanId;
+
 use crate::error::InvalidFrame;
 
 pub const INPUT_IMAGE_SIZE: &[ReqId] = req_ids!["LAY-GEN-004"];
@@ -156,6 +159,48 @@ pub fn invalid_frame(invalid: &InvalidFrame) -> &'static [ReqId] {
     }
 }
 
+/// The filter statement that decides whether identifier `id` passes `table`
+/// (000 §7, ruling G7): where matching rows disagree, their order (FLT-005);
+/// where none matches, the default (FLT-006); otherwise the deciding row, its
+/// range first when `id` is at its edge (FLT-004), or its mask (FLT-003),
+/// and the manual's example table first of all (FLT-009). At the edge of a
+/// row that a later row overlaps both the range and the order can be what
+/// broke. `None` without filters. A device that decides `id` otherwise contradicts this statement
+/// first; the assumptions (FLT-005, FLT-006) are charged alone.
+pub fn filter_statement(table: &[FilterRow], id: CanId) -> Option<&'static [ReqId]> {
+    if table.is_empty() {
+        return None;
+    }
+    let mut matching = table.iter().filter(|row| row.matches(id));
+    let Some(first) = matching.next() else {
+        return Some(req_ids!["FLT-006"]);
+    };
+    let disagree = matching.any(|row| row.action != first.action);
+    let raw = id.raw();
+    let edge = matches!(first.matches, FilterMatch::Range { from, to } if raw == from || raw == to);
+    // At the deciding row's edge, a later row that disagrees decides for a
+    // device whose range ends early as for one whose last match wins.
+    match (disagree, edge) {
+        (true, true) => return Some(req_ids!["FLT-004", "FLT-005"]),
+        (true, false) => return Some(req_ids!["FLT-005"]),
+        _ => {}
+    }
+    let manual = table == filter::manual_example();
+    let mask = matches!(first.matches, FilterMatch::CodeMask { .. });
+    Some(match (manual, first.action, edge, mask) {
+        (true, FilterAction::Accept, true, _) => req_ids!["FLT-009", "FLT-004", "FLT-001"],
+        (true, FilterAction::Reject, true, _) => req_ids!["FLT-009", "FLT-004", "FLT-002"],
+        (true, FilterAction::Accept, false, _) => req_ids!["FLT-009", "FLT-001"],
+        (true, FilterAction::Reject, false, _) => req_ids!["FLT-009", "FLT-002"],
+        (false, FilterAction::Accept, true, _) => req_ids!["FLT-004", "FLT-001"],
+        (false, FilterAction::Reject, true, _) => req_ids!["FLT-004", "FLT-002"],
+        (false, FilterAction::Accept, false, true) => req_ids!["FLT-003", "FLT-001"],
+        (false, FilterAction::Reject, false, true) => req_ids!["FLT-003", "FLT-002"],
+        (false, FilterAction::Accept, false, false) => req_ids!["FLT-001"],
+        (false, FilterAction::Reject, false, false) => req_ids!["FLT-002"],
+    })
+}
+
 /// The requirements of `InfoData[index]`.
 pub fn info_data(index: usize) -> &'static [ReqId] {
     match index {
@@ -226,5 +271,34 @@ mod tests {
             assert!(!info_data(index).is_empty(), "InfoData[{index}]");
         }
         assert_eq!(info_data(3), req_ids!["INFO-004"]);
+    }
+
+    /// Issue 36: a filter difference names the statement deciding the
+    /// identifier - the order of disagreeing rows and the default are
+    /// assumptions charged alone; a range's edge names the range first; the
+    /// manual's example table names itself.
+    #[test]
+    fn a_filter_difference_names_the_statement_that_decides_the_identifier() {
+        let id = |raw: u32| CanId::Extended(raw);
+        let overlapping = [
+            FilterRow::accept_range(0x100, 0x1FF),
+            FilterRow::reject_range(0x180, 0x2FF),
+        ];
+        let decided = |table: &[FilterRow], raw| filter_statement(table, id(raw)).unwrap();
+        assert_eq!(decided(&overlapping, 0x190), req_ids!["FLT-005"]);
+        assert_eq!(decided(&overlapping, 0x400), req_ids!["FLT-006"]);
+        assert_eq!(decided(&overlapping, 0x1FF), req_ids!["FLT-004", "FLT-005"]);
+        assert_eq!(decided(&overlapping, 0x100), req_ids!["FLT-004", "FLT-001"]);
+        assert_eq!(decided(&overlapping, 0x120), req_ids!["FLT-001"]);
+        assert_eq!(decided(&overlapping, 0x2FF), req_ids!["FLT-004", "FLT-002"]);
+        let manual = filter::manual_example();
+        assert_eq!(
+            decided(&manual, 0x700),
+            req_ids!["FLT-009", "FLT-004", "FLT-001"]
+        );
+        assert_eq!(decided(&manual, 0x500), req_ids!["FLT-009", "FLT-001"]);
+        let mask = [FilterRow::accept_code_mask(0x100, 0x700)];
+        assert_eq!(decided(&mask, 0x101), req_ids!["FLT-003", "FLT-001"]);
+        assert_eq!(filter_statement(&[], id(0x100)), None);
     }
 }

@@ -103,6 +103,8 @@ pub struct Lockstep<B: Bus + ?Sized = dyn Bus> {
     pub iut_declares: Vec<String>,
     cycle_time: Nanos,
     time_stamp_tolerance: Nanos,
+    /// The configuration's filter table, which a difference of what came in is charged to.
+    filters: Vec<canif_model::filter::FilterRow>,
 }
 
 impl<B: Bus + ?Sized> Lockstep<B> {
@@ -179,6 +181,7 @@ impl<B: Bus + ?Sized> Lockstep<B> {
             time_stamp_tolerance: scenario
                 .time_stamp_tolerance
                 .max(bus.time_stamp_tolerance()),
+            filters: scenario.interface.filters.clone(),
             pair,
             bus,
             iut_declares,
@@ -329,6 +332,7 @@ impl<B: Bus + ?Sized> Lockstep<B> {
                     layout: &layout,
                     was_on_bus: &|f| history.received_lately(f),
                     lost_by_model: &|f| history.lost_by_model_lately(f),
+                    filters: &self.filters,
                     time_stamp_tolerance: self.time_stamp_tolerance,
                     rx,
                     declared: self.rules.declared_rx,

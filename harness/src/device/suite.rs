@@ -400,6 +400,8 @@ pub fn profile_for(fault: canif_softdevice::Fault) -> &'static str {
         | TransactionNumberOnHandover
         | TimeStampInMicroseconds
         | FilterLastMatchWins
+        | FilterRangeEndExcluded
+        | FilterUnmatchedAccepted
         | StandardIdKeepsHighBits => "ccat",
         _ => "el6751-mdp",
     }

@@ -3,6 +3,7 @@
 //! documents call don't-care is skipped: Rx slots at and past NoOfRxMessages
 //! (HS-RX-008, FQ-005) and data bytes past the length.
 
+use canif_model::filter::{self, FilterRow};
 use canif_model::frame::Frame;
 use canif_model::image::{
     field, ImageLayout, InputImage, LengthField, MessageLayout, MessageRepr, MessageView,
@@ -101,6 +102,9 @@ pub struct InputCheck<'a> {
     /// Whether the model lost a frame lately to its full local Rx queue: a
     /// device delivering it kept what the tail drop of G4 drops.
     pub lost_by_model: &'a dyn Fn(&Frame) -> bool,
+    /// The configuration's filter table: a frame let through or held back
+    /// otherwise than it says is charged to the statement deciding it.
+    pub filters: &'a [FilterRow],
     pub time_stamp_tolerance: Nanos,
     pub rx: RxState,
     /// What the device declared of the freedoms the checks otherwise skip.
@@ -154,6 +158,7 @@ impl InputCheck<'_> {
         a: &InputImage<&[u8]>,
         unread: bool,
     ) -> Option<Difference> {
+        let (e_image, a_image) = (e, a);
         let (e, a) = (e.header(), a.header());
         let rx = self.rx;
         if e.tx_counter != a.tx_counter {
@@ -175,10 +180,14 @@ impl InputCheck<'_> {
             let candidates = match (model_moved, iut_moved) {
                 (false, true) if !released => blame::RX_UNRELEASED,
                 (false, true) if a.no_of_rx_messages == 0 => blame::RX_EMPTY_DELIVERY,
-                (false, true) => blame::RX_ADMISSION,
+                (false, true) => self
+                    .filter_statement_of(a_image)
+                    .unwrap_or(blame::RX_ADMISSION),
                 (true, false) if rx.before == u16::MAX => blame::RX_COUNTING,
                 (true, false) if rx.fast => blame::RX_WITHHELD_FAST,
-                (true, false) => blame::RX_WITHHELD,
+                (true, false) => self
+                    .filter_statement_of(e_image)
+                    .unwrap_or(blame::RX_WITHHELD),
                 _ => blame::RX_COUNTING,
             };
             return Some(Difference {
@@ -220,6 +229,30 @@ impl InputCheck<'_> {
             });
         }
         None
+    }
+
+    /// The filter statement deciding the messages `image` delivers, all
+    /// taken or all held back: the narrowest that decides every one of them
+    /// (an edge that is also an overlap names both, and the others say
+    /// which), else the first message's.
+    fn filter_statement_of(&self, image: &InputImage<&[u8]>) -> Option<&'static [ReqId]> {
+        let count = usize::from(image.no_of_rx_messages()).min(self.layout.rx_slots);
+        let statements: Vec<&'static [ReqId]> = (0..count)
+            .filter_map(|slot| image.rx_message(slot))
+            .filter_map(|view| MessageRepr::parse(&view).ok())
+            .filter_map(|message| blame::filter_statement(self.filters, message.frame.id))
+            .collect();
+        let in_all = |s: &&[ReqId]| {
+            statements
+                .iter()
+                .all(|other| s.iter().all(|id| other.contains(id)))
+        };
+        statements
+            .iter()
+            .copied()
+            .filter(in_all)
+            .min_by_key(|s| s.len())
+            .or_else(|| statements.first().copied())
     }
 
     fn messages(&self, e: &InputImage<&[u8]>, a: &InputImage<&[u8]>) -> Option<Difference> {
@@ -282,9 +315,22 @@ impl InputCheck<'_> {
         let kept_what_the_model_dropped = different_frame
             && !self.rx.fast
             && parsed(a).is_some_and(|actual| (self.lost_by_model)(&actual));
+        // A frame the table holds back, let through; else one it lets
+        // through, missing: the filter statement deciding it.
+        let filtered = match (parsed(e), parsed(a)) {
+            (Some(expected), Some(actual)) if different_frame => {
+                match filter::accepts(self.filters, actual.id) {
+                    false => blame::filter_statement(self.filters, actual.id),
+                    true => blame::filter_statement(self.filters, expected.id),
+                }
+            }
+            _ => None,
+        };
         let has_own_length = !matches!(message.length, LengthField::InCobIdWord);
         Some(if kept_what_the_model_dropped {
             blame::RX_DROP_POLICY
+        } else if let Some(statement) = filtered {
+            statement
         } else if different_frame {
             blame::RX_SET
         } else if message.cob_id.len() == 2 && e.cob_id_word() != a.cob_id_word() {
@@ -397,205 +443,4 @@ pub fn frame_difference(expected: &Frame, actual: &Frame, word: bool) -> &'stati
 }
 
 #[cfg(test)]
-mod tests {
-    use canif_model::config::{FrameFormat, InterfaceConfig};
-    use canif_model::frame::CanId;
-    use canif_model::image::InputImage;
-
-    use super::*;
-
-    fn layout(format: FrameFormat) -> ImageLayout {
-        ImageLayout::new(&InterfaceConfig::new(format, 4), false)
-    }
-
-    /// An input image with TxCounter 3, RxCounter 1 and `messages` in its slots.
-    fn image(layout: ImageLayout, messages: &[Frame]) -> Vec<u8> {
-        let mut bytes = vec![0; layout.input_size()];
-        let mut image = InputImage::new_checked(&mut bytes[..], layout).unwrap();
-        image.set_tx_counter(3);
-        image.set_rx_counter(1);
-        image.set_no_of_rx_messages(messages.len() as u16);
-        for (slot, frame) in messages.iter().enumerate() {
-            let mut view = image.rx_message_mut(slot).unwrap();
-            MessageRepr {
-                transaction_number: 0,
-                frame: *frame,
-                time_stamp: 0,
-            }
-            .emit(&mut view)
-            .unwrap();
-        }
-        bytes
-    }
-
-    fn check(layout: &ImageLayout, plc_released: u16) -> InputCheck<'_> {
-        InputCheck {
-            layout,
-            was_on_bus: &|_| false,
-            lost_by_model: &|_| false,
-            time_stamp_tolerance: 0,
-            rx: RxState {
-                before: 0,
-                plc_released,
-                fast: false,
-                no_of_tx_messages: 1,
-            },
-            declared: DeclaredRx::default(),
-        }
-    }
-
-    fn frame(id: u16, data: &[u8]) -> Frame {
-        Frame::classic(CanId::Standard(id), data).unwrap()
-    }
-
-    #[test]
-    fn identical_images_do_not_differ_and_a_wrong_size_is_the_layout() {
-        let layout = layout(FrameFormat::Base11);
-        let expected = image(layout, &[frame(0x123, &[1, 2])]);
-        assert_eq!(check(&layout, 0).compare(&expected, &expected), None);
-        let difference = check(&layout, 0)
-            .compare(&expected, &expected[..expected.len() - 2])
-            .unwrap();
-        assert_eq!(difference.candidates, blame::INPUT_IMAGE_SIZE);
-    }
-
-    #[test]
-    fn the_idle_count_and_stale_slots_are_judged_only_where_declared() {
-        let layout = layout(FrameFormat::Base11);
-        let expected = image(layout, &[frame(0x123, &[1, 2])]);
-        // A delivery leaves old bytes in slot 1, past NoOfRxMessages.
-        let mut stale = expected.clone();
-        let old = image(layout, &[frame(0x1, &[9]), frame(0x2, &[8])]);
-        let slot = layout.rx_slot(1);
-        stale[slot.clone()].copy_from_slice(&old[slot]);
-        assert_eq!(check(&layout, 0).compare(&expected, &stale), None);
-        let declared = InputCheck {
-            declared: DeclaredRx {
-                stale_slots: true,
-                idle_count: true,
-            },
-            ..check(&layout, 0)
-        };
-        let difference = declared.compare(&expected, &stale).unwrap();
-        assert_eq!(difference.candidates, blame::RX_STALE_SLOTS);
-        assert!(
-            difference.what.contains("RxMessage[1]"),
-            "{}",
-            difference.what
-        );
-        // Nothing new (the PLC released RxCounter 1): a 0 where the count stayed.
-        let mut zero = expected.clone();
-        InputImage::new_checked(&mut zero[..], layout)
-            .unwrap()
-            .set_no_of_rx_messages(0);
-        assert_eq!(check(&layout, 1).compare(&expected, &zero), None);
-        let declared = InputCheck {
-            declared: DeclaredRx {
-                stale_slots: false,
-                idle_count: true,
-            },
-            ..check(&layout, 1)
-        };
-        let difference = declared.compare(&expected, &zero).unwrap();
-        assert_eq!(difference.candidates, blame::RX_IDLE_COUNT);
-    }
-
-    #[test]
-    fn a_header_field_is_blamed_on_its_handshake() {
-        let layout = layout(FrameFormat::Base11);
-        let expected = image(layout, &[]);
-        let mut actual = expected.clone();
-        InputImage::new_checked(&mut actual[..], layout)
-            .unwrap()
-            .set_tx_counter(4);
-        let difference = check(&layout, 0).compare(&expected, &actual).unwrap();
-        assert_eq!(difference.what, "Inputs.TxCounter");
-        assert_eq!(difference.candidates, blame::TX_COUNTER);
-        assert_eq!(
-            (difference.expected.as_str(), difference.actual.as_str()),
-            ("3", "4")
-        );
-    }
-
-    #[test]
-    fn rx_slots_are_dont_care_until_the_plc_reads_them_and_past_the_length() {
-        let layout = layout(FrameFormat::Base11);
-        let expected = image(layout, &[frame(0x123, &[1, 2])]);
-        let other = image(layout, &[frame(0x124, &[1, 2])]);
-        // Outputs.RxCounter equals Inputs.RxCounter: the PLC does not read the slots (HS-RX-008).
-        assert_eq!(check(&layout, 1).compare(&expected, &other), None);
-        let difference = check(&layout, 0).compare(&expected, &other).unwrap();
-        assert_eq!(difference.what, "Inputs.RxMessage[0]");
-        // Data bytes past the length are don't-care.
-        let mut padded = expected.clone();
-        let mut image = InputImage::new_checked(&mut padded[..], layout).unwrap();
-        image.rx_message_mut(0).unwrap().data_field_mut()[5] = 0xEE;
-        assert_eq!(check(&layout, 0).compare(&expected, &padded), None);
-    }
-
-    #[test]
-    fn a_swapped_cob_id_word_is_the_byte_order() {
-        let layout = layout(FrameFormat::Base11);
-        let expected = image(layout, &[frame(0x123, &[1, 2])]);
-        let mut actual = expected.clone();
-        let mut image = InputImage::new_checked(&mut actual[..], layout).unwrap();
-        let mut slot = image.rx_message_mut(0).unwrap();
-        let word = slot.cob_id_word();
-        slot.set_cob_id_word(canif_model::cob_id::CobIdWord(word.0.swap_bytes()));
-        let difference = check(&layout, 0).compare(&expected, &actual).unwrap();
-        assert_eq!(difference.candidates, blame::BYTE_ORDER);
-    }
-
-    #[test]
-    fn a_frame_is_blamed_on_its_first_differing_property() {
-        let a = frame(0x123, &[1, 2]);
-        assert_eq!(
-            frame_difference(&a, &frame(0x123, &[1, 3]), true),
-            blame::TX_DATA
-        );
-        assert_eq!(
-            frame_difference(&a, &frame(0x123, &[1]), true),
-            blame::TX_LENGTH
-        );
-        assert_eq!(
-            frame_difference(&a, &frame(0x124, &[1, 2]), true),
-            blame::TX_ID_WORD
-        );
-        assert_eq!(
-            frame_difference(&a, &frame(0x124, &[9, 9]), true),
-            blame::TX_OTHER_FRAME
-        );
-        let extended = Frame::classic(CanId::Extended(0x123), &[1, 2]).unwrap();
-        assert_eq!(frame_difference(&a, &extended, false), blame::TX_FORMAT);
-        let remote = Frame::remote(CanId::Standard(0x123), 2).unwrap();
-        assert_eq!(frame_difference(&a, &remote, true), blame::TX_REMOTE);
-        // Bits above the 11 kept in a standard identifier (LAY-29-006).
-        let high = Frame::classic(CanId::Standard(0x123 | 0x800), &[1, 2]).unwrap();
-        assert_eq!(frame_difference(&a, &high, false), blame::TX_ID_RESERVED);
-    }
-
-    /// Issue 36: a device that kept a frame the model's tail drop lost broke
-    /// the assumption that decides which frames a full queue loses (RXQ-004),
-    /// not the statement that frames are lost (RXQ-003); another real frame
-    /// in the slot is the message set's.
-    #[test]
-    fn a_frame_the_model_dropped_is_charged_to_the_drop_policy() {
-        let layout = layout(FrameFormat::Base11);
-        let expected = image(layout, &[frame(0x123, &[1])]);
-        let kept = image(layout, &[frame(0x456, &[2])]);
-        let on_bus = |_: &Frame| true;
-        let dropped = |f: &Frame| f.id == CanId::Standard(0x456);
-        let blamed = |lost_by_model: &dyn Fn(&Frame) -> bool| {
-            InputCheck {
-                was_on_bus: &on_bus,
-                lost_by_model,
-                ..check(&layout, 0)
-            }
-            .compare(&expected, &kept)
-            .unwrap()
-            .candidates
-        };
-        assert_eq!(blamed(&dropped), blame::RX_DROP_POLICY);
-        assert_eq!(blamed(&|_| false), blame::RX_SET);
-    }
-}
+mod tests;
