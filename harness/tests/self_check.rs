@@ -112,7 +112,9 @@ pub const KILL_TABLE: [(Fault, &[&str]); 45] = [
     (Fault::RtrBitMisplaced, &["LAY-11-003"]),
     (Fault::ExtendedFlagMissing, &["LAY-29-005"]),
     (Fault::TransactionNumberOfFirstFrame, &["TN-002", "TN-003"]),
-    (Fault::TransactionNumberOnHandover, &["TN-002", "TN-003"]),
+    // It names a message handed to the controller and not yet complete:
+    // that "sent" means complete is ruling G6's, assumption TN-003 alone.
+    (Fault::TransactionNumberOnHandover, &["TN-003"]),
     (
         Fault::TimeStampInMicroseconds,
         &["TS-001", "TS-003", "TS-004"],

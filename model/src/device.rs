@@ -122,6 +122,15 @@ impl Device {
         self.send_queue.iter().map(|pending| &pending.frame)
     }
 
+    /// The transaction numbers of the messages accepted and not yet complete
+    /// on the bus: the one on the bus first, then the queue in sending order.
+    pub fn waiting_transaction_numbers(&self) -> impl Iterator<Item = u16> + '_ {
+        self.in_flight
+            .iter()
+            .chain(self.send_queue.iter())
+            .map(|pending| pending.transaction_number)
+    }
+
     /// Messages received and not yet in the image.
     pub fn queued_rx(&self) -> usize {
         self.rx_queue.len()

@@ -75,6 +75,9 @@ pub const RX_SET: &[ReqId] = req_ids![
 /// that frames are lost).
 pub const RX_DROP_POLICY: &[ReqId] = req_ids!["RXQ-004"];
 pub const TRANSACTION_NUMBER: &[ReqId] = req_ids!["TN-002", "TN-003"];
+/// Inputs.TransactionNumber names a message the device has not yet completed
+/// on the bus: that "sent" means complete is ruling G6's, assumption TN-003.
+pub const TRANSACTION_NUMBER_EARLY: &[ReqId] = req_ids!["TN-003"];
 pub const COB_WORD: &[ReqId] = req_ids!["LAY-11-002", "LAY-11-003", "LAY-11-004", "LAY-GEN-003"];
 /// A multi-byte field with its bytes swapped.
 pub const BYTE_ORDER: &[ReqId] = req_ids!["LAY-GEN-003"];

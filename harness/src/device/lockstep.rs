@@ -327,17 +327,21 @@ impl<B: Bus + ?Sized> Lockstep<B> {
             Some(bounds) => bounds.cycle(&layout, outputs, &actual),
             None if identical => None,
             None => {
+                // Owned, so that the model can say what it still has to send.
+                let expected = expected.to_vec();
+                let waiting: Vec<u16> = self.pair.model.waiting_transaction_numbers().collect();
                 let history = &self.pair.history;
                 InputCheck {
                     layout: &layout,
                     was_on_bus: &|f| history.received_lately(f),
                     lost_by_model: &|f| history.lost_by_model_lately(f),
                     filters: &self.filters,
+                    waiting_transaction_numbers: &waiting,
                     time_stamp_tolerance: self.time_stamp_tolerance,
                     rx,
                     declared: self.rules.declared_rx,
                 }
-                .compare(expected, &actual)
+                .compare(&expected, &actual)
             }
         };
         if let Some(difference) = difference {

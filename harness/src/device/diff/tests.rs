@@ -37,6 +37,7 @@ fn check(layout: &ImageLayout, plc_released: u16) -> InputCheck<'_> {
         was_on_bus: &|_| false,
         lost_by_model: &|_| false,
         filters: &[],
+        waiting_transaction_numbers: &[],
         time_stamp_tolerance: 0,
         rx: RxState {
             before: 0,
@@ -201,4 +202,32 @@ fn a_frame_the_model_dropped_is_charged_to_the_drop_policy() {
     };
     assert_eq!(blamed(&dropped), blame::RX_DROP_POLICY);
     assert_eq!(blamed(&|_| false), blame::RX_SET);
+}
+
+/// Issue 36: Inputs.TransactionNumber naming a message the model still has
+/// to complete on the bus reads "sent" as ruling G6 does not: TN-003 alone.
+/// Another wrong number is TN-002's.
+#[test]
+fn a_transaction_number_of_a_message_not_yet_sent_is_charged_to_the_ruling() {
+    let mut config = InterfaceConfig::new(FrameFormat::Extended29, 4);
+    config.transaction_number = true;
+    let layout = ImageLayout::new(&config, false);
+    let with_number = |n: u16| {
+        let mut bytes = image(layout, &[]);
+        InputImage::new_checked(&mut bytes[..], layout)
+            .unwrap()
+            .set_transaction_number(n);
+        bytes
+    };
+    let blamed = |waiting: &[u16]| {
+        InputCheck {
+            waiting_transaction_numbers: waiting,
+            ..check(&layout, 0)
+        }
+        .compare(&with_number(6), &with_number(7))
+        .unwrap()
+        .candidates
+    };
+    assert_eq!(blamed(&[7, 8]), blame::TRANSACTION_NUMBER_EARLY);
+    assert_eq!(blamed(&[8]), blame::TRANSACTION_NUMBER);
 }
