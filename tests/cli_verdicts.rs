@@ -135,12 +135,16 @@ fn the_canopen_suite_writes_reports_and_refuses_iut_options() {
     assert_eq!(out.status.code(), Some(1));
     let r = report(&dir);
     assert_eq!(r["meta"]["suite"], "canopen");
-    assert_eq!(r["profiles"][0]["verdicts"]["NMT-006"]["verdict"], "fail");
+    // A stuck toggle bit breaks the guarding answer (GRD-002), not the NMT
+    // start whose state that answer could not show (issue 36).
+    assert_eq!(r["profiles"][0]["verdicts"]["GRD-002"]["verdict"], "fail");
+    assert_ne!(r["profiles"][0]["verdicts"]["NMT-006"]["verdict"], "fail");
+    assert_ne!(r["profiles"][0]["verdicts"]["GRD-001"]["verdict"], "fail");
     // The node's requirements only: none of the interface's.
     assert!(r["profiles"][0]["verdicts"].get("HS-TX-001").is_none());
     assert!(std::fs::read_to_string(dir.join("junit.xml"))
         .unwrap()
-        .contains("NMT-006"));
+        .contains("GRD-002"));
     for args in [&["--iut", "model"][..], &["--fault", "fd-padding-ff"]] {
         let out = canif(
             &[

@@ -14,7 +14,7 @@ fn failed(fault: Option<CouplerFault>) -> Vec<(&'static str, Vec<&'static str>)>
     check_node(&mut coupler, node, 0)
         .into_iter()
         .filter(|r| r.outcome.is_err())
-        .map(|r| (r.name, r.requirements.to_vec()))
+        .map(|r| (r.name, r.blamed.to_vec()))
         .collect()
 }
 
@@ -37,6 +37,19 @@ fn faulty_couplers_are_caught_on_the_requirement_they_break() {
             "{fault:?}: {failures:?}"
         );
     }
+}
+
+/// Issue 36: a stuck toggle bit contradicts 002's "bit 7 inverts with every
+/// answer" (and the master's detection of it), not the request (GRD-001) or
+/// the state bits (GRD-003) the same check exercises.
+#[test]
+fn a_stuck_toggle_bit_is_charged_to_the_toggle_alone() {
+    let failures = failed(Some(CouplerFault::ToggleStuck));
+    let guarding = failures
+        .iter()
+        .find(|(name, _)| name.contains("guarding"))
+        .unwrap_or_else(|| panic!("{failures:?}"));
+    assert_eq!(guarding.1, ["GRD-002", "GRD-004"]);
 }
 
 /// Covers: GRD-005

@@ -2,7 +2,7 @@
 //! any [`CanNode`].
 
 use canif_model::canopen::cob_id::{default_cob_id, Channel};
-use canif_model::canopen::guarding::{self, GuardChecker, GUARD_TIME};
+use canif_model::canopen::guarding::{self, GuardChecker, GuardError, GUARD_TIME};
 use canif_model::canopen::heartbeat::{self, PRODUCER_HEARTBEAT_TIME};
 use canif_model::canopen::nmt::{command_frame, NmtCommand, NmtState};
 use canif_model::canopen::pdo::ANALOG_INPUT_INTERRUPT_ENABLE as ANALOG_EVENTS;
@@ -17,7 +17,11 @@ use super::CanNode;
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct NodeCheck {
     pub name: &'static str,
+    /// What the check exercises.
     pub requirements: &'static [&'static str],
+    /// What a failure of it breaks: those it exercises, unless the answer
+    /// says which statement it contradicts.
+    pub blamed: &'static [&'static str],
     pub outcome: Result<(), String>,
 }
 
@@ -26,13 +30,14 @@ impl NodeCheck {
     pub fn check(&self) -> crate::verdict::Check {
         use crate::verdict::{Check, CheckResult, Evidence, Finding};
         let covers: Vec<String> = self.requirements.iter().map(|s| s.to_string()).collect();
+        let blamed: Vec<String> = self.blamed.iter().map(|s| s.to_string()).collect();
         Check {
             evidence: Evidence::NodeCheck(self.name.into()),
             result: match &self.outcome {
                 Ok(()) => CheckResult::Pass,
                 Err(why) => CheckResult::Fail(Finding {
                     rest: crate::verdict::Rest::Stopped,
-                    requirements: covers.clone(),
+                    requirements: blamed,
                     cause: why.lines().next().unwrap_or_default().to_string(),
                     details: why.clone(),
                     failure: None,
@@ -95,17 +100,29 @@ fn sdo(
     SdoResponse::parse(answer.data()).map_err(|e| format!("{answer} is no SDO response: {e:?}"))
 }
 
-fn guard_state(
+/// A guarding exchange, a failure with the statement it contradicts (002):
+/// no single answer to the request (GRD-001), not one status byte or a
+/// toggle bit that did not invert (GRD-002, and the master's detection of
+/// it, GRD-004), bits that name no state (GRD-003).
+fn guard_answer(
     target: &mut dyn CanNode,
     node: NodeId,
     checker: &mut GuardChecker,
     now: Nanos,
-) -> Result<NmtState, String> {
+) -> Result<NmtState, (&'static [&'static str], String)> {
     let answers = target.handle(&guarding::request(node), now);
     let [answer] = answers.as_slice() else {
-        return Err(format!("expected one guarding answer, got {answers:?}"));
+        let why = format!("expected one guarding answer, got {answers:?}");
+        return Err((&["GRD-001"], why));
     };
-    checker.check(answer)
+    checker.check(answer).map_err(|error| {
+        let blamed: &'static [&'static str] = match error {
+            GuardError::Length(_) => &["GRD-002"],
+            GuardError::Toggle { .. } => &["GRD-002", "GRD-004"],
+            GuardError::NotAState(_) => &["GRD-003"],
+        };
+        (blamed, error.to_string())
+    })
 }
 
 /// Runs every check against `target`, a node with id `node`, from its boot
@@ -114,41 +131,48 @@ fn guard_state(
 pub fn check_node(target: &mut dyn CanNode, node: NodeId, tolerance: Nanos) -> Vec<NodeCheck> {
     let mut results = Vec::new();
     let mut now: Nanos = 0;
+    let mut guard = GuardChecker::default();
+
+    let guarding = (0..4).try_for_each(|_| {
+        now += 1_000_000;
+        match guard_answer(target, node, &mut guard, now)? {
+            NmtState::PreOperational => Ok(()),
+            other => Err((
+                &["GRD-003"][..],
+                format!("state {other:?}, expected pre-operational after boot"),
+            )),
+        }
+    });
+    results.push(NodeCheck {
+        name: "guarding answers with the state and a toggling bit 7",
+        requirements: &["GRD-001", "GRD-002", "GRD-003", "GRD-004"],
+        blamed: guarding.as_ref().err().map_or(&[][..], |(ids, _)| ids),
+        outcome: guarding.map_err(|(_, why)| why),
+    });
+
+    target.handle(&command_frame(NmtCommand::StartRemoteNode, None), now);
+    const NMT_START: &[&str] = &["NMT-001", "NMT-003", "NMT-004", "NMT-006"];
+    // When the state cannot be read the guarding answer is what broke, and
+    // NMT start is charged nothing (issue 36: the statement, not the symptom).
+    let (blamed, outcome) = match guard_answer(target, node, &mut guard, now) {
+        Err((blamed, why)) => (blamed, Err(format!("the state cannot be read: {why}"))),
+        Ok(NmtState::Operational) => (NMT_START, Ok(())),
+        Ok(other) => (NMT_START, Err(format!("state {other:?}"))),
+    };
+    results.push(NodeCheck {
+        name: "NMT start (0x000: 01 00) makes the node operational",
+        requirements: NMT_START,
+        blamed,
+        outcome,
+    });
     let mut record = |name, requirements, outcome| {
         results.push(NodeCheck {
             name,
             requirements,
+            blamed: requirements,
             outcome,
         })
     };
-    let mut guard = GuardChecker::default();
-
-    record(
-        "guarding answers with the state and a toggling bit 7",
-        &["GRD-001", "GRD-002", "GRD-003", "GRD-004"],
-        (0..4).try_for_each(|_| {
-            now += 1_000_000;
-            match guard_state(target, node, &mut guard, now)? {
-                NmtState::PreOperational => Ok(()),
-                other => Err(format!(
-                    "state {other:?}, expected pre-operational after boot"
-                )),
-            }
-        }),
-    );
-
-    target.handle(&command_frame(NmtCommand::StartRemoteNode, None), now);
-    record(
-        "NMT start (0x000: 01 00) makes the node operational",
-        &["NMT-001", "NMT-003", "NMT-004", "NMT-006"],
-        guard_state(target, node, &mut guard, now).and_then(|s| {
-            if s == NmtState::Operational {
-                Ok(())
-            } else {
-                Err(format!("state {s:?}"))
-            }
-        }),
-    );
 
     record(
         "an RTR on the analog inputs is answered on 0x280 + node id",
@@ -333,19 +357,33 @@ pub fn check_node(target: &mut dyn CanNode, node: NodeId, tolerance: Nanos) -> V
     );
 
     target.handle(&command_frame(NmtCommand::EnterPreOperational, None), now);
-    let pre_operational = guard_state(target, node, &mut guard, now);
+    let pre_operational = guard_answer(target, node, &mut guard, now);
     target.handle(&command_frame(NmtCommand::StopRemoteNode, Some(node)), now);
-    let stopped = guard_state(target, node, &mut guard, now);
-    record(
-        "0x80 enters pre-operational (0x7F), 0x02 stops (0x04)",
-        &[
-            "NMT-002", "NMT-003", "NMT-004", "NMT-005", "ERR-R6", "GRD-003",
-        ],
-        match (pre_operational, stopped) {
-            (Ok(NmtState::PreOperational), Ok(NmtState::Stopped)) => Ok(()),
-            other => Err(format!("states {other:?}")),
-        },
-    );
+    let stopped = guard_answer(target, node, &mut guard, now);
+    const STATES: &[&str] = &[
+        "NMT-002", "NMT-003", "NMT-004", "NMT-005", "ERR-R6", "GRD-003",
+    ];
+    let (blamed, outcome) = match (pre_operational, stopped) {
+        (Ok(NmtState::PreOperational), Ok(NmtState::Stopped)) => (STATES, Ok(())),
+        (Err((blamed, why)), _) | (_, Err((blamed, why))) => {
+            (blamed, Err(format!("the state cannot be read: {why}")))
+        }
+        other => (STATES, Err(format!("states {other:?}"))),
+    };
+    results.push(NodeCheck {
+        name: "0x80 enters pre-operational (0x7F), 0x02 stops (0x04)",
+        requirements: STATES,
+        blamed,
+        outcome,
+    });
+    let mut record = |name, requirements, outcome| {
+        results.push(NodeCheck {
+            name,
+            requirements,
+            blamed: requirements,
+            outcome,
+        })
+    };
 
     // CiA 301: stopped serves NMT and error control only.
     let answers = target.handle(&sdo_request(node, upload(0x1017)), now);

@@ -190,7 +190,7 @@ impl Side for CanopenSide {
                 Some(check) => match &check.outcome {
                     Ok(()) => Outcome::Pass,
                     Err(why) => Outcome::Fail(Box::new(Failure {
-                        requirements: case.covers.clone(),
+                        requirements: check.blamed.iter().map(|id| ReqId::new(id)).collect(),
                         scenario: case.name.to_string(),
                         cycle: 0,
                         time: 0,

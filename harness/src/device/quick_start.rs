@@ -75,12 +75,13 @@ pub fn quick_start(
     let mut guard = GuardChecker::default();
     let mut guard_state = |exchange: &mut Exchange<'_>| -> Result<NmtState, String> {
         let (_, got) = exchange(Some(guarding::request(node)), Some(guard_id), 50)?;
-        guard.check(&answer_on(&got, guard_id)?)
+        Ok(guard.check(&answer_on(&got, guard_id)?)?)
     };
     let mut record = |name, requirements, outcome| {
         results.push(NodeCheck {
             name,
             requirements,
+            blamed: requirements,
             outcome,
         })
     };

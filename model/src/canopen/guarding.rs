@@ -61,6 +61,42 @@ impl GuardResponder {
     }
 }
 
+/// What is wrong with a guarding answer (002, "node guarding").
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GuardError {
+    /// 002: the module answers with one status byte; this answer has `.0`.
+    Length(usize),
+    /// 002: bit 7 inverts with every answer; this one did not.
+    Toggle { expected: bool },
+    /// 002: bits 6-0 are the node state; these (`.0`) name none.
+    NotAState(u8),
+}
+
+impl std::fmt::Display for GuardError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            GuardError::Length(len) => {
+                write!(f, "a guarding answer has 1 data byte, not {len}")
+            }
+            GuardError::Toggle { expected } => write!(
+                f,
+                "toggle bit is {}, expected {}",
+                u8::from(!expected),
+                u8::from(*expected)
+            ),
+            GuardError::NotAState(bits) => write!(f, "0x{bits:02X} is not an NMT state"),
+        }
+    }
+}
+
+impl std::error::Error for GuardError {}
+
+impl From<GuardError> for String {
+    fn from(error: GuardError) -> String {
+        error.to_string()
+    }
+}
+
 /// The master side: checks that every answer inverts the toggle.
 ///
 /// Requirements: GRD-002, GRD-004.
@@ -71,23 +107,18 @@ pub struct GuardChecker {
 
 impl GuardChecker {
     /// `Ok(state)` for a correct answer; `Err` names what was wrong.
-    pub fn check(&mut self, answer: &Frame) -> Result<NmtState, String> {
+    pub fn check(&mut self, answer: &Frame) -> Result<NmtState, GuardError> {
         let [byte] = answer.data() else {
-            return Err(format!(
-                "a guarding answer has 1 data byte, not {}",
-                answer.data().len()
-            ));
+            return Err(GuardError::Length(answer.data().len()));
         };
         let (state, toggle) = parse_status(*byte);
         if toggle != self.expected_toggle {
-            return Err(format!(
-                "toggle bit is {}, expected {}",
-                u8::from(toggle),
-                u8::from(self.expected_toggle)
-            ));
+            return Err(GuardError::Toggle {
+                expected: self.expected_toggle,
+            });
         }
         self.expected_toggle = !self.expected_toggle;
-        state.ok_or_else(|| format!("0x{:02X} is not an NMT state", byte & 0x7F))
+        state.ok_or(GuardError::NotAState(byte & 0x7F))
     }
 }
 

@@ -539,11 +539,7 @@ fn print_kill_table<F: Copy>(
     sayln!("| {what} | caught on | requirements that failed |\n|---|---|---|");
     for row in rows {
         let on = row.caught.iter().filter(|(_, ids)| !ids.is_empty()).count();
-        let ids: std::collections::BTreeSet<&str> = row
-            .caught
-            .iter()
-            .flat_map(|(_, ids)| ids.iter().map(String::as_str))
-            .collect();
+        let ids: std::collections::BTreeSet<&str> = row.failed().collect();
         if on == 0 {
             uncaught += 1;
         }
