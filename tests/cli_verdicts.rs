@@ -380,3 +380,46 @@ fn a_client_acknowledging_a_half_read_batch_fails_the_read_all_rule() {
     assert_ne!(verdicts["CL-RX-001"]["verdict"], "fail", "{verdicts}");
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// Issue 36: a device that drops the oldest frames of a full queue breaks the
+/// tail drop canif assumes (G4, RXQ-004), no statement of the documents: the
+/// failure is charged to that assumption alone and says it is one.
+#[test]
+fn a_breached_assumption_is_charged_alone_and_said_to_be_one() {
+    let dir = scratch("assumption");
+    let out = canif(&[
+        "run",
+        "--profile",
+        "el6751-mdp",
+        "--fault",
+        "head-drop-when-full",
+        "--report",
+        dir.to_str().unwrap(),
+    ]);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{said}");
+    assert!(
+        said.contains("FAIL el6751-mdp::RXQ-004 (assumption): "),
+        "{said}"
+    );
+    // The lockstep's overflow scenario, whose first differing slot holds a
+    // frame the tail drop lost, charges RXQ-004 alone. (The Gherkin queue
+    // depth scenario still charges its tags RXQ-001/RXQ-003: there the first
+    // differing slot holds a frame both kept - see the closing note.)
+    assert!(
+        said.lines()
+            .any(|l| l.contains("RXQ-004 (assumption): scenario: rx-overflow")),
+        "{said}"
+    );
+    assert!(
+        !said.lines().any(|l| l.contains("FAIL")
+            && !l.contains("RXQ-004")
+            && l.contains(": scenario: rx-overflow")),
+        "{said}"
+    );
+    let verdicts = &report(&dir)["profiles"][0]["verdicts"];
+    for normative in ["RXQ-006", "HS-RX-007"] {
+        assert_ne!(verdicts[normative]["verdict"], "fail", "{normative}");
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}

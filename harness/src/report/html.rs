@@ -76,7 +76,7 @@ impl RunReport {
             );
         }
         let problems: String = self
-            .problems()
+            .problems(catalogue)
             .iter()
             .map(|problem| format!("<li>{}</li>\n", esc(&problem.to_string())))
             .collect();

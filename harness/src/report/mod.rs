@@ -96,22 +96,25 @@ fn gherkin_check(run: &GherkinRun) -> Check {
 }
 
 /// A requirement that failed or erred on a profile; shown as one line,
-/// `FAIL profile::ID: check: cause`.
+/// `FAIL profile::ID: check: cause`, or `FAIL profile::ID (assumption): …`
+/// where what broke is a decision of canif's, not a document's statement.
 #[derive(Debug, Clone, Copy)]
 pub struct Problem<'a> {
     pub profile: &'a str,
     pub id: &'a str,
     pub verdict: &'a Verdict,
+    pub assumption: bool,
 }
 
 impl std::fmt::Display for Problem<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{} {}::{}: {}",
+            "{} {}::{}{}: {}",
             self.verdict.label().to_uppercase(),
             self.profile,
             self.id,
+            if self.assumption { " (assumption)" } else { "" },
             self.verdict.reason().unwrap_or_default()
         )
     }
@@ -193,7 +196,7 @@ impl RunReport {
     }
 
     /// The failing and erring requirements, every profile.
-    pub fn problems(&self) -> Vec<Problem<'_>> {
+    pub fn problems(&self, catalogue: &Catalogue) -> Vec<Problem<'_>> {
         self.profiles
             .iter()
             .flat_map(|p| {
@@ -204,6 +207,9 @@ impl RunReport {
                         profile: &p.profile,
                         id,
                         verdict,
+                        assumption: catalogue
+                            .requirement(id)
+                            .is_some_and(|r| r.status == canif_spec::Status::Assumption),
                     })
             })
             .collect()

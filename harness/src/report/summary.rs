@@ -136,7 +136,7 @@ impl RunReport {
             md.push('\n');
         }
         let mut failing = self
-            .problems()
+            .problems(catalogue)
             .into_iter()
             .filter(|p| p.verdict.kind() == VerdictKind::Fail)
             .peekable();

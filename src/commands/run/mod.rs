@@ -407,7 +407,7 @@ pub(crate) fn finish(
     if report.interrupted {
         errln!("interrupted: the reports hold what ran before the signal");
     }
-    let problems = report.problems();
+    let problems = report.problems(catalogue);
     for line in problems.iter().take(40) {
         errln!("{line}");
     }
