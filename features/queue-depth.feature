@@ -3,7 +3,7 @@ Feature: Local Rx queue depth per device
   A flood the PLC does not read fills the local memory: what it holds is its
   depth, on every profile of the device it binds.
 
-  @el6751 @ext29 @RXQ-001 @RXQ-003
+  @el6751 @ext29 @RXQ-001 @RXQ-003 @RXQ-004
   Scenario: The EL6751 keeps 150 messages while the PLC does not read
     Given the interface is set up for 29-bit messages with 32 slots
     When other nodes transmit 200 frames
@@ -11,7 +11,7 @@ Feature: Local Rx queue depth per device
     And 40 cycles pass
     Then the PLC has received 150 messages
 
-  @ccat @ext29 @RXQ-002 @RXQ-003
+  @ccat @ext29 @RXQ-002 @RXQ-003 @RXQ-004
   Scenario: A CCAT master keeps 512 messages while the PLC does not read
     Given the interface is set up for 29-bit messages with 32 slots
     When other nodes transmit 600 frames

@@ -25,7 +25,7 @@ Feature: Rx queue overflow and silent loss
     And 4 cycles pass
     Then the PLC has received 0x101, 0x102, 0x103, 0x104, 0x105, 0x106
 
-  @RXQ-003
+  @RXQ-003 @RXQ-004
   Scenario: Nothing in the image tells of the loss
     When other nodes transmit 9 frames
     And 5 cycles pass

@@ -402,23 +402,10 @@ fn a_breached_assumption_is_charged_alone_and_said_to_be_one() {
         said.contains("FAIL el6751-mdp::RXQ-004 (assumption): "),
         "{said}"
     );
-    // The lockstep's overflow scenario, whose first differing slot holds a
-    // frame the tail drop lost, charges RXQ-004 alone. (The Gherkin queue
-    // depth scenario still charges its tags RXQ-001/RXQ-003: there the first
-    // differing slot holds a frame both kept - see the closing note.)
-    assert!(
-        said.lines()
-            .any(|l| l.contains("RXQ-004 (assumption): scenario: rx-overflow")),
-        "{said}"
-    );
-    assert!(
-        !said.lines().any(|l| l.contains("FAIL")
-            && !l.contains("RXQ-004")
-            && l.contains(": scenario: rx-overflow")),
-        "{said}"
-    );
+    // Neither the lockstep nor a Gherkin scenario charges it to a statement
+    // of the documents: not the depth, the loss, the slots or the order.
     let verdicts = &report(&dir)["profiles"][0]["verdicts"];
-    for normative in ["RXQ-006", "HS-RX-007"] {
+    for normative in ["RXQ-001", "RXQ-003", "RXQ-006", "HS-RX-007"] {
         assert_ne!(verdicts[normative]["verdict"], "fail", "{normative}");
     }
     let _ = std::fs::remove_dir_all(dir);

@@ -131,6 +131,15 @@ impl Device {
             .map(|pending| pending.transaction_number)
     }
 
+    /// Places left in the local Rx queue (in the Fast CAN Queue, the slots).
+    pub fn rx_room(&self) -> usize {
+        let capacity = match self.config.queue {
+            QueueMode::Fast => self.layout.rx_slots,
+            QueueMode::Standard | QueueMode::Optimized => self.caps.rx_queue_depth,
+        };
+        capacity.saturating_sub(self.rx_queue.len())
+    }
+
     /// Messages received and not yet in the image.
     pub fn queued_rx(&self) -> usize {
         self.rx_queue.len()
@@ -274,11 +283,7 @@ impl Device {
         if !filter::accepts(&self.config.filters, frame.id) {
             return RxOutcome::Filtered;
         }
-        let capacity = match self.config.queue {
-            QueueMode::Fast => self.layout.rx_slots,
-            QueueMode::Standard | QueueMode::Optimized => self.caps.rx_queue_depth,
-        };
-        if self.rx_queue.len() >= capacity {
+        if self.rx_room() == 0 {
             self.lost += 1;
             return RxOutcome::Lost;
         }

@@ -45,7 +45,8 @@ pub const RX_STALE_SLOTS: &[ReqId] = req_ids!["HS-RX-008"];
 /// Both moved, to different values.
 pub const RX_COUNTING: &[ReqId] = req_ids!["HS-RX-005", "HS-RX-006"];
 /// The messages delivered, or their order: the local queue's depth (how
-/// many it keeps) decides which survive a flood.
+/// many it keeps) decides which survive a flood. Which ones a full queue
+/// drops (RXQ-004) is told apart by the history ([`RX_DROP_POLICY`]).
 pub const RX_SET: &[ReqId] = req_ids![
     "HS-RX-001",
     "HS-RX-002",
@@ -55,7 +56,6 @@ pub const RX_SET: &[ReqId] = req_ids![
     "RXQ-001",
     "RXQ-002",
     "RXQ-003",
-    "RXQ-004",
     "RXQ-005",
     "RXQ-006",
     "FQ-004",

@@ -45,6 +45,9 @@ pub struct History {
     recent_rx: Ring<Frame>,
     /// Of those, the frames the model lost to a full local Rx queue.
     recent_lost: Ring<Frame>,
+    /// Of those, the frames the model queued with more than its last place
+    /// free: a device with one place less keeps them too.
+    recent_with_room: Ring<Frame>,
 }
 
 impl Default for History {
@@ -54,6 +57,7 @@ impl Default for History {
             bus: Ring::new(BUS_LOG),
             recent_rx: Ring::new(RECENT_RX),
             recent_lost: Ring::new(RECENT_RX),
+            recent_with_room: Ring::new(RECENT_RX),
         }
     }
 }
@@ -98,6 +102,19 @@ impl History {
     /// local Rx queue (tail drop, G4).
     pub fn model_lost(&mut self, frame: Frame) {
         self.recent_lost.push(frame);
+    }
+
+    /// The model queued `frame` with more than its last place free.
+    pub fn queued_with_room(&mut self, frame: Frame) {
+        self.recent_with_room.push(frame);
+    }
+
+    /// Whether `frame` is one a full queue lost only by the order it drops
+    /// in: the model lost frames lately, and queued `frame` with places to
+    /// spare, so no shorter queue drops it on arrival - a device without it
+    /// evicted it later (a head drop, not a depth).
+    pub fn evicted_by_the_drop_order(&self, frame: &Frame) -> bool {
+        self.recent_lost.iter().len() > 0 && self.recent_with_room.iter().any(|f| f == frame)
     }
 
     /// Whether the model lately lost `frame` to its full local Rx queue.

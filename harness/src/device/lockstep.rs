@@ -335,6 +335,7 @@ impl<B: Bus + ?Sized> Lockstep<B> {
                     layout: &layout,
                     was_on_bus: &|f| history.received_lately(f),
                     lost_by_model: &|f| history.lost_by_model_lately(f),
+                    evicted_by_the_drop_order: &|f| history.evicted_by_the_drop_order(f),
                     filters: &self.filters,
                     waiting_transaction_numbers: &waiting,
                     time_stamp_tolerance: self.time_stamp_tolerance,

@@ -343,8 +343,13 @@ impl Pair {
         }
         if from_iut {
             self.model.handle_transmit_complete();
-        } else if self.model.handle_received(frame, end) == RxOutcome::Lost {
-            self.history.model_lost(frame);
+        } else {
+            let room = self.model.rx_room();
+            if self.model.handle_received(frame, end) == RxOutcome::Lost {
+                self.history.model_lost(frame);
+            } else if room > 1 {
+                self.history.queued_with_room(frame);
+            }
         }
         self.history.frame(self.cycle, from_iut, frame, end);
         if let Some(ended) = self.ended.as_mut() {

@@ -102,6 +102,10 @@ pub struct InputCheck<'a> {
     /// Whether the model lost a frame lately to its full local Rx queue: a
     /// device delivering it kept what the tail drop of G4 drops.
     pub lost_by_model: &'a dyn Fn(&Frame) -> bool,
+    /// Whether a frame the model delivers, missing from the device's slot,
+    /// was lost only by the order a full queue drops in (see
+    /// [`crate::device::history::History::evicted_by_the_drop_order`]).
+    pub evicted_by_the_drop_order: &'a dyn Fn(&Frame) -> bool,
     /// The configuration's filter table: a frame let through or held back
     /// otherwise than it says is charged to the statement deciding it.
     pub filters: &'a [FilterRow],
@@ -324,7 +328,8 @@ impl InputCheck<'_> {
         // loss is a cycle's overflow, not a queue's policy).
         let kept_what_the_model_dropped = different_frame
             && !self.rx.fast
-            && parsed(a).is_some_and(|actual| (self.lost_by_model)(&actual));
+            && (parsed(a).is_some_and(|actual| (self.lost_by_model)(&actual))
+                || parsed(e).is_some_and(|expected| (self.evicted_by_the_drop_order)(&expected)));
         // A frame the table holds back, let through; else one it lets
         // through, missing: the filter statement deciding it.
         let filtered = match (parsed(e), parsed(a)) {

@@ -36,6 +36,7 @@ fn check(layout: &ImageLayout, plc_released: u16) -> InputCheck<'_> {
         layout,
         was_on_bus: &|_| false,
         lost_by_model: &|_| false,
+        evicted_by_the_drop_order: &|_| false,
         filters: &[],
         waiting_transaction_numbers: &[],
         time_stamp_tolerance: 0,
