@@ -113,7 +113,10 @@ fn blamed_by(name: &str, fault: Fault) -> (Vec<String>, Vec<String>) {
             choices: vec![],
         },
         profile: "el6751-mdp".into(),
-        caps: catalogue.profile("el6751-mdp").unwrap().model_capabilities(),
+        caps: catalogue
+            .profile("el6751-mdp")
+            .unwrap()
+            .model_capabilities(),
     };
     match run_scenario(&scenario.file, scenario.line, target) {
         ScenarioOutcome::Failed { witness, .. } => (
