@@ -26,6 +26,20 @@ pub struct NodeCheck {
 }
 
 impl NodeCheck {
+    /// A check whose failure breaks every requirement it exercises.
+    pub fn new(
+        name: &'static str,
+        requirements: &'static [&'static str],
+        outcome: Result<(), String>,
+    ) -> Self {
+        NodeCheck {
+            name,
+            requirements,
+            blamed: requirements,
+            outcome,
+        }
+    }
+
     /// The check for [`crate::verdict::judge`]: a failure blames every requirement it exercises.
     pub fn check(&self) -> crate::verdict::Check {
         use crate::verdict::{Check, CheckResult, Evidence, Finding};
@@ -165,14 +179,8 @@ pub fn check_node(target: &mut dyn CanNode, node: NodeId, tolerance: Nanos) -> V
         blamed,
         outcome,
     });
-    let mut record = |name, requirements, outcome| {
-        results.push(NodeCheck {
-            name,
-            requirements,
-            blamed: requirements,
-            outcome,
-        })
-    };
+    let mut record =
+        |name, requirements, outcome| results.push(NodeCheck::new(name, requirements, outcome));
 
     record(
         "an RTR on the analog inputs is answered on 0x280 + node id",
@@ -376,14 +384,8 @@ pub fn check_node(target: &mut dyn CanNode, node: NodeId, tolerance: Nanos) -> V
         blamed,
         outcome,
     });
-    let mut record = |name, requirements, outcome| {
-        results.push(NodeCheck {
-            name,
-            requirements,
-            blamed: requirements,
-            outcome,
-        })
-    };
+    let mut record =
+        |name, requirements, outcome| results.push(NodeCheck::new(name, requirements, outcome));
 
     // CiA 301: stopped serves NMT and error control only.
     let answers = target.handle(&sdo_request(node, upload(0x1017)), now);

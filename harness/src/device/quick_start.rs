@@ -77,14 +77,8 @@ pub fn quick_start(
         let (_, got) = exchange(Some(guarding::request(node)), Some(guard_id), 50)?;
         Ok(guard.check(&answer_on(&got, guard_id)?)?)
     };
-    let mut record = |name, requirements, outcome| {
-        results.push(NodeCheck {
-            name,
-            requirements,
-            blamed: requirements,
-            outcome,
-        })
-    };
+    let mut record =
+        |name, requirements, outcome| results.push(NodeCheck::new(name, requirements, outcome));
 
     let started = exchange(
         Some(command_frame(NmtCommand::StartRemoteNode, None)),

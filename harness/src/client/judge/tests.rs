@@ -177,6 +177,22 @@ fn a_byte_stream_is_cut_where_the_client_cut_it() {
     assert_eq!(super::tx::cut(pending.clone(), &message(3, &[1])), pending);
 }
 
+/// An input image with RxCounter 1 and NoOfRxMessages 1, `ids` in its slots
+/// from slot 0 (those past the first are stale).
+fn batch_of_one(ids: &[u16]) -> Vec<u8> {
+    let layout = layout();
+    let mut inputs = vec![0; layout.input_size()];
+    let mut image = InputImage::new_checked(&mut inputs[..], layout).unwrap();
+    image.set_rx_counter(1);
+    image.set_no_of_rx_messages(1);
+    for (slot, id) in ids.iter().enumerate() {
+        request(*id)
+            .emit(&mut image.rx_message_mut(slot).unwrap())
+            .unwrap();
+    }
+    inputs
+}
+
 /// Issue 36: in a restarted program's first batch, a message decoded
 /// otherwise than the device wrote it is a decoding fault (CL-RX-003), not
 /// the restart's (CL-RST-001 allows a batch twice or dropped, nothing else).
@@ -184,13 +200,7 @@ fn a_byte_stream_is_cut_where_the_client_cut_it() {
 fn a_wrong_decoding_after_a_plc_restart_is_charged_to_the_decoding() {
     let layout = layout();
     let mut judge = Judge::new(layout, QueueMode::Standard, &Default::default());
-    let mut inputs = vec![0; layout.input_size()];
-    let mut image = InputImage::new_checked(&mut inputs[..], layout).unwrap();
-    image.set_rx_counter(1);
-    image.set_no_of_rx_messages(1);
-    request(0x181)
-        .emit(&mut image.rx_message_mut(0).unwrap())
-        .unwrap();
+    let inputs = batch_of_one(&[0x181]);
     judge.device_cycle(&inputs);
     judge.plc_restarted(0);
     let idle = outputs(0, &[]);
@@ -217,15 +227,8 @@ fn a_wrong_decoding_after_a_plc_restart_is_charged_to_the_decoding() {
 fn a_stale_slot_read_is_charged_to_the_delivery_not_the_decoding() {
     let layout = layout();
     let mut judge = Judge::new(layout, QueueMode::Standard, &Default::default());
-    let mut inputs = vec![0; layout.input_size()];
-    let mut image = InputImage::new_checked(&mut inputs[..], layout).unwrap();
-    image.set_rx_counter(1);
-    image.set_no_of_rx_messages(1);
-    for (slot, id) in [(0, 0x181), (1, 0x199)] {
-        request(id)
-            .emit(&mut image.rx_message_mut(slot).unwrap())
-            .unwrap();
-    }
+    // Slot 1, past NoOfRxMessages, holds what an earlier batch left there.
+    let inputs = batch_of_one(&[0x181, 0x199]);
     judge.device_cycle(&inputs);
     let idle = outputs(0, &[]);
     let delivered = [request(0x199), request(0x181)];
