@@ -103,8 +103,8 @@ pub struct InputCheck<'a> {
     /// device delivering it kept what the tail drop of G4 drops.
     pub lost_by_model: &'a dyn Fn(&Frame) -> bool,
     /// Whether a frame the model delivers, missing from the device's slot,
-    /// was lost only by the order a full queue drops in (see
-    /// [`crate::device::history::History::evicted_by_the_drop_order`]).
+    /// was lost only by the order a full queue drops in (the lockstep's
+    /// history: queued with places to spare, then an overflow).
     pub evicted_by_the_drop_order: &'a dyn Fn(&Frame) -> bool,
     /// The configuration's filter table: a frame let through or held back
     /// otherwise than it says is charged to the statement deciding it.
