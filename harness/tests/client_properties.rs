@@ -145,9 +145,11 @@ fn a_failing_client_run_shrinks_to_a_minimal_one() {
     let Outcome::Fail(failure) = outcome(&faulty, master, &minimal) else {
         panic!("the minimal run passes")
     };
+    // Acknowledged with a message left unread: "Es müssen immer alle Daten
+    // ausgelesen werden" (000 §6, CL-RX-004), not the copy rule.
     assert_eq!(
         failure.requirements,
-        [ReqId::new("CL-RX-001")],
+        [ReqId::new("CL-RX-004")],
         "{failure:?}"
     );
 }
