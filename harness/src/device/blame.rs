@@ -69,10 +69,10 @@ pub const RX_SET: &[ReqId] = req_ids![
     "FLT-008",
     "FLT-009",
 ];
-/// The device delivered a frame the model lost to its full local Rx queue:
-/// it dropped others than the newest, which is what assumption RXQ-004 (G4's
-/// tail drop) decides and no normative statement does (RXQ-003 says only
-/// that frames are lost).
+/// A full local Rx queue lost other frames than the newest: the device kept
+/// one the model's tail drop lost, or evicted one the model queued with
+/// room. Which frames go is what assumption RXQ-004 (G4's tail drop) decides
+/// and no normative statement does (RXQ-003 says only that frames are lost).
 pub const RX_DROP_POLICY: &[ReqId] = req_ids!["RXQ-004"];
 pub const TRANSACTION_NUMBER: &[ReqId] = req_ids!["TN-002", "TN-003"];
 /// Inputs.TransactionNumber names a message the device has not yet completed
@@ -168,8 +168,9 @@ pub fn invalid_frame(invalid: &InvalidFrame) -> &'static [ReqId] {
 /// range first when `id` is at its edge (FLT-004), or its mask (FLT-003),
 /// and the manual's example table first of all (FLT-009). At the edge of a
 /// row that a later row overlaps both the range and the order can be what
-/// broke. `None` without filters. A device that decides `id` otherwise contradicts this statement
-/// first; the assumptions (FLT-005, FLT-006) are charged alone.
+/// broke. `None` without filters. A device that decides `id` otherwise
+/// contradicts this statement first; the assumptions (FLT-005, FLT-006) are
+/// charged alone.
 pub fn filter_statement(table: &[FilterRow], id: CanId) -> Option<&'static [ReqId]> {
     if table.is_empty() {
         return None;

@@ -41,13 +41,23 @@ struct Logged {
 pub struct History {
     cycles: Ring<CycleRecord>,
     bus: Ring<Logged>,
-    /// Frames other nodes sent lately.
-    recent_rx: Ring<Frame>,
-    /// Of those, the frames the model lost to a full local Rx queue.
-    recent_lost: Ring<Frame>,
-    /// Of those, the frames the model queued with more than its last place
-    /// free: a device with one place less keeps them too.
-    recent_with_room: Ring<Frame>,
+    /// Frames other nodes sent lately, and what the model's Rx queue did
+    /// with each.
+    recent_rx: Ring<(Frame, Taken)>,
+}
+
+/// What the model's local Rx queue did with a frame another node sent.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Taken {
+    /// Queued with more than its last place free: a queue one place
+    /// shorter keeps it too.
+    WithRoom,
+    /// Queued into its last free place.
+    LastPlace,
+    /// Lost to the full queue (tail drop, G4).
+    Lost,
+    /// Not for the queue: filtered, or a format the interface cannot carry.
+    Held,
 }
 
 impl Default for History {
@@ -56,8 +66,6 @@ impl Default for History {
             cycles: Ring::context(),
             bus: Ring::new(BUS_LOG),
             recent_rx: Ring::new(RECENT_RX),
-            recent_lost: Ring::new(RECENT_RX),
-            recent_with_room: Ring::new(RECENT_RX),
         }
     }
 }
@@ -85,46 +93,33 @@ impl History {
         });
     }
 
-    /// A frame ended on the bus during `cycle`.
-    pub fn frame(&mut self, cycle: u64, from_iut: bool, frame: Frame, end: Nanos) {
+    /// A frame ended on the bus during `cycle`: the IUT's (`taken` `None`),
+    /// or another node's, which the model's queue `taken`.
+    pub fn frame(&mut self, cycle: u64, frame: Frame, end: Nanos, taken: Option<Taken>) {
         self.bus.push(Logged {
             cycle,
-            from_iut,
+            from_iut: taken.is_none(),
             frame,
             end,
         });
-        if !from_iut {
-            self.recent_rx.push(frame);
+        if let Some(taken) = taken {
+            self.recent_rx.push((frame, taken));
         }
     }
 
-    /// The model lost `frame`, received from another node, to its full
-    /// local Rx queue (tail drop, G4).
-    pub fn model_lost(&mut self, frame: Frame) {
-        self.recent_lost.push(frame);
+    /// What the model's queue did with `frame`, if another node sent it
+    /// lately (its latest time).
+    pub fn taken(&self, frame: &Frame) -> Option<Taken> {
+        self.recent_rx
+            .iter()
+            .rev()
+            .find(|(f, _)| f == frame)
+            .map(|(_, taken)| *taken)
     }
 
-    /// The model queued `frame` with more than its last place free.
-    pub fn queued_with_room(&mut self, frame: Frame) {
-        self.recent_with_room.push(frame);
-    }
-
-    /// Whether `frame` is one a full queue lost only by the order it drops
-    /// in: the model lost frames lately, and queued `frame` with places to
-    /// spare, so no shorter queue drops it on arrival - a device without it
-    /// evicted it later (a head drop, not a depth).
-    pub fn evicted_by_the_drop_order(&self, frame: &Frame) -> bool {
-        self.recent_lost.iter().len() > 0 && self.recent_with_room.iter().any(|f| f == frame)
-    }
-
-    /// Whether the model lately lost `frame` to its full local Rx queue.
-    pub fn lost_by_model_lately(&self, frame: &Frame) -> bool {
-        self.recent_lost.iter().any(|f| f == frame)
-    }
-
-    /// Whether another node sent `frame` lately.
-    pub fn received_lately(&self, frame: &Frame) -> bool {
-        self.recent_rx.iter().any(|f| f == frame)
+    /// The model's local Rx queue overflowed lately.
+    pub fn overflowed(&self) -> bool {
+        self.recent_rx.iter().any(|(_, t)| *t == Taken::Lost)
     }
 
     /// Frames that ended since the cycle before `cycle`.
@@ -212,7 +207,7 @@ mod tests {
         for cycle in 0..10u64 {
             history.cycle(layout, (cycle, cycle * 1_000), &outputs, &inputs, &inputs);
             if cycle == 8 {
-                history.frame(cycle, false, frame, cycle * 1_000 + 500);
+                history.frame(cycle, frame, cycle * 1_000 + 500, Some(Taken::WithRoom));
             }
         }
         let timeline = history.timeline();
@@ -228,8 +223,9 @@ mod tests {
         let context = history.context();
         assert_eq!(context.len(), CONTEXT);
         assert!(context.last().unwrap().contains("rx"), "{context:?}");
-        assert!(history.received_lately(&frame));
-        assert!(!history.received_lately(&Frame::classic(CanId::Standard(1), &[]).unwrap()));
+        assert_eq!(history.taken(&frame), Some(Taken::WithRoom));
+        let other = Frame::classic(CanId::Standard(1), &[]).unwrap();
+        assert_eq!(history.taken(&other), None);
     }
 
     #[test]
@@ -248,7 +244,7 @@ mod tests {
         history.cycle(layout, (0, 0), &outputs, &inputs, &inputs);
         for id in 0..200u16 {
             let frame = Frame::classic(CanId::Standard(id), &[]).unwrap();
-            history.frame(0, false, frame, 10 + u64::from(id));
+            history.frame(0, frame, 10 + u64::from(id), Some(Taken::WithRoom));
         }
         history.cycle(layout, (1, 1_000), &outputs, &inputs, &inputs);
         let context = history.context();

@@ -103,8 +103,6 @@ pub struct Lockstep<B: Bus + ?Sized = dyn Bus> {
     pub iut_declares: Vec<String>,
     cycle_time: Nanos,
     time_stamp_tolerance: Nanos,
-    /// The configuration's filter table, which a difference of what came in is charged to.
-    filters: Vec<canif_model::filter::FilterRow>,
 }
 
 impl<B: Bus + ?Sized> Lockstep<B> {
@@ -181,7 +179,6 @@ impl<B: Bus + ?Sized> Lockstep<B> {
             time_stamp_tolerance: scenario
                 .time_stamp_tolerance
                 .max(bus.time_stamp_tolerance()),
-            filters: scenario.interface.filters.clone(),
             pair,
             bus,
             iut_declares,
@@ -286,14 +283,13 @@ impl<B: Bus + ?Sized> Lockstep<B> {
             fast: rules.fast_queue,
             no_of_tx_messages: written.no_of_tx_messages,
         };
-        let expected = match self.pair.model.cycle(outputs, t) {
-            Ok(inputs) => inputs,
-            Err(e) => {
-                return Err(Outcome::Error(RunError::Harness(HarnessError::Model(
-                    e.to_string(),
-                ))))
-            }
-        };
+        if let Err(e) = self.pair.model.cycle(outputs, t) {
+            return Err(Outcome::Error(RunError::Harness(HarnessError::Model(
+                e.to_string(),
+            ))));
+        }
+        // Borrowed shared, so that the comparison can ask the model too.
+        let expected = self.pair.model.inputs();
         let actual = match self.pair.iut.cycle(outputs, t) {
             Ok(actual) => actual,
             // Stopped at an image's end by its host: what it did, judged (G3).
@@ -327,22 +323,18 @@ impl<B: Bus + ?Sized> Lockstep<B> {
             Some(bounds) => bounds.cycle(&layout, outputs, &actual),
             None if identical => None,
             None => {
-                // Owned, so that the model can say what it still has to send.
-                let expected = expected.to_vec();
-                let waiting: Vec<u16> = self.pair.model.waiting_transaction_numbers().collect();
-                let history = &self.pair.history;
+                let (model, history) = (&self.pair.model, &self.pair.history);
                 InputCheck {
                     layout: &layout,
-                    was_on_bus: &|f| history.received_lately(f),
-                    lost_by_model: &|f| history.lost_by_model_lately(f),
-                    evicted_by_the_drop_order: &|f| history.evicted_by_the_drop_order(f),
-                    filters: &self.filters,
-                    waiting_transaction_numbers: &waiting,
+                    received: &|f| history.taken(f),
+                    overflowed: history.overflowed(),
+                    filters: &model.config().filters,
+                    waiting_to_send: &|n| model.waiting_transaction_numbers().any(|w| w == n),
                     time_stamp_tolerance: self.time_stamp_tolerance,
                     rx,
                     declared: self.rules.declared_rx,
                 }
-                .compare(&expected, &actual)
+                .compare(expected, &actual)
             }
         };
         if let Some(difference) = difference {

@@ -13,7 +13,7 @@ use crate::bus::sim::Controller;
 use crate::device::blame;
 use crate::device::bounds::Bounds;
 use crate::device::diff::{frame_difference, read_with_another_structure, Difference};
-use crate::device::history::History;
+use crate::device::history::{History, Taken};
 use crate::device::sync1_window::{Held, Moment, Sync1Window};
 use crate::door::iut::{InvalidFrame, Iut};
 use crate::outcome::{Failure, FrameDiff, Outcome};
@@ -341,17 +341,19 @@ impl Pair {
                 self.trace = None; // a full disk ends the trace, not the run
             }
         }
-        if from_iut {
+        let taken = if from_iut {
             self.model.handle_transmit_complete();
+            None
         } else {
             let room = self.model.rx_room();
-            if self.model.handle_received(frame, end) == RxOutcome::Lost {
-                self.history.model_lost(frame);
-            } else if room > 1 {
-                self.history.queued_with_room(frame);
-            }
-        }
-        self.history.frame(self.cycle, from_iut, frame, end);
+            Some(match self.model.handle_received(frame, end) {
+                RxOutcome::Queued if room > 1 => Taken::WithRoom,
+                RxOutcome::Queued => Taken::LastPlace,
+                RxOutcome::Lost => Taken::Lost,
+                RxOutcome::Filtered | RxOutcome::NotRepresentable => Taken::Held,
+            })
+        };
+        self.history.frame(self.cycle, frame, end, taken);
         if let Some(ended) = self.ended.as_mut() {
             ended.push((frame, from_iut, end));
         }

@@ -81,19 +81,12 @@ impl Judge {
                 delivered = &delivered[n..];
             }
         }
-        // What the slots past NoOfRxMessages hold: a client reading them
-        // delivers no message of this batch, however right its decoding.
-        let in_use = usize::from(inputs.no_of_rx_messages()).min(self.layout.rx_slots);
-        let stale: Vec<MessageRepr> = (in_use..self.layout.rx_slots)
-            .filter_map(|slot| inputs.rx_message(slot))
-            .map(|view| MessageRepr::parse_clamped(&view).0)
-            .collect();
         for message in delivered {
             // P3 allows one batch: a message delivered twice, out of order,
             // from a stale slot or never entered beyond it is the restart's
             // fault; a message decoded wrongly is a decoding fault, restart
             // or not.
-            self.take_delivered(message, &stale)
+            self.take_delivered(message, inputs)
                 .map_err(|breach| match restart_batch {
                     Some(_) if [RX_ONCE, FAST_QUEUE].contains(&breach.requirements) => Breach {
                         requirements: PLC_RESTART,
@@ -194,7 +187,7 @@ impl Judge {
     fn take_delivered(
         &mut self,
         message: &MessageRepr,
-        stale: &[MessageRepr],
+        inputs: &InputImage<&[u8]>,
     ) -> Result<(), Breach> {
         if self.byte_stream {
             // The next bytes of its identifier, however the client cut them.
@@ -242,19 +235,22 @@ impl Judge {
             .iter()
             .flat_map(|b| b.messages.iter())
             .any(|m| m == message);
-        let earlier = self.entered_lately.contains(message) || stale.contains(message);
+        // A slot past NoOfRxMessages, or an earlier batch's message: no
+        // message of this batch, however right its decoding.
+        let in_use = usize::from(inputs.no_of_rx_messages()).min(self.layout.rx_slots);
+        let earlier = self.entered_lately.contains(message)
+            || (in_use..self.layout.rx_slots)
+                .filter_map(|slot| inputs.rx_message(slot))
+                .any(|view| MessageRepr::parse_clamped(&view).0 == *message);
+        let once = match self.queue {
+            QueueMode::Fast => FAST_QUEUE,
+            _ => RX_ONCE,
+        };
         let (ids, what) = match (again, later, expected) {
-            (true, _, _) if self.queue == QueueMode::Fast => {
-                (FAST_QUEUE, "a message delivered twice")
-            }
-            (true, _, _) => (RX_ONCE, "a message delivered twice"),
+            (true, _, _) => (once, "a message delivered twice"),
             (_, true, _) => (RX_ONCE, "a message delivered out of order"),
-            _ if earlier && self.queue == QueueMode::Fast => (
-                FAST_QUEUE,
-                "a slot past NoOfRxMessages or of an earlier batch read",
-            ),
             _ if earlier => (
-                RX_ONCE,
+                once,
                 "a slot past NoOfRxMessages or of an earlier batch read",
             ),
             (_, _, None) => (RX_ONCE, "a message the device never entered"),

@@ -12,6 +12,7 @@ use canif_model::Nanos;
 use canif_spec::ReqId;
 
 use crate::device::blame;
+use crate::device::history::Taken;
 use crate::outcome::FrameDiff;
 
 /// A difference found, before it becomes a [`crate::Failure`].
@@ -96,22 +97,18 @@ pub struct RxState {
 /// How an input image is judged against the model's.
 pub struct InputCheck<'a> {
     pub layout: &'a ImageLayout,
-    /// Whether a frame was on the bus lately (a slot holding one carries a real,
-    /// wrong frame; anything else is a frame the IUT encoded wrongly).
-    pub was_on_bus: &'a dyn Fn(&Frame) -> bool,
-    /// Whether the model lost a frame lately to its full local Rx queue: a
-    /// device delivering it kept what the tail drop of G4 drops.
-    pub lost_by_model: &'a dyn Fn(&Frame) -> bool,
-    /// Whether a frame the model delivers, missing from the device's slot,
-    /// was lost only by the order a full queue drops in (the lockstep's
-    /// history: queued with places to spare, then an overflow).
-    pub evicted_by_the_drop_order: &'a dyn Fn(&Frame) -> bool,
+    /// What the model's Rx queue did with a frame another node sent lately;
+    /// `None`: no node did. A slot holding such a frame carries a real, wrong
+    /// frame; anything else is a frame the IUT encoded wrongly.
+    pub received: &'a dyn Fn(&Frame) -> Option<Taken>,
+    /// The model's local Rx queue overflowed lately.
+    pub overflowed: bool,
     /// The configuration's filter table: a frame let through or held back
     /// otherwise than it says is charged to the statement deciding it.
     pub filters: &'a [FilterRow],
-    /// The transaction numbers of messages the model has accepted and not
-    /// yet completed on the bus.
-    pub waiting_transaction_numbers: &'a [u16],
+    /// Whether a transaction number is of a message the model has accepted
+    /// and not yet completed on the bus.
+    pub waiting_to_send: &'a dyn Fn(u16) -> bool,
     pub time_stamp_tolerance: Nanos,
     pub rx: RxState,
     /// What the device declared of the freedoms the checks otherwise skip.
@@ -232,9 +229,7 @@ impl InputCheck<'_> {
                 // A message handed over and not yet complete on the bus:
                 // "sent" read as G6 does not read it (TN-003 alone).
                 candidates: match a.transaction_number {
-                    Some(n) if self.waiting_transaction_numbers.contains(&n) => {
-                        blame::TRANSACTION_NUMBER_EARLY
-                    }
+                    Some(n) if (self.waiting_to_send)(n) => blame::TRANSACTION_NUMBER_EARLY,
                     _ => blame::TRANSACTION_NUMBER,
                 },
                 what: "Inputs.TransactionNumber".into(),
@@ -321,15 +316,21 @@ impl InputCheck<'_> {
         let parsed = |v: &MessageView<&[u8]>| MessageRepr::parse(v).ok().map(|m| m.frame);
         let data_len = parsed(e).map_or(0, |f| f.data().len());
         let different_frame = match (parsed(e), parsed(a)) {
-            (Some(expected), Some(actual)) => expected != actual && (self.was_on_bus)(&actual),
+            (Some(expected), Some(actual)) => {
+                expected != actual && (self.received)(&actual).is_some()
+            }
             _ => false,
         };
-        // A frame the model's tail drop lost (with the Fast CAN Queue a
-        // loss is a cycle's overflow, not a queue's policy).
+        // Which frames a full queue loses (with the Fast CAN Queue a loss is
+        // a cycle's overflow, not a queue's order): the device kept one the
+        // model's tail drop lost, or, after an overflow, misses one the model
+        // queued with places to spare - which no queue a place shorter drops
+        // on arrival, so the device evicted it later.
+        let taken = |frame: Option<Frame>| frame.and_then(|f| (self.received)(&f));
         let kept_what_the_model_dropped = different_frame
             && !self.rx.fast
-            && (parsed(a).is_some_and(|actual| (self.lost_by_model)(&actual))
-                || parsed(e).is_some_and(|expected| (self.evicted_by_the_drop_order)(&expected)));
+            && (taken(parsed(a)) == Some(Taken::Lost)
+                || (self.overflowed && taken(parsed(e)) == Some(Taken::WithRoom)));
         // A frame the table holds back, let through; else one it lets
         // through, missing: the filter statement deciding it.
         let filtered = match (parsed(e), parsed(a)) {

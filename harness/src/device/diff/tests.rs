@@ -34,11 +34,10 @@ fn image(layout: ImageLayout, messages: &[Frame]) -> Vec<u8> {
 fn check(layout: &ImageLayout, plc_released: u16) -> InputCheck<'_> {
     InputCheck {
         layout,
-        was_on_bus: &|_| false,
-        lost_by_model: &|_| false,
-        evicted_by_the_drop_order: &|_| false,
+        received: &|_| None,
+        overflowed: false,
         filters: &[],
-        waiting_transaction_numbers: &[],
+        waiting_to_send: &|_| false,
         time_stamp_tolerance: 0,
         rx: RxState {
             before: 0,
@@ -180,29 +179,35 @@ fn a_frame_is_blamed_on_its_first_differing_property() {
     assert_eq!(frame_difference(&a, &high, false), blame::TX_ID_RESERVED);
 }
 
-/// Issue 36: a device that kept a frame the model's tail drop lost broke
-/// the assumption that decides which frames a full queue loses (RXQ-004),
-/// not the statement that frames are lost (RXQ-003); another real frame
-/// in the slot is the message set's.
+/// Issue 36: which frames a full queue loses is assumption RXQ-004's (G4),
+/// not the statement that frames are lost (RXQ-003): a device kept a frame
+/// the model's tail drop lost, or after an overflow misses one the model
+/// queued with places to spare (evicted later). One the model queued into
+/// its last place is the depth's to lose, and so is any without an overflow.
 #[test]
 fn a_frame_the_model_dropped_is_charged_to_the_drop_policy() {
+    use crate::device::history::Taken::{LastPlace, Lost, WithRoom};
     let layout = layout(FrameFormat::Base11);
     let expected = image(layout, &[frame(0x123, &[1])]);
     let kept = image(layout, &[frame(0x456, &[2])]);
-    let on_bus = |_: &Frame| true;
-    let dropped = |f: &Frame| f.id == CanId::Standard(0x456);
-    let blamed = |lost_by_model: &dyn Fn(&Frame) -> bool| {
+    let blamed = |missing, shown, overflowed| {
+        let received = move |f: &Frame| match f.id == CanId::Standard(0x123) {
+            true => Some(missing),
+            false => Some(shown),
+        };
         InputCheck {
-            was_on_bus: &on_bus,
-            lost_by_model,
+            received: &received,
+            overflowed,
             ..check(&layout, 0)
         }
         .compare(&expected, &kept)
         .unwrap()
         .candidates
     };
-    assert_eq!(blamed(&dropped), blame::RX_DROP_POLICY);
-    assert_eq!(blamed(&|_| false), blame::RX_SET);
+    assert_eq!(blamed(WithRoom, Lost, true), blame::RX_DROP_POLICY);
+    assert_eq!(blamed(WithRoom, WithRoom, true), blame::RX_DROP_POLICY);
+    assert_eq!(blamed(WithRoom, WithRoom, false), blame::RX_SET);
+    assert_eq!(blamed(LastPlace, WithRoom, true), blame::RX_SET);
 }
 
 /// Issue 36: Inputs.TransactionNumber naming a message the model still has
@@ -222,7 +227,7 @@ fn a_transaction_number_of_a_message_not_yet_sent_is_charged_to_the_ruling() {
     };
     let blamed = |waiting: &[u16]| {
         InputCheck {
-            waiting_transaction_numbers: waiting,
+            waiting_to_send: &|n| waiting.contains(&n),
             ..check(&layout, 0)
         }
         .compare(&with_number(6), &with_number(7))
