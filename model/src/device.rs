@@ -66,6 +66,8 @@ pub struct Device {
     last_transmitted: u16,
     rx_queue: VecDeque<Received>,
     status: ControllerStatus,
+    /// Whether `status` came from the controller or is the initial one (INFO-009).
+    controller_reported: bool,
     lost: u64,
 }
 
@@ -91,6 +93,7 @@ impl Device {
                 ..ControllerStatus::default()
             },
             lost: 0,
+            controller_reported: false,
         })
     }
 
@@ -332,5 +335,12 @@ impl Device {
     /// Requirements: INFO-002, INFO-005.
     pub fn handle_controller_status(&mut self, status: ControllerStatus) {
         self.status = status;
+        self.controller_reported = true;
+    }
+
+    /// Whether the controller has reported a status yet: before, InfoData
+    /// shows INFO-009's initial words.
+    pub fn controller_reported(&self) -> bool {
+        self.controller_reported
     }
 }

@@ -47,10 +47,15 @@ pub enum Fault {
     AcceptsMalformedFilter,
     FdWithoutTransactionNumber,
     DropsWhatDoesNotFit,
+    FdLengthAsDlc,
+    FdKeepsRemote,
+    InfoDataStartsZero,
+    AcknowledgesByIncrement,
+    TxReadWithoutTransactionNumber,
 }
 
 impl Fault {
-    pub const ALL: [Fault; 45] = [
+    pub const ALL: [Fault; 50] = [
         Fault::AckBeforeAccept,
         Fault::OverwritesUnacknowledgedRx,
         Fault::FdLengthRoundsDown,
@@ -96,6 +101,11 @@ impl Fault {
         Fault::AcceptsMalformedFilter,
         Fault::FdWithoutTransactionNumber,
         Fault::DropsWhatDoesNotFit,
+        Fault::FdLengthAsDlc,
+        Fault::FdKeepsRemote,
+        Fault::InfoDataStartsZero,
+        Fault::AcknowledgesByIncrement,
+        Fault::TxReadWithoutTransactionNumber,
     ];
 
     /// The name used on the command line.
@@ -146,6 +156,11 @@ impl Fault {
             Fault::AcceptsMalformedFilter => "accepts-malformed-filter",
             Fault::FdWithoutTransactionNumber => "fd-without-transaction-number",
             Fault::DropsWhatDoesNotFit => "drops-what-does-not-fit",
+            Fault::FdLengthAsDlc => "fd-length-as-dlc",
+            Fault::FdKeepsRemote => "fd-keeps-remote",
+            Fault::InfoDataStartsZero => "info-data-starts-zero",
+            Fault::AcknowledgesByIncrement => "acknowledges-by-increment",
+            Fault::TxReadWithoutTransactionNumber => "tx-read-without-transaction-number",
         }
     }
 
@@ -199,6 +214,11 @@ impl Fault {
             Fault::AcceptsMalformedFilter => "accepts a filter row whose range ends before it starts or that reaches past 29 bits",
             Fault::FdWithoutTransactionNumber => "accepts the CAN FD interface without the transaction number and time stamp its structures carry",
             Fault::DropsWhatDoesNotFit => "acknowledges a batch its send queue has no room for, keeping only what fits",
+            Fault::FdLengthAsDlc => "writes a received FD frame's DLC into dataLength instead of its byte count (9 for 12 bytes)",
+            Fault::FdKeepsRemote => "sends a Tx message with RTR and EDL as a remote FD frame, which CAN FD does not have",
+            Fault::InfoDataStartsZero => "reads InfoData 0 (node not active, core stopped) until the controller first reports",
+            Fault::AcknowledgesByIncrement => "acknowledges a batch by incrementing Inputs.TxCounter instead of copying Outputs.TxCounter",
+            Fault::TxReadWithoutTransactionNumber => "reads the Tx slots with the structure without transaction number (its stride and offsets) where the interface has one",
         }
     }
 

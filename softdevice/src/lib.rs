@@ -67,6 +67,8 @@ pub struct SoftDevice {
     faults: Vec<Fault>,
     choices: Vec<Choice>,
     tx_geo: MsgGeometry,
+    /// The structure Tx slots are read with: `tx_geo` but for a fault.
+    tx_read: MsgGeometry,
     rx_geo: MsgGeometry,
     rx_base: usize,
     info_base: usize,
@@ -91,6 +93,8 @@ impl SoftDevice {
         settings.check(faults)?;
         let has_tn = settings.transaction_number || settings.format == Format::Fd;
         let tx_geo = MsgGeometry::tx(settings.format, has_tn);
+        let skips_tn = faults.contains(&Fault::TxReadWithoutTransactionNumber);
+        let tx_read = MsgGeometry::tx(settings.format, has_tn && !skips_tn);
         let rx_geo = MsgGeometry::rx(
             settings.format,
             settings.time_stamp || settings.format == Format::Fd,
@@ -108,10 +112,13 @@ impl SoftDevice {
                 0
             };
         let mut controller = [0u32; info::WORDS];
-        controller[info::STATUS] = info::NODE_ACTIVE;
-        controller[info::CORE_RUNNING] = 1;
+        if !faults.contains(&Fault::InfoDataStartsZero) {
+            controller[info::STATUS] = info::NODE_ACTIVE;
+            controller[info::CORE_RUNNING] = 1;
+        }
         Ok(SoftDevice {
             tx_geo,
+            tx_read,
             rx_geo,
             rx_base,
             info_base,
@@ -238,14 +245,19 @@ impl SoftDevice {
             count = self.settings.tx_fifo_depth.saturating_sub(busy);
         }
         self.copy_batch_n(output, now, count);
-        put16(&mut self.input, header::TX_COUNTER, requested);
+        let acknowledge = if self.has(Fault::AcknowledgesByIncrement) {
+            acknowledged.wrapping_add(1)
+        } else {
+            requested
+        };
+        put16(&mut self.input, header::TX_COUNTER, acknowledge);
     }
 
     /// The message in slot `i` (beyond the slots: a device that trusts
     /// NoOfTxMessages starts over at slot 0).
     fn tx_slot<'a>(&self, output: &'a [u8], i: usize) -> &'a [u8] {
-        let at = 6 + (i % usize::from(self.settings.tx_slots)) * self.tx_geo.size;
-        &output[at..at + self.tx_geo.size]
+        let at = 6 + (i % usize::from(self.settings.tx_slots)) * self.tx_read.size;
+        &output[at..at + self.tx_read.size]
     }
 
     fn copy_batch(&mut self, output: &[u8], now: u64) {
@@ -269,7 +281,7 @@ impl SoftDevice {
         let mut batch: Vec<TxJob> = (0..count)
             .filter_map(|i| {
                 let slot = self.tx_slot(output, i);
-                let tn = self.tx_geo.tn.map_or(0, |o| get16(slot, o));
+                let tn = self.tx_read.tn.map_or(0, |o| get16(slot, o));
                 Some(TxJob {
                     frame: self.decode_tx(slot)?,
                     tn,
@@ -291,7 +303,7 @@ impl SoftDevice {
     /// The frame a Tx slot asks for; `None` when the device drops it (a
     /// length out of range, with [`Choice::DropsMessageWithBadLength`]).
     fn decode_tx(&self, slot: &[u8]) -> Option<CanFrame> {
-        let g = self.tx_geo;
+        let g = self.tx_read;
         let mut frame = CanFrame::default();
         if g.cob_wide {
             let cob = get32(slot, g.cob);
@@ -334,7 +346,7 @@ impl SoftDevice {
         if frame.fd {
             frame.brs = flags & 2 != 0;
             frame.esi = flags & 4 != 0;
-            frame.remote = false;
+            frame.remote &= self.has(Fault::FdKeepsRemote);
             let wanted = frame.len.min(64);
             let wire = if self.has(Fault::FdLengthRoundsDown) {
                 frame::FD_SIZES
@@ -463,7 +475,10 @@ impl SoftDevice {
             put16(&mut slot, o, f.len as u16);
         }
         if let Some(o) = g.len8 {
-            slot[o] = f.len as u8;
+            slot[o] = match frame::FD_SIZES.iter().position(|&size| size == f.len) {
+                Some(dlc) if f.fd && self.has(Fault::FdLengthAsDlc) => dlc as u8,
+                _ => f.len as u8,
+            };
         }
         if let Some(o) = g.flags {
             let (brs, esi) = if self.has(Fault::BrsEsiSwapped) {

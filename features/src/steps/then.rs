@@ -423,9 +423,11 @@ fn configuration(world: &mut CanWorld, verdict: String) -> StepResult {
 #[then(regex = r"^InfoData\[(\d+)\] is (0x[0-9A-Fa-f]+|\d+)$")]
 fn info_data(world: &mut CanWorld, index: usize, value: String) -> StepResult {
     let actual = world.input_image().info_data(index).ok_or("no InfoData")?;
-    check_as(&[blame::info_data(index)], actual == num(&value), || {
-        format!("InfoData[{index}] = 0x{actual:X}, expected {value}")
-    })
+    check_as(
+        &[blame::info_data(index, world.status.is_some())],
+        actual == num(&value),
+        || format!("InfoData[{index}] = 0x{actual:X}, expected {value}"),
+    )
 }
 
 #[then(regex = r"^the PLC saw the confirmation (\d+) cycles? after its increment$")]

@@ -19,6 +19,10 @@ pub const TX_COUNTER: &[ReqId] = req_ids![
     "HS-TX-012",
     "FQ-003",
 ];
+/// Inputs.TxCounter moved to a value that is neither its last nor
+/// Outputs.TxCounter: 003 says the acknowledge "is set to the value of the
+/// TxCounter in the EtherCAT output data" (HS-TX-007), whatever the PLC's step.
+pub const TX_ACKNOWLEDGE_VALUE: &[ReqId] = req_ids!["HS-TX-007"];
 /// The device filled a buffer the PLC had not released.
 pub const RX_UNRELEASED: &[ReqId] = req_ids!["HS-RX-001", "HS-RX-004"];
 /// RxCounter moved with nothing new.
@@ -114,8 +118,18 @@ pub const TX_DATA: &[ReqId] = req_ids!["HS-TX-006", "LAY-GEN-003"];
 /// A Tx frame the IUT decoded from the output image with another message
 /// structure's stride and offsets (a transaction number skipped or read as
 /// the COB ID).
-pub const TX_STRIDE: &[ReqId] = req_ids!["LAY-GEN-006"];
+pub const TX_STRIDE: &[ReqId] = req_ids!["LAY-GEN-006", "LAY-GEN-002"];
 pub const TX_INVALID: &[ReqId] = req_ids!["FD-LEN-003", "FD-LEN-004", "ERR-R1", "LAY-GEN-008"];
+/// An FD frame whose data field is no valid size (36 bytes): the rounding
+/// to the next valid size and its DLC.
+pub const TX_LENGTH_ROUNDING: &[ReqId] = req_ids!["FD-LEN-003", "FD-LEN-004", "ERR-R1"];
+/// A length field beyond the frame's on the CAN FD interface (EDL = 0 and
+/// above 8, or above 64) sent as it is.
+pub const TX_INVALID_FD_LENGTH: &[ReqId] = req_ids!["FD-LEN-006", "LAY-GEN-008"];
+/// RTR with EDL sent as a remote FD frame, which CAN FD does not have.
+pub const TX_REMOTE_FD: &[ReqId] = req_ids!["LAY-FD-003", "LAY-GEN-008"];
+/// A received FD frame's DLC in dataLength where its byte count belongs.
+pub const RX_LENGTH_AS_DLC: &[ReqId] = req_ids!["FD-LEN-002"];
 pub const CONFIRMATION: &[ReqId] = req_ids!["PDX-001", "PDX-002"];
 /// A device that read or wrote past its images (G3: nothing is read outside
 /// the image, whatever NoOfTxMessages or a length field says).
@@ -151,13 +165,25 @@ pub const SYNC1_LATE: &[ReqId] = req_ids!["PDX-004"];
 /// COB ID's flag bits (LAY-29-003); BRS or ESI on a classic frame, or a
 /// remote FD frame, from the FD flags (FD-BIT-*); a length beyond the
 /// format's from the length field (LAY-GEN-008, FD-LEN-*).
-pub fn invalid_frame(invalid: &InvalidFrame) -> &'static [ReqId] {
+///
+/// On the CAN FD interface a length beyond the frame's is what FD-LEN-006
+/// says of its structure, and a remote FD frame what LAY-FD-003 says; both
+/// before G3's general bound. A length that is no FD size is the rounding's.
+pub fn invalid_frame(invalid: &InvalidFrame, fd_interface: bool) -> &'static [ReqId] {
+    use canif_model::frame::FrameError;
     match invalid {
         InvalidFrame::Identifier {
             extended: false, ..
         } => TX_ID_RESERVED,
         InvalidFrame::Identifier { extended: true, .. } => TX_ID_29,
-        InvalidFrame::FdBitsOnClassic { .. } | InvalidFrame::RemoteFd => TX_FD_FLAGS,
+        InvalidFrame::FdBitsOnClassic { .. } => TX_FD_FLAGS,
+        InvalidFrame::RemoteFd => TX_REMOTE_FD,
+        InvalidFrame::Parts(FrameError::FdInvalidSize { .. }) => TX_LENGTH_ROUNDING,
+        InvalidFrame::Parts(FrameError::ClassicTooLong { .. } | FrameError::FdTooLong { .. })
+            if fd_interface =>
+        {
+            TX_INVALID_FD_LENGTH
+        }
         InvalidFrame::Parts(_) | InvalidFrame::Declared(_) => TX_INVALID,
     }
 }
@@ -205,14 +231,16 @@ pub fn filter_statement(table: &[FilterRow], id: CanId) -> Option<&'static [ReqI
     })
 }
 
-/// The requirements of `InfoData[index]`.
-pub fn info_data(index: usize) -> &'static [ReqId] {
+/// The requirements of `InfoData[index]`; before the controller reported
+/// anything, the status and core words are assumption INFO-009's alone.
+pub fn info_data(index: usize, controller_reported: bool) -> &'static [ReqId] {
     match index {
-        0 => req_ids!["INFO-002", "INFO-009"],
+        0 | 11 if !controller_reported => req_ids!["INFO-009"],
+        0 => req_ids!["INFO-002"],
         1 | 2 => req_ids!["INFO-003"],
         3 => req_ids!["INFO-004"],
         4..=6 => req_ids!["INFO-005", "INFO-007"],
-        11 => req_ids!["INFO-006", "INFO-009"],
+        11 => req_ids!["INFO-006"],
         15 => req_ids!["INFO-006"],
         _ => req_ids!["INFO-005"],
     }
@@ -272,9 +300,34 @@ mod tests {
     #[test]
     fn every_info_data_word_has_its_requirement() {
         for index in 0..canif_model::image::field::INFO_DATA_WORDS {
-            assert!(!info_data(index).is_empty(), "InfoData[{index}]");
+            assert!(!info_data(index, true).is_empty(), "InfoData[{index}]");
         }
-        assert_eq!(info_data(3), req_ids!["INFO-004"]);
+        assert_eq!(info_data(3, true), req_ids!["INFO-004"]);
+    }
+
+    /// Issue 36: the initial status and core words are assumption
+    /// INFO-009's alone; once the controller reported, its statements'.
+    #[test]
+    fn the_initial_info_data_is_charged_to_its_assumption_alone() {
+        assert_eq!(info_data(0, false), req_ids!["INFO-009"]);
+        assert_eq!(info_data(11, false), req_ids!["INFO-009"]);
+        assert_eq!(info_data(0, true), req_ids!["INFO-002"]);
+        assert_eq!(info_data(11, true), req_ids!["INFO-006"]);
+        assert_eq!(info_data(3, false), req_ids!["INFO-004"]);
+    }
+
+    /// Issue 36: what no controller sends is charged to the statement
+    /// that says so for its interface, the general bound after it.
+    #[test]
+    fn an_invalid_frame_names_the_statement_of_its_interface_first() {
+        use canif_model::frame::FrameError;
+        let too_long = InvalidFrame::Parts(FrameError::ClassicTooLong { len: 15 });
+        assert_eq!(invalid_frame(&too_long, false), TX_INVALID);
+        assert_eq!(invalid_frame(&too_long, true)[0], ReqId::new("FD-LEN-006"));
+        let remote = invalid_frame(&InvalidFrame::RemoteFd, true);
+        assert_eq!(remote[0], ReqId::new("LAY-FD-003"));
+        let size = InvalidFrame::Parts(FrameError::FdInvalidSize { len: 36 });
+        assert!(!invalid_frame(&size, true).contains(&ReqId::new("LAY-GEN-008")));
     }
 
     /// Issue 36: a filter difference names the statement deciding the

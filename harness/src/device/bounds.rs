@@ -40,23 +40,37 @@ impl Bounds {
             return Some(image_size(layout.input_size(), actual.len()));
         };
         let acknowledged = inputs.tx_counter();
+        if let Ok(outputs) = OutputImage::new_checked(outputs, *layout) {
+            self.requested = outputs.tx_counter();
+        }
         if acknowledged != self.acknowledged {
             self.allowance += layout.tx_slots;
             self.acknowledged = acknowledged;
-        }
-        if let Ok(outputs) = OutputImage::new_checked(outputs, *layout) {
-            self.requested = outputs.tx_counter();
+            // Whatever the device made of the batch, its acknowledge is a copy.
+            if acknowledged != self.requested {
+                return Some(Difference {
+                    frames: None,
+                    candidates: blame::TX_ACKNOWLEDGE_VALUE,
+                    what: "Inputs.TxCounter".into(),
+                    expected: format!("{} (Outputs.TxCounter) or unchanged", self.requested),
+                    actual: acknowledged.to_string(),
+                });
+            }
         }
         None
     }
 
     /// A frame the IUT hands its controller: within the bounds, or how not.
-    pub fn transmit(&mut self, actual: Transmit) -> Result<Option<Frame>, Difference> {
+    pub fn transmit(
+        &mut self,
+        actual: Transmit,
+        fd_interface: bool,
+    ) -> Result<Option<Frame>, Difference> {
         match actual {
             None => Ok(None),
             Some(Err(invalid)) => Err(Difference {
                 frames: None,
-                candidates: blame::invalid_frame(&invalid),
+                candidates: blame::invalid_frame(&invalid, fd_interface),
                 what: "frame handed to the controller".into(),
                 expected: "a valid CAN frame (at most 8 classic, 64 FD data bytes)".into(),
                 actual: format!("invalid frame: {invalid}"),

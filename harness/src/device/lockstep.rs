@@ -276,12 +276,15 @@ impl<B: Bus + ?Sized> Lockstep<B> {
         let written = OutputImage::new_checked(outputs, layout)
             .map(|o| o.header())
             .unwrap_or_default();
+        let before = InputImage::new_checked(self.pair.model.inputs(), layout)
+            .map_or((0, 0), |i| (i.rx_counter(), i.tx_counter()));
         let rx = RxState {
-            before: InputImage::new_checked(self.pair.model.inputs(), layout)
-                .map_or(0, |i| i.rx_counter()),
+            before: before.0,
             plc_released: written.rx_counter,
             fast: rules.fast_queue,
             no_of_tx_messages: written.no_of_tx_messages,
+            tx_before: before.1,
+            tx_requested: written.tx_counter,
         };
         if let Err(e) = self.pair.model.cycle(outputs, t) {
             return Err(Outcome::Error(RunError::Harness(HarnessError::Model(
@@ -331,6 +334,7 @@ impl<B: Bus + ?Sized> Lockstep<B> {
                     filters: &model.config().filters,
                     waiting_to_send: &|n| model.waiting_transaction_numbers().any(|w| w == n),
                     time_stamp_tolerance: self.time_stamp_tolerance,
+                    controller_reported: model.controller_reported(),
                     rx,
                     declared: self.rules.declared_rx,
                 }

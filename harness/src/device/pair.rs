@@ -107,9 +107,9 @@ impl Pair {
 
     /// Whether the IUT's frame is a slot of a recent batch read with another
     /// message structure's stride and offsets.
-    fn misread(&self, frame: &Frame) -> bool {
+    fn misread(&self, expected: Option<&Frame>, frame: &Frame) -> bool {
         let batches: Vec<&[u8]> = self.batches.iter().map(Vec::as_slice).collect();
-        read_with_another_structure(&self.layout, &batches, frame)
+        read_with_another_structure(&self.layout, &batches, expected, frame)
     }
 
     /// A difference as the failure of this scenario, with its history. The
@@ -156,7 +156,7 @@ impl Pair {
         }
         let actual = self.iut.poll_transmit(self.now).map_err(iut_broke)?;
         let judged = match self.bounds.as_mut() {
-            Some(bounds) => bounds.transmit(actual),
+            Some(bounds) => bounds.transmit(actual, self.layout.is_fd()),
             None => {
                 // Distributed Clocks: the first message of a batch waits for
                 // SYNC1 and the device's output delay (003, R10).
@@ -235,7 +235,7 @@ impl Pair {
                     frames: None,
                     candidates: if queued_later {
                         blame::TX_OTHER_FRAME
-                    } else if self.misread(&a) {
+                    } else if self.misread(Some(&e), &a) {
                         blame::TX_STRIDE
                     } else {
                         frame_difference(
@@ -251,7 +251,7 @@ impl Pair {
             }
             (e, Some(Err(invalid))) => Difference {
                 frames: None,
-                candidates: blame::invalid_frame(&invalid),
+                candidates: blame::invalid_frame(&invalid, self.layout.is_fd()),
                 what,
                 expected: e.map_or("no frame".into(), |f| f.to_string()),
                 actual: format!("invalid frame: {invalid}"),
@@ -265,7 +265,7 @@ impl Pair {
             },
             (None, Some(Ok(a))) => Difference {
                 frames: None,
-                candidates: if self.misread(&a) {
+                candidates: if self.misread(None, &a) {
                     blame::TX_STRIDE
                 } else {
                     blame::TX_EXTRA

@@ -391,7 +391,10 @@ pub fn profile_for(fault: canif_softdevice::Fault) -> &'static str {
         | BrsWithoutEdlSendsFd
         | InfoDataTwoBytesLate
         | TimeStampOn11Bit
-        | FdWithoutTransactionNumber => "fc532x",
+        | FdWithoutTransactionNumber
+        | FdLengthAsDlc
+        | FdKeepsRemote
+        | InfoDataStartsZero => "fc532x",
         TransactionNumberOn11Bit => "el6751-legacy",
         AcceptsEveryFormat => "fc510x-before-fw2.14",
         TransactionNumberNotOffered => "ccat-before-fw1.17",

@@ -91,6 +91,11 @@ impl ImageLayout {
         }
     }
 
+    /// Whether this is the CAN FD interface (000 §8.3): its messages carry the EDL, BRS and ESI bits.
+    pub fn is_fd(&self) -> bool {
+        self.tx_message.flags.is_some()
+    }
+
     pub fn output_size(&self) -> usize {
         field::MESSAGES + self.tx_slots * self.tx_message.size
     }

@@ -3,10 +3,12 @@
 //! documents call don't-care is skipped: Rx slots at and past NoOfRxMessages
 //! (HS-RX-008, FQ-005) and data bytes past the length.
 
+use canif_model::dlc;
 use canif_model::filter::{self, FilterRow};
 use canif_model::frame::Frame;
 use canif_model::image::{
     field, ImageLayout, InputImage, LengthField, MessageLayout, MessageRepr, MessageView,
+    OutputImage,
 };
 use canif_model::Nanos;
 use canif_spec::ReqId;
@@ -92,6 +94,10 @@ pub struct RxState {
     pub fast: bool,
     /// NoOfTxMessages of the output image the cycle ran on.
     pub no_of_tx_messages: u16,
+    /// Inputs.TxCounter going into the cycle, and the Outputs.TxCounter
+    /// the cycle ran on: an acknowledge is the one copied to the other.
+    pub tx_before: u16,
+    pub tx_requested: u16,
 }
 
 /// How an input image is judged against the model's.
@@ -110,6 +116,9 @@ pub struct InputCheck<'a> {
     /// and not yet completed on the bus.
     pub waiting_to_send: &'a dyn Fn(u16) -> bool,
     pub time_stamp_tolerance: Nanos,
+    /// The controller has reported a status to the model (else InfoData
+    /// holds INFO-009's initial words).
+    pub controller_reported: bool,
     pub rx: RxState,
     /// What the device declared of the freedoms the checks otherwise skip.
     pub declared: DeclaredRx,
@@ -170,6 +179,8 @@ impl InputCheck<'_> {
                 frames: None,
                 candidates: if rx.no_of_tx_messages == 0 {
                     blame::TX_EMPTY_BATCH
+                } else if a.tx_counter != rx.tx_before && a.tx_counter != rx.tx_requested {
+                    blame::TX_ACKNOWLEDGE_VALUE
                 } else {
                     blame::TX_COUNTER
                 },
@@ -365,7 +376,12 @@ impl InputCheck<'_> {
                 blame::COB_LOW
             }
         } else if has_own_length && e.raw_length() != a.raw_length() {
-            blame::LENGTH
+            let dlc = u8::try_from(e.raw_length()).ok().and_then(dlc::fd_dlc);
+            if message.flags.is_some() && dlc.map(u16::from) == Some(a.raw_length()) {
+                blame::RX_LENGTH_AS_DLC
+            } else {
+                blame::LENGTH
+            }
         } else if message.flags.is_some() && e.flags() != a.flags() {
             blame::FLAGS
         } else if e.data_field()[..data_len] != a.data_field()[..data_len] {
@@ -384,7 +400,7 @@ impl InputCheck<'_> {
             let (expected, actual) = (e.info_data(index)?, a.info_data(index)?);
             (expected != actual).then(|| Difference {
                 frames: None,
-                candidates: blame::info_data(index),
+                candidates: blame::info_data(index, self.controller_reported),
                 what: format!("InfoData[{index}]"),
                 expected: format!("0x{expected:08X}"),
                 actual: format!("0x{actual:08X}"),
@@ -393,32 +409,57 @@ impl InputCheck<'_> {
     }
 }
 
-/// Whether `frame` is what a Tx slot of one of `batches` (output images)
-/// holds when read with another message structure than the interface's, and
-/// no slot holds with the interface's own: the IUT decoded the image at the
-/// wrong stride or offsets (LAY-GEN-006). A frame some slot holds as it is
+/// Whether the IUT decoded `frame` from the output image at another message
+/// structure's stride and offsets (LAY-GEN-006, LAY-GEN-002): it is the slot
+/// the model sent `expected` from, read with another structure; or, where
+/// the model sent nothing, a slot of one of `batches` read so that no slot
+/// holds with the interface's own structure. A frame a slot holds as it is
 /// (one past NoOfTxMessages, say) is another fault.
-pub fn read_with_another_structure(layout: &ImageLayout, batches: &[&[u8]], frame: &Frame) -> bool {
+pub fn read_with_another_structure(
+    layout: &ImageLayout,
+    batches: &[&[u8]],
+    expected: Option<&Frame>,
+    frame: &Frame,
+) -> bool {
     let Some(first) = (layout.tx_slots > 0).then(|| layout.tx_slot(0).start) else {
         return false;
     };
-    let holds = |structure: &'static MessageLayout| {
-        batches.iter().any(|outputs| {
+    // Read as a device that trusts the fields would.
+    let read = |outputs: &[u8], structure: &'static MessageLayout, slot: usize| {
+        let at = first + slot * structure.size;
+        outputs
+            .get(at..at + structure.size)
+            .and_then(|bytes| MessageView::new_checked(bytes, structure).ok())
+            .map(|view| MessageRepr::parse_clamped(&view).0.frame)
+    };
+    let own = layout.tx_message;
+    let others = || {
+        MessageLayout::ALL
+            .iter()
+            .filter(move |other| other.name != own.name)
+    };
+    if let Some(expected) = expected {
+        return batches.iter().any(|outputs| {
             (0..layout.tx_slots).any(|slot| {
-                let at = first + slot * structure.size;
-                outputs
-                    .get(at..at + structure.size)
-                    .and_then(|bytes| MessageView::new_checked(bytes, structure).ok())
-                    // Read as a device that trusts the fields would.
-                    .is_some_and(|view| MessageRepr::parse_clamped(&view).0.frame == *frame)
+                read(outputs, own, slot) == Some(*expected)
+                    && others().any(|other| read(outputs, other, slot) == Some(*frame))
             })
+        });
+    }
+    // Only the slots a batch asks for: a zeroed slot past them reads as a
+    // frame with every structure, and so does an empty frame on identifier 0.
+    let asked = |outputs: &[u8]| {
+        OutputImage::new_checked(outputs, *layout).map_or(0, |o| {
+            usize::from(o.no_of_tx_messages()).min(layout.tx_slots)
         })
     };
-    !holds(layout.tx_message)
-        && MessageLayout::ALL
-            .iter()
-            .filter(|other| other.name != layout.tx_message.name)
-            .any(|other| holds(other))
+    let holds = |structure: &'static MessageLayout| {
+        batches.iter().any(|outputs| {
+            (0..asked(outputs)).any(|slot| read(outputs, structure, slot) == Some(*frame))
+        })
+    };
+    let zeroes = frame.id.raw() == 0 && frame.data().is_empty() && !frame.is_remote();
+    !zeroes && !holds(own) && others().any(|other| holds(other))
 }
 
 /// The requirements of the first property in which a frame handed to the

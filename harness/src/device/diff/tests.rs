@@ -39,11 +39,14 @@ fn check(layout: &ImageLayout, plc_released: u16) -> InputCheck<'_> {
         filters: &[],
         waiting_to_send: &|_| false,
         time_stamp_tolerance: 0,
+        controller_reported: true,
         rx: RxState {
             before: 0,
             plc_released,
             fast: false,
             no_of_tx_messages: 1,
+            tx_before: 0,
+            tx_requested: 3,
         },
         declared: DeclaredRx::default(),
     }
@@ -113,7 +116,10 @@ fn a_header_field_is_blamed_on_its_handshake() {
     InputImage::new_checked(&mut actual[..], layout)
         .unwrap()
         .set_tx_counter(4);
-    let difference = check(&layout, 0).compare(&expected, &actual).unwrap();
+    // The model acknowledged the PLC's 3; the device still shows its 4.
+    let mut not_acknowledged = check(&layout, 0);
+    not_acknowledged.rx.tx_before = 4;
+    let difference = not_acknowledged.compare(&expected, &actual).unwrap();
     assert_eq!(difference.what, "Inputs.TxCounter");
     assert_eq!(difference.candidates, blame::TX_COUNTER);
     assert_eq!(
@@ -236,4 +242,26 @@ fn a_transaction_number_of_a_message_not_yet_sent_is_charged_to_the_ruling() {
     };
     assert_eq!(blamed(&[7, 8]), blame::TRANSACTION_NUMBER_EARLY);
     assert_eq!(blamed(&[8]), blame::TRANSACTION_NUMBER);
+}
+
+/// Issue 36: an acknowledge that is neither the last TxCounter nor
+/// Outputs.TxCounter contradicts HS-TX-007's copy, not the counting rules.
+#[test]
+fn an_acknowledge_that_is_no_copy_is_charged_to_the_copy() {
+    let layout = layout(FrameFormat::Base11);
+    let expected = image(layout, &[]);
+    let mut acknowledged = expected.clone();
+    InputImage::new_checked(&mut acknowledged[..], layout)
+        .unwrap()
+        .set_tx_counter(2);
+    let judged = |tx_before, tx_requested| {
+        let mut check = check(&layout, 1);
+        check.rx.tx_before = tx_before;
+        check.rx.tx_requested = tx_requested;
+        check.compare(&expected, &acknowledged).unwrap().candidates
+    };
+    // The PLC stepped from 1 to 3; the device counted 1 up to 2.
+    assert_eq!(judged(1, 3), blame::TX_ACKNOWLEDGE_VALUE);
+    // Not acknowledged yet (2 was the last): the handshake's timing.
+    assert_eq!(judged(2, 3), blame::TX_COUNTER);
 }

@@ -180,7 +180,6 @@ fn layout_ids(config: &InterfaceConfig) -> Vec<&'static str> {
             "FD-BIT-001",
             "FD-BIT-002",
             "FD-BIT-003",
-            "FD-BIT-004",
         ]),
     }
     if config.transaction_number || config.format == FrameFormat::Fd {
