@@ -65,17 +65,36 @@ fn named_profile(
     }
 }
 
+/// The embedded catalogue, read once; `None` if it does not load (its own
+/// tests say why).
+fn embedded_catalogue() -> Option<&'static canif_spec::Catalogue> {
+    static CATALOGUE: std::sync::OnceLock<Option<canif_spec::Catalogue>> =
+        std::sync::OnceLock::new();
+    CATALOGUE
+        .get_or_init(|| canif_spec::Catalogue::embedded().ok())
+        .as_ref()
+}
+
 /// The capabilities a tag can name: those of the catalogue (`spec/capabilities.yaml`).
 fn is_capability(tag: &str) -> bool {
-    static NAMES: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
-    NAMES
-        .get_or_init(|| {
-            canif_spec::Catalogue::embedded()
-                .map(|c| c.capabilities.into_iter().map(|c| c.name).collect())
-                .unwrap_or_default()
-        })
+    embedded_catalogue().is_some_and(|c| c.capabilities.iter().any(|cap| cap.name == tag))
+}
+
+/// The capabilities every requirement in `ids` needs: on a profile without
+/// one of them a scenario tagged with `ids` judges nothing it names, so it
+/// does not run there (issue 36: fc510x ran the EL6751's PDX scenarios).
+fn needed_by_every_requirement(ids: &[String]) -> Vec<String> {
+    let Some(catalogue) = embedded_catalogue() else {
+        return Vec::new();
+    };
+    let mut needs = ids
         .iter()
-        .any(|name| name == tag)
+        .filter_map(|id| catalogue.requirement(id))
+        .map(|r| r.capabilities.clone());
+    let first = needs.next().unwrap_or_default();
+    needs.fold(first, |common, caps| {
+        common.into_iter().filter(|c| caps.contains(c)).collect()
+    })
 }
 
 /// The embedded feature parsed, by file name.
@@ -124,21 +143,28 @@ pub fn scenarios() -> Result<Vec<ScenarioInfo>, String> {
                 ));
             }
             for (line, tags, profile, example) in rows {
+                let requirements: Vec<String> = tags
+                    .iter()
+                    .filter(|t| t.contains('-'))
+                    .map(|t| t.to_string())
+                    .collect();
+                let mut capabilities: Vec<String> = tags
+                    .iter()
+                    .filter(|t| is_capability(t))
+                    .map(|t| t.to_string())
+                    .collect();
+                for needed in needed_by_every_requirement(&requirements) {
+                    if !capabilities.contains(&needed) {
+                        capabilities.push(needed);
+                    }
+                }
                 list.push(ScenarioInfo {
                     file: path.to_string(),
                     feature: feature.name.clone(),
                     name: scenario.name.clone(),
                     line,
-                    requirements: tags
-                        .iter()
-                        .filter(|t| t.contains('-'))
-                        .map(|t| t.to_string())
-                        .collect(),
-                    capabilities: tags
-                        .iter()
-                        .filter(|t| is_capability(t))
-                        .map(|t| t.to_string())
-                        .collect(),
+                    requirements,
+                    capabilities,
                     model_only: tags.iter().any(|t| *t == "model"),
                     once: tags.iter().any(|t| *t == "once"),
                     profile,

@@ -6,6 +6,7 @@ use canif_harness::client::suite::ClientKind;
 use canif_harness::client::ClientDeclaration;
 use canif_harness::device::refusals::OFFERED_REFUSED;
 use canif_harness::device::{blame, IutKind};
+use canif_harness::door::declaration::choices::Declared;
 use canif_harness::door::declaration::client::Application;
 use canif_harness::verdict::{NotRunReason, Rest};
 use canif_harness::{GherkinOutcome, GherkinRun};
@@ -19,7 +20,8 @@ use crate::{
 /// What a Gherkin scenario runs against.
 #[derive(Debug, Clone)]
 pub enum UnderTest {
-    Device(IutKind),
+    /// A device, and what it declares (the command line's over its kind's).
+    Device(IutKind, Declared),
     /// A client, and what it declares (the command line's and its own).
     Client(ClientKind, ClientDeclaration),
 }
@@ -27,7 +29,7 @@ pub enum UnderTest {
 impl UnderTest {
     pub fn side(&self) -> Side {
         match self {
-            UnderTest::Device(_) => Side::Device,
+            UnderTest::Device(..) => Side::Device,
             UnderTest::Client(..) => Side::Plc,
         }
     }
@@ -117,9 +119,9 @@ pub fn run(profile: &Profile, scenario: &ScenarioInfo, under_test: &UnderTest) -
     let started = std::time::Instant::now();
     let (caps, name) = (profile.model_capabilities(), profile.name.clone());
     let outcome = match under_test {
-        UnderTest::Device(iut) => {
+        UnderTest::Device(iut, declared) => {
             // Judged by what the device declares where the documents leave a choice.
-            let caps = iut.declared().apply(&caps);
+            let caps = declared.apply(&caps);
             run_scenario(
                 &scenario.file,
                 scenario.line,
@@ -127,6 +129,7 @@ pub fn run(profile: &Profile, scenario: &ScenarioInfo, under_test: &UnderTest) -
                     iut: iut.for_profile(profile),
                     profile: name,
                     caps,
+                    declared: *declared,
                 },
             )
         }
@@ -148,7 +151,7 @@ pub fn run(profile: &Profile, scenario: &ScenarioInfo, under_test: &UnderTest) -
             blamed: match under_test {
                 // A device step names the families of the field it read:
                 // the scenario's tags of those families are blamed.
-                UnderTest::Device(_) => blame::narrow_tags(&scenario.requirements, &witness),
+                UnderTest::Device(..) => blame::narrow_tags(&scenario.requirements, &witness),
                 // The client judge names exactly what a client broke,
                 // whatever the scenario is tagged with.
                 UnderTest::Client(..) if witness.is_empty() => scenario.requirements.clone(),

@@ -12,6 +12,7 @@ use canif_harness::device::bus::BusChoice;
 use canif_harness::device::lockstep::Lockstep;
 use canif_harness::device::scenario::{Judgement, Scenario, Step, Steps};
 use canif_harness::device::IutKind;
+use canif_harness::door::declaration::choices::Declared;
 use canif_harness::door::iut::BuildError;
 use canif_harness::error::{Refusal, RunError};
 use canif_harness::Outcome;
@@ -33,6 +34,23 @@ pub struct Target {
     pub iut: IutKind,
     pub profile: String,
     pub caps: Capabilities,
+    /// What the device declares where the documents leave a choice: the
+    /// command line's over its kind's own, as the lockstep reads it
+    /// (issue 36: Gherkin honours `--declare` too).
+    pub declared: Declared,
+}
+
+impl Target {
+    /// `iut` on `profile` with `caps`, declaring what its kind declares.
+    pub fn new(iut: IutKind, profile: impl Into<String>, caps: Capabilities) -> Target {
+        let declared = iut.declared();
+        Target {
+            iut,
+            profile: profile.into(),
+            caps,
+            declared,
+        }
+    }
 }
 
 thread_local! {
@@ -101,11 +119,7 @@ pub fn set_target(target: Target) {
 fn target() -> Target {
     TARGET
         .with(|t| t.borrow().clone())
-        .unwrap_or_else(|| Target {
-            iut: IutKind::Model,
-            profile: "everything".into(),
-            caps: Capabilities::everything(),
-        })
+        .unwrap_or_else(|| Target::new(IutKind::Model, "everything", Capabilities::everything()))
 }
 
 /// One cycle: 1 ms.
@@ -254,7 +268,7 @@ impl CanWorld {
             trace: None,
             bus: BusChoice::Sim,
             judgement: Judgement::Exact,
-            declared: self.target.iut.declared(),
+            declared: self.target.declared,
             steps: Steps::Scripted(Vec::new()),
         }
     }

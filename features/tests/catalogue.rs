@@ -66,14 +66,14 @@ fn every_fault_is_caught_by_a_scenario() {
             .iter()
             .filter(|s| !s.model_only && (s.once || s.capabilities.iter().all(|c| profile.has(c))))
             .filter(|s| {
-                let target = Target {
-                    iut: IutKind::SoftDevice {
+                let target = Target::new(
+                    IutKind::SoftDevice {
                         faults: vec![fault],
                         choices: vec![],
                     },
-                    profile: profile.name.clone(),
-                    caps: profile.model_capabilities(),
-                };
+                    profile.name.clone(),
+                    profile.model_capabilities(),
+                );
                 matches!(
                     run_scenario(&s.file, s.line, target),
                     ScenarioOutcome::Failed { .. }
@@ -107,17 +107,17 @@ fn blamed_by(name: &str, fault: Fault) -> (Vec<String>, Vec<String>) {
     // words of other devices differ first, and a witness outside the tags
     // blames every tag - which once made this pass for the wrong reason.
     let catalogue = Catalogue::embedded().unwrap();
-    let target = Target {
-        iut: IutKind::SoftDevice {
+    let target = Target::new(
+        IutKind::SoftDevice {
             faults: vec![fault],
             choices: vec![],
         },
-        profile: "el6751-mdp".into(),
-        caps: catalogue
+        "el6751-mdp",
+        catalogue
             .profile("el6751-mdp")
             .unwrap()
             .model_capabilities(),
-    };
+    );
     match run_scenario(&scenario.file, scenario.line, target) {
         ScenarioOutcome::Failed { witness, .. } => (
             blame::narrow_tags(&scenario.requirements, &witness),
@@ -172,8 +172,8 @@ fn a_broken_iut_makes_a_scenario_an_error() {
         .into_iter()
         .find(|s| s.file.ends_with("tx-handshake.feature"))
         .unwrap();
-    let target = Target {
-        iut: IutKind::Door(Door::Exec {
+    let target = Target::new(
+        IutKind::Door(Door::Exec {
             command: "echo stuck >&2; sleep 30".into(),
             // It never answers, so a short start limit judges it the same
             // on any machine, and the test need not wait out the default.
@@ -183,9 +183,9 @@ fn a_broken_iut_makes_a_scenario_an_error() {
             },
             same_cpu: false,
         }),
-        profile: "el6751-mdp".into(),
-        caps: canif_model::config::Capabilities::everything(),
-    };
+        "el6751-mdp",
+        canif_model::config::Capabilities::everything(),
+    );
     match run_scenario(&scenario.file, scenario.line, target) {
         ScenarioOutcome::Error(report) => assert!(
             report.contains("no answer to `configure`") && report.contains("stuck"),
@@ -208,8 +208,8 @@ fn a_babbling_iut_ends_a_scenario_in_bounded_time() {
         .find(|s| s.file.ends_with("tx-handshake.feature"))
         .unwrap();
     for mode in ["babble", "stuck-time"] {
-        let target = Target {
-            iut: IutKind::Door(Door::Exec {
+        let target = Target::new(
+            IutKind::Door(Door::Exec {
                 command: format!(
                     "python3 {}/../tests/iuts/misbehave.py {mode}",
                     env!("CARGO_MANIFEST_DIR")
@@ -217,9 +217,9 @@ fn a_babbling_iut_ends_a_scenario_in_bounded_time() {
                 timeouts: Timeouts::with_request(std::time::Duration::from_millis(2_000)),
                 same_cpu: false,
             }),
-            profile: "el6751-mdp".into(),
-            caps: canif_model::config::Capabilities::everything(),
-        };
+            "el6751-mdp",
+            canif_model::config::Capabilities::everything(),
+        );
         let started = std::time::Instant::now();
         let outcome = run_scenario(&scenario.file, scenario.line, target);
         assert!(
@@ -246,5 +246,81 @@ fn a_babbling_iut_ends_a_scenario_in_bounded_time() {
             }
             (mode, other) => panic!("{mode}: ended otherwise: {other:?}"),
         }
+    }
+}
+
+/// Issue 36: a scenario whose requirements all need a capability does not
+/// run on a profile without it, where its requirements are not applicable
+/// (the EL6751's process-data scenarios on fc510x).
+#[test]
+fn a_scenario_runs_only_where_some_requirement_it_names_applies() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let list = scenarios().unwrap();
+    let lrw = list
+        .iter()
+        .find(|s| s.name == "LRW confirms after two task cycles")
+        .unwrap();
+    assert!(lrw.capabilities.contains(&"el6751".to_string()));
+    let profiles: Vec<_> = catalogue.profiles.iter().collect();
+    let targets = canif_features::schedule::targets(&list, &profiles, canif_spec::Side::Device);
+    for (profile, scenario) in &targets {
+        let profile = catalogue.profile(profile).unwrap();
+        assert!(
+            scenario.requirements.iter().any(|id| {
+                let r = catalogue.requirement(id).unwrap();
+                profile.lacks(&r.capabilities).is_empty()
+            }),
+            "{}:{} runs on {} where none of {:?} applies",
+            scenario.file,
+            scenario.line,
+            profile.name,
+            scenario.requirements
+        );
+    }
+    assert!(targets
+        .iter()
+        .any(|(p, s)| p == "el6751-mdp" && s.name == lrw.name));
+}
+
+/// Issue 36: a Gherkin scenario reads the declarations the lockstep reads,
+/// the command line's over the device's own: told that the device waits
+/// 5 µs after SYNC1, the scenario judges it by that delay and fails the soft
+/// device, which does not wait; the declaration was once ignored there.
+#[test]
+fn a_gherkin_scenario_honours_the_command_lines_declaration() {
+    use canif_features::schedule::{run, UnderTest};
+    use canif_harness::door::declaration::choices::Declared;
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("el6751-mdp").unwrap();
+    let scenario = scenarios()
+        .unwrap()
+        .into_iter()
+        .find(|s| s.name == "With Distributed Clocks the first message waits for SYNC1")
+        .unwrap();
+    let soft = IutKind::SoftDevice {
+        faults: vec![],
+        choices: vec![],
+    };
+    let own = run(
+        profile,
+        &scenario,
+        &UnderTest::Device(soft.clone(), soft.declared()),
+    );
+    assert!(
+        matches!(own.outcome, canif_harness::GherkinOutcome::Pass),
+        "{:?}",
+        own.outcome
+    );
+    let told = Declared {
+        sync1_output_delay: Some(5_000),
+        ..Declared::default()
+    }
+    .or(soft.declared());
+    let contradicted = run(profile, &scenario, &UnderTest::Device(soft, told));
+    match contradicted.outcome {
+        canif_harness::GherkinOutcome::Fail { blamed, .. } => {
+            assert!(blamed.contains(&"PDX-004".to_string()), "{blamed:?}")
+        }
+        other => panic!("expected a failure, got {other:?}"),
     }
 }

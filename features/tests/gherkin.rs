@@ -15,10 +15,13 @@ use libtest_mimic::{Arguments, Failed, Trial};
 
 fn under_test(side: Side) -> UnderTest {
     match side {
-        Side::Device => UnderTest::Device(IutKind::SoftDevice {
-            faults: vec![],
-            choices: vec![],
-        }),
+        Side::Device => {
+            let soft = IutKind::SoftDevice {
+                faults: vec![],
+                choices: vec![],
+            };
+            UnderTest::Device(soft.clone(), soft.declared())
+        }
         Side::Plc => UnderTest::Client(ClientKind::Reference, Default::default()),
     }
 }
@@ -48,11 +51,11 @@ fn main() {
     let mut trials = Vec::new();
     for scenario in scenarios.iter().filter(|s| s.model_only) {
         let (path, line) = (scenario.file.clone(), scenario.line);
-        let target = Target {
-            iut: IutKind::Model,
-            profile: "model".into(),
-            caps: canif_model::config::Capabilities::everything(),
-        };
+        let target = Target::new(
+            IutKind::Model,
+            "model",
+            canif_model::config::Capabilities::everything(),
+        );
         trials.push(Trial::test(
             trial_name("model", scenario),
             move || match run_scenario(&path, line, target) {

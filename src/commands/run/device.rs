@@ -171,7 +171,10 @@ pub(crate) fn execute(
         left_out.push("Gherkin scenarios not run: they use the simulated bus".into());
         Vec::new()
     } else {
-        plan.run_gherkin(&canif_features::UnderTest::Device(kind.clone()))
+        plan.run_gherkin(&canif_features::UnderTest::Device(
+            kind.clone(),
+            options.declared_by(kind),
+        ))
     };
     plan.assemble(catalogue, lockstep, gherkin, left_out, meta, started)
 }

@@ -474,10 +474,11 @@ fn add_gherkin_failures(
     catalogue: &Catalogue,
     row: &mut KillRow<canif_softdevice::Fault>,
 ) {
-    let faulty = UnderTest::Device(canif_harness::device::IutKind::SoftDevice {
+    let kind = canif_harness::device::IutKind::SoftDevice {
         faults: vec![row.fault],
         choices: vec![],
-    });
+    };
+    let faulty = UnderTest::Device(kind.clone(), kind.declared());
     for (profile_name, run) in plan.run_gherkin(&faulty) {
         let canif_harness::GherkinOutcome::Fail { blamed, .. } = run.outcome else {
             continue;
