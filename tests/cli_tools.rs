@@ -93,3 +93,18 @@ fn size_gives_both_figures_and_recommends_the_safe_one() {
     );
     assert!(text.contains("4 slots can overflow"), "{text}");
 }
+
+/// Issue 36: `spec show` names a document by its title and edition, not its
+/// hashed file name alone, and shows a ruling with its text.
+#[test]
+fn spec_show_names_the_document_and_the_ruling() {
+    let shown = canif(&["spec", "show", "FD-LEN-002"]);
+    assert!(
+        shown.contains("source: CAN-Interface manual, version 1.7 (Chinese; the later document), §8.3.1 DLC table (001_c68c573893220081.txt)"),
+        "{shown}"
+    );
+    assert!(
+        shown.contains("ruling R1: CAN FD length/DLC: DLC 13 is 32 bytes, not 36"),
+        "{shown}"
+    );
+}

@@ -36,12 +36,25 @@ pub(crate) fn spec(
             };
             outln!(out, "{}  [{:?}]  {}:{}", r.id, r.status, r.file, r.line);
             outln!(out, "  {}", r.statement);
-            outln!(out, "  source: {} {}", r.source.file, r.source.section);
+            // A document by its title and edition, the file it is kept in after it.
+            match catalogue.sources.iter().find(|s| s.file == r.source.file) {
+                Some(document) => outln!(
+                    out,
+                    "  source: {}, {} ({})",
+                    document.title,
+                    r.source.section,
+                    r.source.file
+                ),
+                None => outln!(out, "  source: {} {}", r.source.file, r.source.section),
+            }
             if !r.capabilities.is_empty() {
                 outln!(out, "  needs: {}", r.capabilities.join(", "));
             }
-            if !r.rulings.is_empty() {
-                outln!(out, "  rulings: {}", r.rulings.join(", "));
+            for id in &r.rulings {
+                match catalogue.rulings.iter().find(|ruling| ruling.id == *id) {
+                    Some(ruling) => outln!(out, "  ruling {id}: {}", ruling.title),
+                    None => outln!(out, "  ruling {id}"),
+                }
             }
             // Coverage is read from the tests where they are (the workspace), never kept by hand.
             if let Ok(sources) = coverage::test_sources(Path::new(".")) {
