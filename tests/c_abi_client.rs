@@ -384,3 +384,37 @@ fn a_tx_only_library_is_certified_on_what_it_declares() {
     );
     assert_eq!(undeclared["CL-RX-001"].kind(), VerdictKind::Fail);
 }
+
+/// Issue 36: canif.h says `canif_client_declares` is asked before any start.
+/// A library that starts only on 29-bit interfaces without transaction
+/// numbers, and says so there, is run only on those (the profile offers
+/// them with transaction numbers, which its declaration turns off) and
+/// conforms, in process and in its host; it was once an error on every
+/// check, asked only of a program that had started.
+#[test]
+fn a_library_declares_before_it_is_started() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let profile = catalogue.profile("ccat").unwrap();
+    let path = build("ext29_without_tn", &["-DCANIF_29BIT_NO_TN"]);
+    let kind = ClientKind::Door(Door::Lib {
+        path: path.clone(),
+        host: None,
+    });
+    let run = run_profile(profile, &kind, &options().declared_by(&kind), |_| {});
+    let verdicts = run.verdicts(&catalogue, profile);
+    let broken: Vec<_> = verdicts
+        .iter()
+        .filter(|(_, v)| matches!(v.kind(), VerdictKind::Fail | VerdictKind::Error))
+        .map(|(id, v)| format!("{id}: {v:?}"))
+        .collect();
+    assert!(broken.is_empty(), "{broken:#?}");
+    assert_eq!(verdicts["CL-TX-003"].kind(), VerdictKind::Pass);
+    // Hosted, as `canif run` runs a library: the host is asked first too.
+    let (code, stderr, _, json) = canif_run("ext29_without_tn", &path, "ccat", false);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(
+        json["totals"]["pass"].as_u64().unwrap_or(0) > 0,
+        "{}",
+        json["totals"]
+    );
+}

@@ -51,6 +51,9 @@ static void put(uint8_t *b, uint32_t v, size_t n) {
 uint32_t canif_abi_version(void) { return CANIF_ABI_VERSION; }
 
 void *canif_client_start(const canif_config *config) {
+#ifdef CANIF_29BIT_NO_TN /* tests/c_abi_client.rs: a client of one interface, declaring it */
+    if (config->format != 1 || config->transaction_number || config->time_stamp) return NULL;
+#endif
     client *c = calloc(1, sizeof *c);
     if (!c) return NULL;
     c->config = *config;
@@ -249,6 +252,9 @@ int canif_client_task(void *handle, const uint8_t *inputs, size_t inputs_size, u
 const char *canif_client_declares(void) {
 #ifdef CANIF_TX_ONLY
     return "direction=tx\nslots=1..32\napplication=one-stream\nrestart=delivers-twice\n";
+#elif defined(CANIF_29BIT_NO_TN)
+    return "formats=29-bit\ntransaction-numbers=no\ntime-stamps=no\nslots=1..32\n"
+           "application=one-stream\nrestart=delivers-twice\n";
 #else
     return "direction=both\nslots=1..32\napplication=one-stream\nrestart=delivers-twice\n";
 #endif

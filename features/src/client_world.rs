@@ -101,9 +101,12 @@ impl ClientWorld {
         }
     }
 
-    /// The interface as the profile offers it, with `slots` slots.
+    /// The interface as the profile offers it and the client serves it
+    /// (without the transaction numbers or time stamps it declares it does
+    /// without), with `slots` slots.
     pub fn set_up(&mut self, format: FrameFormat, queue: QueueMode, slots: u8) {
-        self.config = canif_harness::run::interface(format, queue, &self.target.caps);
+        let offered = canif_harness::run::interface(format, queue, &self.target.caps);
+        self.config = self.target.declared.serve(&offered).unwrap_or(offered);
         (self.config.tx_slots, self.config.rx_slots) = (slots, slots);
     }
 

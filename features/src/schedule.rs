@@ -71,6 +71,13 @@ pub fn declined_by_client(
     profile: &Profile,
     declared: &ClientDeclaration,
 ) -> Option<String> {
+    if let Some(why) = scenario
+        .capabilities
+        .iter()
+        .find_map(|capability| declared.declined_capability(capability))
+    {
+        return Some(why);
+    }
     let caps = profile.model_capabilities();
     let (mut format, mut queue, mut slots) = (FrameFormat::Base11, QueueMode::Standard, 0u8);
     let count = |text: &str| text.split(' ').find_map(|w| w.parse::<u8>().ok());

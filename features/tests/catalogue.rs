@@ -324,3 +324,39 @@ fn a_gherkin_scenario_honours_the_command_lines_declaration() {
         other => panic!("expected a failure, got {other:?}"),
     }
 }
+
+/// Issue 36: a client that declares it does without transaction numbers
+/// (or time stamps) is not run on the scenario that needs them, which was
+/// an ERROR; one that needs them is not run where the profile has none.
+#[test]
+fn a_client_declaration_leaves_out_what_it_does_not_serve() {
+    use canif_features::schedule::declined_by_client;
+    use canif_harness::client::ClientDeclaration;
+    let catalogue = Catalogue::embedded().unwrap();
+    let list = scenarios().unwrap();
+    let in_flight = list
+        .iter()
+        .find(|s| s.name == "Transaction numbers tell the messages in flight apart")
+        .unwrap();
+    let ccat = catalogue.profile("ccat").unwrap();
+    let declared = |line: &str| ClientDeclaration::parse(&[line]).unwrap();
+    assert_eq!(
+        declined_by_client(in_flight, ccat, &declared("transaction-numbers=no")).as_deref(),
+        Some("the client declares transaction-numbers=no")
+    );
+    assert_eq!(
+        declined_by_client(in_flight, ccat, &declared("transaction-numbers=yes")),
+        None
+    );
+    let plain = list
+        .iter()
+        .find(|s| s.name == "A batch stays as it is until the device has acknowledged it")
+        .unwrap();
+    let fc510x = catalogue.profile("fc510x").unwrap();
+    assert!(
+        declined_by_client(plain, fc510x, &declared("transaction-numbers=yes")).is_some(),
+        "{}:{}",
+        plain.file,
+        plain.line
+    );
+}

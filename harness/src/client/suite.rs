@@ -84,13 +84,20 @@ impl ClientKind {
 }
 
 impl ClientKind {
-    /// What the client declares: asked of a program started on the first of
-    /// `interfaces` it starts on (it need not serve one to declare), and stopped.
+    /// What the client declares: a library before any start, as
+    /// include/canif.h promises; any other client as a program started on
+    /// the first of `interfaces` it starts on (it need not serve one to
+    /// declare), and stopped.
     pub fn declaration(
         &self,
         caps: &Capabilities,
         interfaces: &[InterfaceConfig],
     ) -> Result<ClientDeclaration, BuildError> {
+        if let ClientKind::Door(door) = self {
+            if let Some(declared) = door.client_declares() {
+                return declared.map_err(BuildError::Failed);
+            }
+        }
         let mut failed = BuildError::Refused("no interface to start it on".into());
         for config in interfaces {
             let layout = ImageLayout::new(config, caps.info_data);

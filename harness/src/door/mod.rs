@@ -36,6 +36,7 @@ use canif_model::image::ImageLayout;
 use adapter::process::Channel;
 use adapter::protocol::OwnedBus;
 use client::Client;
+use declaration::client::ClientDeclaration;
 use ethercat::EthercatLink;
 use exec::{Configured, ExecIut};
 use iut::{BuildError, Iut};
@@ -318,6 +319,19 @@ impl Door {
     }
 
     /// A fresh client (a new PLC program) behind the door for an interface.
+    /// What a library client declares before any start (include/canif.h:
+    /// `canif_client_declares` is asked first), in its host or in process;
+    /// `None` for a door that tells it only once started.
+    pub fn client_declares(&self) -> Option<Result<ClientDeclaration, IutError>> {
+        if let Some((command, timeouts)) = self.hosted(Role::Client) {
+            return Some(exec::client::declares_before_start(&command, timeouts));
+        }
+        match self {
+            Door::Lib { path, host: None } => Some(lib::client::LibClient::declares(path)),
+            _ => None,
+        }
+    }
+
     pub fn client(
         &self,
         config: &InterfaceConfig,

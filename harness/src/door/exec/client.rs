@@ -111,6 +111,23 @@ impl ExecClient {
     }
 }
 
+/// What the library `command` hosts declares, asked of a `lib-host` before
+/// any start (`declare`); the process then ends.
+pub(crate) fn declares_before_start(
+    command: &str,
+    timeouts: Timeouts,
+) -> Result<ClientDeclaration, IutError> {
+    let mut process = AdapterProcess::spawn(command, timeouts, false, Channel::Control)?;
+    let declares = process.exchange(&Request::Declare {}, Answer::DECLARED)?;
+    let lines: Vec<String> = declares.iter().map(|(k, v)| format!("{k}={v}")).collect();
+    ClientDeclaration::parse(&lines).map_err(|error| {
+        process.fail(
+            IutCause::Protocol,
+            format!("declares what cannot be taken in `declared`: {error}"),
+        )
+    })
+}
+
 impl Drop for ExecClient {
     /// A program that ends in a sound process that restarts waits idle for
     /// the next one; any other process ends with its program.

@@ -30,6 +30,19 @@ pub(crate) struct LibClient {
 }
 
 impl LibClient {
+    /// What the library at `path` declares, asked before any start
+    /// (include/canif.h).
+    pub(crate) fn declares(path: &Path) -> Result<ClientDeclaration, IutError> {
+        let library =
+            ClientLibrary::open(path).map_err(|e| IutError::new(IutCause::NotStarted, e))?;
+        ClientDeclaration::parse(&library.declares()).map_err(|error| {
+            IutError::new(
+                IutCause::Protocol,
+                format!("{}: canif_client_declares: {error}", path.display()),
+            )
+        })
+    }
+
     pub(crate) fn start(
         path: &Path,
         config: &InterfaceConfig,

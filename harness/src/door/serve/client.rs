@@ -70,6 +70,17 @@ impl Serves for ClientServer<'_> {
     fn answer(&mut self, request: &Request) -> Option<Answer> {
         Some(match request {
             Request::Bye {} => return None,
+            Request::Declare {} => match LibClient::declares(self.path) {
+                Ok(declaration) => Answer::Declared {
+                    declares: declaration
+                        .lines()
+                        .iter()
+                        .filter_map(|l| l.split_once('='))
+                        .map(|(k, v)| (k.to_string(), v.to_string()))
+                        .collect(),
+                },
+                Err(error) => Answer::error(error.to_string()),
+            },
             Request::Start {
                 protocol,
                 config,

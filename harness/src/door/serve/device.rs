@@ -100,9 +100,9 @@ impl<'a> Server<'a> {
         };
         let iut = match (request, self.iut.as_mut()) {
             (Request::Bye {}, _) => return None,
-            (Request::Start { .. } | Request::Task { .. }, _) => {
+            (Request::Start { .. } | Request::Task { .. } | Request::Declare {}, _) => {
                 return Some(Answer::error(
-                    "this is a device; `start` and `task` are the client role's requests",
+                    "this is a device; `start`, `task` and `declare` are the client role's requests",
                 ))
             }
             (
@@ -199,6 +199,7 @@ impl<'a> Server<'a> {
             Request::Configure { .. }
             | Request::Bye {}
             | Request::Start { .. }
+            | Request::Declare {}
             | Request::Task { .. } => unreachable!("answered above"),
         })
     }

@@ -89,6 +89,11 @@ pub enum Request {
         outputs: Hex,
         requests: Vec<WireMessage>,
     },
+    /// Client role: what the client declares it is, asked before any
+    /// `start` (include/canif.h's `canif_client_declares`), so canif can
+    /// start it only on interfaces it serves. Answered `declared`; canif
+    /// asks only its own `lib-host`.
+    Declare {},
     Bye {},
 }
 
@@ -106,6 +111,7 @@ impl Request {
             Request::Plan { .. } => "plan",
             Request::Start { .. } => "start",
             Request::Task { .. } => "task",
+            Request::Declare {} => "declare",
             Request::Bye {} => "bye",
         }
     }
@@ -180,6 +186,11 @@ pub enum Answer {
         #[serde(default, skip_serializing_if = "std::ops::Not::not")]
         more: bool,
     },
+    /// Client role: what the client declares, before any start (docs/plc-side.md), name to value.
+    Declared {
+        #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+        declares: std::collections::BTreeMap<String, String>,
+    },
     /// Client role: the program runs, speaking this version; it may say
     /// whether it tells its application which Tx messages were sent, and
     /// declare what it is (docs/plc-side.md), name to value.
@@ -220,6 +231,7 @@ impl Answer {
             Answer::Transmit { .. } => "transmit",
             Answer::Stepped { .. } => "stepped",
             Answer::Started { .. } => "started",
+            Answer::Declared { .. } => "declared",
             Answer::Tasked { .. } => "tasked",
             Answer::Error { .. } => "error",
         }
@@ -299,6 +311,14 @@ impl Answer {
                 declares,
                 restarts,
             }),
+            other => Err(other),
+        },
+    };
+    /// `declared`: what a client declares before any start.
+    pub const DECLARED: Expected<std::collections::BTreeMap<String, String>> = Expected {
+        name: "declared",
+        take: |answer| match answer {
+            Answer::Declared { declares } => Ok(declares),
             other => Err(other),
         },
     };

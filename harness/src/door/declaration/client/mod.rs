@@ -516,6 +516,14 @@ impl ClientDeclaration {
             }
             config.time_stamp = false;
         }
+        // A client that serves only interfaces with them has nothing to
+        // be judged on where they are not offered.
+        if self.transaction_numbers == Some(true) && !config.transaction_number {
+            return Err(self.declined(Item::TransactionNumbers));
+        }
+        if self.time_stamps == Some(true) && !config.time_stamp {
+            return Err(self.declined(Item::TimeStamps));
+        }
         Ok(config)
     }
 
@@ -564,6 +572,18 @@ impl ClientDeclaration {
     /// Why traffic one way is not served.
     pub fn declined_direction(&self) -> String {
         self.declined(Item::Direction)
+    }
+
+    /// Why a scenario that needs `capability` (a tag) is not served: the
+    /// client declares it does without transaction numbers or time stamps.
+    pub fn declined_capability(&self, capability: &str) -> Option<String> {
+        match capability {
+            "transaction_number" if self.transaction_numbers == Some(false) => {
+                Some(self.declined(Item::TransactionNumbers))
+            }
+            "timestamp" if self.time_stamps == Some(false) => Some(self.declined(Item::TimeStamps)),
+            _ => None,
+        }
     }
 }
 

@@ -84,3 +84,27 @@ fn geometries_are_the_default_and_the_edges_the_client_takes() {
     let range = ClientDeclaration::parse(&["slots=4..16"]).unwrap();
     assert_eq!(range.geometries(32), [8, 4, 16]);
 }
+
+/// Issue 36: a client that serves only interfaces with transaction numbers
+/// (or time stamps) is left out of those without them, and one that does
+/// without them is left out of a scenario that needs them.
+#[test]
+fn a_yes_leaves_out_interfaces_without_and_a_no_scenarios_that_need_them() {
+    use canif_model::config::{FrameFormat, InterfaceConfig};
+    let plain = InterfaceConfig::new(FrameFormat::Base11, 4);
+    let with = ClientDeclaration::parse(&["transaction-numbers=yes"]).unwrap();
+    assert_eq!(
+        with.serve(&plain).unwrap_err(),
+        "the client declares transaction-numbers=yes"
+    );
+    let stamped = ClientDeclaration::parse(&["time-stamps=yes"]).unwrap();
+    assert!(stamped.serve(&plain).is_err());
+    let without = ClientDeclaration::parse(&["transaction-numbers=no"]).unwrap();
+    assert!(without.serve(&plain).is_ok());
+    assert_eq!(
+        without.declined_capability("transaction_number").as_deref(),
+        Some("the client declares transaction-numbers=no")
+    );
+    assert_eq!(without.declined_capability("timestamp"), None);
+    assert_eq!(with.declined_capability("transaction_number"), None);
+}

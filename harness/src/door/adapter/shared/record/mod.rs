@@ -354,9 +354,10 @@ pub fn encode_request(request: &Request) -> Result<Encoded<'_>, String> {
             }
             record
         }
-        Request::Configure { .. } | Request::Start { .. } | Request::Bye {} => {
-            return Err(format!("`{}` goes on the line channel", request.name()))
-        }
+        Request::Configure { .. }
+        | Request::Start { .. }
+        | Request::Declare {}
+        | Request::Bye {} => return Err(format!("`{}` goes on the line channel", request.name())),
     };
     record.done()
 }
@@ -429,7 +430,7 @@ pub fn encode_answer(answer: &Answer) -> Result<Encoded<'_>, String> {
             }
             record
         }
-        Answer::Configured { .. } | Answer::Started { .. } => {
+        Answer::Configured { .. } | Answer::Started { .. } | Answer::Declared { .. } => {
             return Err(format!("`{}` goes on the line channel", answer.name()))
         }
     };
