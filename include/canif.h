@@ -173,7 +173,8 @@ size_t canif_client_sent(void *client, uint16_t *numbers, size_t capacity);
  * lines separated by '\n', NUL-terminated, valid while the library is loaded;
  * NULL declares nothing. Asked before any canif_client_start, so a client
  * can say which interfaces it serves before it is started on one:
- * formats, queues, transaction-numbers, time-stamps, slots, direction,
+ * formats, queues, transaction-numbers, time-stamps, slots (or tx-slots and
+ * rx-slots apart), direction,
  * application, restart, tells-sent. */
 const char *canif_client_declares(void);
 

@@ -113,12 +113,13 @@ pub fn declined_by_client(
     if let Err(why) = declared.serve(&config) {
         return Some(why);
     }
-    match declared.slots {
-        Some(range) if !range.contains(slots) => Some(format!(
-            "the client declares slots={range}; the scenario's interface has {slots}"
-        )),
-        _ => None,
-    }
+    // The scenarios set up one count for both directions.
+    (!declared.serves_slots(slots, slots)).then(|| {
+        format!(
+            "{}; the scenario's interface has {slots} each way",
+            declared.declined_geometry()
+        )
+    })
 }
 
 /// Runs one scenario on `profile` and says how it ended, blamed the way its side blames.
@@ -250,7 +251,7 @@ mod tests {
         assert_eq!(declined(sends, &["direction=tx"]), None);
         assert_eq!(
             declined(sends, &["slots=10"]).as_deref(),
-            Some("the client declares slots=10; the scenario's interface has 4")
+            Some("the client declares slots=10; the scenario's interface has 4 each way")
         );
         assert_eq!(declined(sends, &["slots=1..8"]), None);
         assert_eq!(

@@ -76,7 +76,8 @@ const KILL_TABLE: &[(ClientFault, &[&str])] = &[
     (ClientFault::SendSample000, &["CL-IMG-001"]),
     (
         ClientFault::DecodeOverNoOfTxMessages,
-        &["CL-FQ-001", "CL-RX-002", "CL-RX-004"],
+        // With more Tx than Rx slots its loop runs past the Rx slots too.
+        &["CL-FQ-001", "CL-IMG-001", "CL-RX-002", "CL-RX-004"],
     ),
     // After a restart its own counter is out of step: judged by what its
     // application sees (P1), the batch it reads again after a PLC restart
@@ -139,6 +140,13 @@ const KILL_TABLE: &[(ClientFault, &[&str])] = &[
     (
         ClientFault::AcknowledgesWithTxCounter,
         &["CL-FQ-001", "CL-RX-001", "CL-RX-002"],
+    ),
+    // Seen where the Rx slots outnumber the Tx slots: its batch runs past
+    // the Tx slots into what the master maps behind the image, says more
+    // messages than the slots hold, and the ones past them never go.
+    (
+        ClientFault::TxBatchBoundedByRxSlots,
+        &["CL-IMG-001", "CL-TX-003", "CL-TX-005"],
     ),
 ];
 

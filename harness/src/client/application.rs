@@ -271,7 +271,11 @@ pub fn describe(config: &InterfaceConfig) -> String {
     } else {
         ""
     };
-    format!("{format}{tn}{queue}, {} slots", config.tx_slots)
+    let slots = match (config.tx_slots, config.rx_slots) {
+        (tx, rx) if tx == rx => format!("{tx} slots"),
+        (tx, rx) => format!("{tx} Tx and {rx} Rx slots"),
+    };
+    format!("{format}{tn}{queue}, {slots}")
 }
 
 /// Frames both ways, about half the bus, for a while.

@@ -36,10 +36,11 @@ pub enum ClientFault {
     IgnoresRxCounterZero,
     SentOnAcknowledge,
     AcknowledgesWithTxCounter,
+    TxBatchBoundedByRxSlots,
 }
 
 impl ClientFault {
-    pub const ALL: [ClientFault; 19] = [
+    pub const ALL: [ClientFault; 20] = [
         ClientFault::SendSample000,
         ClientFault::DecodeOverNoOfTxMessages,
         ClientFault::OwnRxCounter,
@@ -59,6 +60,7 @@ impl ClientFault {
         ClientFault::IgnoresRxCounterZero,
         ClientFault::SentOnAcknowledge,
         ClientFault::AcknowledgesWithTxCounter,
+        ClientFault::TxBatchBoundedByRxSlots,
     ];
 
     pub fn name(self) -> &'static str {
@@ -82,6 +84,7 @@ impl ClientFault {
             ClientFault::IgnoresRxCounterZero => "ignores-rx-counter-zero",
             ClientFault::SentOnAcknowledge => "sent-on-acknowledge",
             ClientFault::AcknowledgesWithTxCounter => "acknowledges-with-tx-counter",
+            ClientFault::TxBatchBoundedByRxSlots => "tx-batch-bounded-by-rx-slots",
         }
     }
 
@@ -135,6 +138,9 @@ impl ClientFault {
             }
             ClientFault::AcknowledgesWithTxCounter => {
                 "acknowledges Rx by copying Inputs.TxCounter into Outputs.RxCounter: the wrong counter copied"
+            }
+            ClientFault::TxBatchBoundedByRxSlots => {
+                "bounds its Tx batch by the Rx slot count, as if the terminal had one count for both"
             }
         }
     }
@@ -411,7 +417,12 @@ impl FaultyClient {
         if !ready || self.to_send.is_empty() {
             return Ok(());
         }
-        let slots = self.slots(layout.tx_slots);
+        // One count for both directions, as when the terminal's two
+        // settings are taken for one: visible only where they differ.
+        let slots = match self.fault {
+            Some(ClientFault::TxBatchBoundedByRxSlots) => self.slots(layout.rx_slots),
+            _ => self.slots(layout.tx_slots),
+        };
         let mut batch: Vec<MessageRepr> = match self.takes(ClientShape::ByteStream) {
             true => self.packed(slots),
             false => self

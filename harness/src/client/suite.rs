@@ -249,7 +249,7 @@ pub fn scenarios(caps: &Capabilities, options: &ClientOptions) -> Vec<(ClientSce
         };
         for (g, slots) in declared.geometries(caps.max_slots).into_iter().enumerate() {
             let mut config = served.clone();
-            (config.tx_slots, config.rx_slots) = (slots, slots);
+            (config.tx_slots, config.rx_slots) = slots;
             for &master in &masters {
                 // DC works only with the Fast CAN Queue (PDX-005).
                 if master.distributed_clocks && config.queue != QueueMode::Fast {

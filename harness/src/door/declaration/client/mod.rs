@@ -14,9 +14,6 @@ use std::fmt;
 use canif_model::config::{FrameFormat, InterfaceConfig, QueueMode};
 use canif_model::freedoms::Named;
 
-/// The most slots an image has each way (ruling R2).
-pub const MAX_SLOTS: u8 = 32;
-
 /// Which way a client moves frames.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub enum Direction {
@@ -110,28 +107,6 @@ pub enum RestartChoice {
     DropsOnce,
 }
 
-/// The slot counts a client's code runs with, each way (1..=32, R2).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct SlotRange {
-    pub min: u8,
-    pub max: u8,
-}
-
-impl SlotRange {
-    pub fn contains(self, slots: u8) -> bool {
-        (self.min..=self.max).contains(&slots)
-    }
-}
-
-impl fmt::Display for SlotRange {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.min == self.max {
-            true => write!(f, "{}", self.min),
-            false => write!(f, "{}..{}", self.min, self.max),
-        }
-    }
-}
-
 /// What a client declares; `None` (or the default): it declares nothing there.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct ClientDeclaration {
@@ -143,7 +118,10 @@ pub struct ClientDeclaration {
     pub transaction_numbers: Option<bool>,
     /// Whether it serves interfaces with time stamps.
     pub time_stamps: Option<bool>,
-    pub slots: Option<SlotRange>,
+    /// The Tx slot counts it runs with (`tx-slots`, or `slots` for both).
+    pub tx_slots: Option<SlotRange>,
+    /// The Rx slot counts it runs with (`rx-slots`, or `slots` for both).
+    pub rx_slots: Option<SlotRange>,
     pub direction: Option<Direction>,
     pub application: Option<Application>,
     /// P3; undeclared, either is accepted.
@@ -210,6 +188,8 @@ enum Item {
     TransactionNumbers,
     TimeStamps,
     Slots,
+    TxSlots,
+    RxSlots,
     Direction,
     Application,
     Restart,
@@ -217,12 +197,14 @@ enum Item {
 }
 
 impl Item {
-    const ALL: [Item; 9] = [
+    const ALL: [Item; 11] = [
         Item::Formats,
         Item::Queues,
         Item::TransactionNumbers,
         Item::TimeStamps,
         Item::Slots,
+        Item::TxSlots,
+        Item::RxSlots,
         Item::Direction,
         Item::Application,
         Item::Restart,
@@ -236,6 +218,8 @@ impl Item {
             Item::TransactionNumbers => "transaction-numbers",
             Item::TimeStamps => "time-stamps",
             Item::Slots => "slots",
+            Item::TxSlots => "tx-slots",
+            Item::RxSlots => "rx-slots",
             Item::Direction => "direction",
             Item::Application => "application",
             Item::Restart => "restart",
@@ -248,7 +232,9 @@ impl Item {
             Item::Formats => "a list of 11-bit, 29-bit, fd (comma-separated)",
             Item::Queues => "a list of standard, optimized, fast (comma-separated)",
             Item::TransactionNumbers | Item::TimeStamps | Item::TellsSent => "yes or no",
-            Item::Slots => "a slot count N or a range MIN..MAX within 1..32",
+            Item::Slots | Item::TxSlots | Item::RxSlots => {
+                "a slot count N or a range MIN..MAX within 1..32"
+            }
             Item::Direction => "tx, rx or both",
             Item::Application => "one-stream, streams or byte-stream",
             Item::Restart => "delivers-twice or drops-once",
@@ -282,20 +268,6 @@ fn yes_no(value: &str) -> Option<bool> {
         "no" => Some(false),
         _ => None,
     }
-}
-
-fn slot_range(value: &str) -> Option<SlotRange> {
-    let count = |s: &str| {
-        s.trim()
-            .parse::<u8>()
-            .ok()
-            .filter(|n| (1..=MAX_SLOTS).contains(n))
-    };
-    let (min, max) = match value.split_once("..") {
-        Some((min, max)) => (count(min)?, count(max)?),
-        None => (count(value)?, count(value)?),
-    };
-    (min <= max).then_some(SlotRange { min, max })
 }
 
 /// Sets `slot` to `value` unless it holds another value already.
@@ -422,9 +394,17 @@ impl ClientDeclaration {
             }
             Item::TimeStamps => yes_or_no(&mut self.time_stamps, value, item, &line),
             Item::TellsSent => yes_or_no(&mut self.tells_sent, value, item, &line),
-            Item::Slots => {
-                let range = slot_range(value).ok_or_else(bad)?;
-                set(&mut self.slots, range, item, &line, SlotRange::to_string)
+            // `slots` is both directions at once: it conflicts with a
+            // `tx-slots` or `rx-slots` that says otherwise.
+            Item::Slots | Item::TxSlots | Item::RxSlots => {
+                let range = SlotRange::parse(value).ok_or_else(bad)?;
+                if item != Item::RxSlots {
+                    set(&mut self.tx_slots, range, item, &line, SlotRange::to_string)?;
+                }
+                if item != Item::TxSlots {
+                    set(&mut self.rx_slots, range, item, &line, SlotRange::to_string)?;
+                }
+                Ok(())
             }
             Item::Direction => named(&mut self.direction, value, item, &line),
             Item::Application => named(&mut self.application, value, item, &line),
@@ -463,7 +443,13 @@ impl ClientDeclaration {
             self.transaction_numbers.as_ref().map(yes_no_name),
         );
         line(Item::TimeStamps, self.time_stamps.as_ref().map(yes_no_name));
-        line(Item::Slots, self.slots.map(|s| s.to_string()));
+        match (self.tx_slots, self.rx_slots) {
+            (Some(tx), Some(rx)) if tx == rx => line(Item::Slots, Some(tx.to_string())),
+            (tx, rx) => {
+                line(Item::TxSlots, tx.map(|s| s.to_string()));
+                line(Item::RxSlots, rx.map(|s| s.to_string()));
+            }
+        }
         line(Item::Direction, self.direction.map(|d| d.name().into()));
         line(Item::Application, self.application.map(|a| a.name().into()));
         line(Item::Restart, self.restart.map(|c| c.name().into()));
@@ -527,23 +513,20 @@ impl ClientDeclaration {
         Ok(config)
     }
 
-    /// The slot counts a client is run at on a profile with `max_slots`: the
-    /// default 8 (or the nearest the client takes), and the edges 1 and the
-    /// profile's most, each where the client takes it.
-    pub fn geometries(&self, max_slots: u8) -> Vec<u8> {
-        let range = self.slots.unwrap_or(SlotRange {
-            min: 1,
-            max: MAX_SLOTS,
-        });
-        let (low, high) = (range.min, range.max.min(max_slots));
-        if low > high {
-            return Vec::new();
-        }
-        let mut list = vec![8.clamp(low, high), low, high];
-        list.dedup();
-        list.sort_by_key(|n| (*n != 8.clamp(low, high), *n));
-        list.dedup();
-        list
+    /// The (Tx, Rx) slot counts a client is run at on a profile with
+    /// `max_slots`: the default, the edges of both ranges, and the edges apart.
+    pub fn geometries(&self, max_slots: u8) -> Vec<(u8, u8)> {
+        slots::geometries(
+            self.tx_slots.unwrap_or(SlotRange::ANY),
+            self.rx_slots.unwrap_or(SlotRange::ANY),
+            max_slots,
+        )
+    }
+
+    /// Whether the client runs with `tx` Tx slots and `rx` Rx slots.
+    pub fn serves_slots(&self, tx: u8, rx: u8) -> bool {
+        self.tx_slots.unwrap_or(SlotRange::ANY).contains(tx)
+            && self.rx_slots.unwrap_or(SlotRange::ANY).contains(rx)
     }
 
     /// Why an interface is not served: the declaration's line.
@@ -560,8 +543,23 @@ impl ClientDeclaration {
     pub fn declined_slots(&self, max_slots: u8) -> String {
         format!(
             "{}, outside the profile's 1..{max_slots}",
-            self.declined(Item::Slots)
+            self.declined_geometry()
         )
+    }
+
+    /// The declaration's slot lines, as a reason.
+    pub fn declined_geometry(&self) -> String {
+        let slots = [Item::Slots, Item::TxSlots, Item::RxSlots];
+        let lines: Vec<String> = self
+            .lines()
+            .into_iter()
+            .filter(|l| {
+                slots
+                    .iter()
+                    .any(|i| l.starts_with(&format!("{}=", i.name())))
+            })
+            .collect();
+        format!("the client declares {}", lines.join(", "))
     }
 
     /// Why one stream's frame-by-frame order is not the client's.
@@ -593,6 +591,9 @@ fn yes_no_name(v: &bool) -> String {
         false => "no".into(),
     }
 }
+
+mod slots;
+pub use slots::{SlotRange, MAX_SLOTS};
 
 #[cfg(test)]
 mod tests;

@@ -17,7 +17,8 @@ fn every_line_reads_back_as_written() {
     ];
     let declaration = ClientDeclaration::parse(&lines).unwrap();
     assert_eq!(declaration.lines(), lines);
-    assert_eq!(declaration.slots, Some(SlotRange { min: 10, max: 10 }));
+    assert_eq!(declaration.tx_slots, Some(SlotRange { min: 10, max: 10 }));
+    assert_eq!(declaration.rx_slots, declaration.tx_slots);
     assert_eq!(declaration.direction(), Direction::Tx);
 }
 
@@ -42,7 +43,7 @@ fn a_bad_line_is_named_with_what_was_expected() {
 fn the_same_value_twice_is_fine_two_values_conflict() {
     let cli = ClientDeclaration::parse(&["direction=tx"]).unwrap();
     let same = ClientDeclaration::parse(&["direction=tx", "slots=1..32"]).unwrap();
-    assert_eq!(cli.merged(&same).unwrap().slots.unwrap().max, 32);
+    assert_eq!(cli.merged(&same).unwrap().rx_slots.unwrap().max, 32);
     let other = ClientDeclaration::parse(&["direction=rx"]).unwrap();
     assert_eq!(
         cli.merged(&other).unwrap_err().to_string(),
@@ -76,13 +77,32 @@ fn a_declined_format_is_not_served_a_declined_option_is_switched_off() {
 #[test]
 fn geometries_are_the_default_and_the_edges_the_client_takes() {
     let any = ClientDeclaration::default();
-    assert_eq!(any.geometries(32), [8, 1, 32]);
-    assert_eq!(any.geometries(8), [8, 1]);
+    assert_eq!(any.geometries(32)[..3], [(8, 8), (1, 1), (32, 32)]);
+    assert_eq!(any.geometries(8), [(8, 8), (1, 1), (8, 1), (1, 8)]);
     let ten = ClientDeclaration::parse(&["slots=10"]).unwrap();
-    assert_eq!(ten.geometries(32), [10]);
+    assert_eq!(ten.geometries(32), [(10, 10)]);
     assert!(ten.geometries(8).is_empty());
     let range = ClientDeclaration::parse(&["slots=4..16"]).unwrap();
-    assert_eq!(range.geometries(32), [8, 4, 16]);
+    assert_eq!(range.geometries(32)[..3], [(8, 8), (4, 4), (16, 16)]);
+}
+
+/// Issue 36: the Tx and Rx slot counts are declared apart, as a terminal's
+/// settings hold them; `slots` is both, and conflicts with either that
+/// says otherwise.
+#[test]
+fn tx_and_rx_slots_are_declared_apart() {
+    let apart = ClientDeclaration::parse(&["tx-slots=10", "rx-slots=20"]).unwrap();
+    assert_eq!(apart.geometries(32), [(10, 20)]);
+    assert_eq!(apart.lines(), ["tx-slots=10", "rx-slots=20"]);
+    assert!(apart.serves_slots(10, 20) && !apart.serves_slots(10, 10));
+    assert_eq!(
+        apart.declined_geometry(),
+        "the client declares tx-slots=10, rx-slots=20"
+    );
+    let both = ClientDeclaration::parse(&["slots=10"]).unwrap();
+    assert_eq!(both.lines(), ["slots=10"]);
+    assert!(ClientDeclaration::parse(&["slots=10", "tx-slots=12"]).is_err());
+    assert!(ClientDeclaration::parse(&["slots=10", "rx-slots=10"]).is_ok());
 }
 
 /// Issue 36: a client that serves only interfaces with transaction numbers
