@@ -241,13 +241,22 @@ pub fn html(certificate: &Certificate, catalogue: &canif_spec::Catalogue) -> Str
 <body><h1>canif conformance certificate</h1>
 <p><b>{verdict}</b> — <code>{iut}</code>{product}, {side} side, profiles {profiles}</p>
 <table><tr><th>date</th><td>{date}</td></tr><tr><th>bus</th><td>{bus}</td></tr>{masters}{choices}{not_served}{left_out}<tr><th>canif</th><td>{version} ({commit})</td></tr>
-<tr><th>catalogue SHA-256</th><td><code>{catalogue}</code></td></tr><tr><th>seed</th><td>{seed}</td></tr>
+<tr><th>catalogue SHA-256</th><td><code>{catalogue}</code></td></tr>{sources}<tr><th>seed</th><td>{seed}</td></tr>
 <tr><th>totals</th><td>{pass} pass, {fail} fail, {error} error, {na} not applicable, {nr} not run, {nt} not testable</td></tr></table>
 <p>certificate.json carries this page's SHA-256 and is signed in certificate.json.sig; see docs/certificates.md for checking it with <code>ssh-keygen -Y verify</code>.</p>
 <table><tr><th>profile</th><th>requirement</th><th>verdict</th><th>statement</th><th>reason</th><th>evidence</th></tr>
 {rows}</table></body></html>
 "#,
         iut = esc(&certificate.iut),
+        // The documents by title and edition, each with the file it is kept in.
+        sources = list(
+            "sources",
+            &catalogue
+                .sources
+                .iter()
+                .map(|s| format!("{} ({})", s.title, s.file))
+                .collect::<Vec<_>>()
+        ),
         product = certificate
             .product
             .as_ref()

@@ -458,3 +458,26 @@ fn the_html_report_draws_the_failing_frame_in_a_browser() {
     );
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// Issue 36: every report names the documents by title and edition beside
+/// the file a requirement's source cites.
+#[test]
+fn the_reports_name_each_document_by_title() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let run = report("el6751-mdp", vec![], 1, vec![]);
+    let title = "CAN-Interface manual, version 1.7 (Chinese; the later document)";
+    let summary = run.summary(&catalogue);
+    assert!(
+        summary.contains(&format!("| {title} | `001_c68c573893220081.txt` |")),
+        "{summary}"
+    );
+    assert!(run.html(&catalogue).contains(&format!(
+        "<tr><td>{title}</td><td>001_c68c573893220081.txt</td></tr>"
+    )));
+    let certificate = canif_harness::certificate::Certificate::of(&run);
+    let page = canif_harness::certificate::html(&certificate, &catalogue);
+    assert!(
+        page.contains(&format!("{title} (001_c68c573893220081.txt)")),
+        "{page}"
+    );
+}

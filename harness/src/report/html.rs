@@ -238,6 +238,9 @@ pre{{background:#f6f6f6;padding:6px;overflow-x:auto;font-size:12px}} svg.timing{
 <table id="checks"><thead><tr><th>profile</th><th>check</th><th>outcome</th><th>exercises</th><th>cause</th></tr></thead>
 <tbody>
 {checks}</tbody></table>
+<h2>Sources</h2>
+<table id="sources"><tr><th>document</th><th>kept as</th></tr>
+{sources}</table>
 <script>
 window.addEventListener('error', function (e) {{ document.body.dataset.errors = (document.body.dataset.errors || '') + e.message + ';'; }});
 (function () {{
@@ -263,6 +266,15 @@ window.addEventListener('error', function (e) {{ document.body.dataset.errors = 
 </body></html>
 "#,
             iut = esc(&m.iut),
+            sources = catalogue
+                .sources
+                .iter()
+                .map(|s| format!(
+                    "<tr><td>{}</td><td>{}</td></tr>",
+                    esc(&s.title),
+                    esc(&s.file)
+                ))
+                .collect::<String>(),
             headline = esc(&self.headline()),
             totals = esc(&self.totals_line()),
             problems = if problems.is_empty() {

@@ -172,6 +172,12 @@ impl RunReport {
                 );
             }
         }
+        // The documents by title and edition: a requirement's source names
+        // the file it is kept in.
+        md.push_str("\n## Sources\n\n| document | kept as |\n|---|---|\n");
+        for source in &catalogue.sources {
+            let _ = writeln!(md, "| {} | `{}` |", source.title, source.file);
+        }
         md
     }
 
