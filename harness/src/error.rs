@@ -89,6 +89,18 @@ pub enum InvalidFrame {
     Declared(String),
 }
 
+impl InvalidFrame {
+    /// The FD bits of a frame that no controller sends: a remote FD frame
+    /// (CAN FD has none), BRS or ESI on a classic one.
+    pub fn of_fd_bits(fd: bool, remote: bool, brs: bool, esi: bool) -> Result<(), InvalidFrame> {
+        match (fd, remote) {
+            (true, true) => Err(InvalidFrame::RemoteFd),
+            (false, _) if brs || esi => Err(InvalidFrame::FdBitsOnClassic { brs, esi }),
+            _ => Ok(()),
+        }
+    }
+}
+
 impl fmt::Display for InvalidFrame {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {

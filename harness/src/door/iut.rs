@@ -289,15 +289,7 @@ pub(crate) fn from_soft(soft: &CanFrame) -> Result<Frame, InvalidFrame> {
     })?;
     // What no controller sends is judged as such, as the adapter
     // protocol's frames are (`WireFrame::to_frame`).
-    if soft.fd && soft.remote {
-        return Err(InvalidFrame::RemoteFd);
-    }
-    if !soft.fd && (soft.brs || soft.esi) {
-        return Err(InvalidFrame::FdBitsOnClassic {
-            brs: soft.brs,
-            esi: soft.esi,
-        });
-    }
+    InvalidFrame::of_fd_bits(soft.fd, soft.remote, soft.brs, soft.esi)?;
     let frame = if soft.fd {
         Frame::fd(id, soft.brs, soft.esi, &soft.data[..soft.len.min(64)])
     } else if soft.remote {

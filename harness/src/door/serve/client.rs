@@ -13,6 +13,7 @@ use crate::door::adapter::protocol::{
     Answer, Config, Hex, Request, SharedOffer, WireFrame, WireMessage,
 };
 use crate::door::client::{Client, TaskIo};
+use crate::door::declaration::client::ClientDeclaration;
 use crate::door::lib::client::LibClient;
 
 /// The layout the sizes of `config` name (with InfoData or without).
@@ -56,14 +57,19 @@ impl ClientServer<'_> {
             protocol,
             tells_sent: None,
             restarts: None,
-            declares: declared
-                .lines()
-                .iter()
-                .filter_map(|l| l.split_once('='))
-                .map(|(k, v)| (k.to_string(), v.to_string()))
-                .collect(),
+            declares: by_name(&declared),
         }
     }
+}
+
+/// A declaration as the protocol carries it: name to value.
+fn by_name(declaration: &ClientDeclaration) -> std::collections::BTreeMap<String, String> {
+    declaration
+        .lines()
+        .iter()
+        .filter_map(|l| l.split_once('='))
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect()
 }
 
 impl Serves for ClientServer<'_> {
@@ -72,12 +78,7 @@ impl Serves for ClientServer<'_> {
             Request::Bye {} => return None,
             Request::Declare {} => match LibClient::declares(self.path) {
                 Ok(declaration) => Answer::Declared {
-                    declares: declaration
-                        .lines()
-                        .iter()
-                        .filter_map(|l| l.split_once('='))
-                        .map(|(k, v)| (k.to_string(), v.to_string()))
-                        .collect(),
+                    declares: by_name(&declaration),
                 },
                 Err(error) => Answer::error(error.to_string()),
             },

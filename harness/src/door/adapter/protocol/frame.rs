@@ -157,15 +157,7 @@ impl WireFrame {
             id: self.id,
             extended: self.extended,
         })?;
-        if self.fd && self.rtr {
-            return Err(InvalidFrame::RemoteFd);
-        }
-        if !self.fd && (self.brs || self.esi) {
-            return Err(InvalidFrame::FdBitsOnClassic {
-                brs: self.brs,
-                esi: self.esi,
-            });
-        }
+        InvalidFrame::of_fd_bits(self.fd, self.rtr, self.brs, self.esi)?;
         let frame = if self.fd {
             Frame::fd(id, self.brs, self.esi, &self.data.0)
         } else if self.rtr {
