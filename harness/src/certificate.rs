@@ -140,7 +140,15 @@ impl Certificate {
 /// Why a certificate cannot be signed or verified.
 #[derive(Debug)]
 pub enum SignatureError {
-    Key { path: String, cause: String },
+    /// The key file cannot be read at all (missing, a folder, no permission).
+    Unreadable {
+        path: String,
+        cause: String,
+    },
+    Key {
+        path: String,
+        cause: String,
+    },
     Encrypted(String),
     NotEd25519(String),
     Signature(String),
@@ -150,6 +158,7 @@ pub enum SignatureError {
 impl std::fmt::Display for SignatureError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
+            SignatureError::Unreadable { path, cause } => write!(f, "{path}: cannot read the key file: {cause}"),
             SignatureError::Key { path, cause } => write!(f, "{path}: not an OpenSSH key: {cause}"),
             SignatureError::Encrypted(path) => write!(f, "{path}: the key is encrypted; canif signs with an unencrypted key (ssh-keygen -t ed25519 -N '')"),
             SignatureError::NotEd25519(path) => write!(f, "{path}: certificates are signed with Ed25519 keys (ssh-keygen -t ed25519)"),
@@ -164,7 +173,7 @@ impl std::error::Error for SignatureError {}
 /// Signs `bytes` with the OpenSSH Ed25519 private key at `key`: an armored SSHSIG.
 pub fn sign(bytes: &[u8], key: &Path) -> Result<String, SignatureError> {
     let path = key.display().to_string();
-    let key = PrivateKey::read_openssh_file(key).map_err(|e| SignatureError::Key {
+    let key = PrivateKey::from_openssh(read_key(key)?).map_err(|e| SignatureError::Key {
         path: path.clone(),
         cause: e.to_string(),
     })?;
@@ -179,11 +188,19 @@ pub fn sign(bytes: &[u8], key: &Path) -> Result<String, SignatureError> {
         .map_err(|e| SignatureError::Signature(e.to_string()))
 }
 
+/// The text of the key file at `path`, or why it cannot be read.
+fn read_key(path: &Path) -> Result<String, SignatureError> {
+    std::fs::read_to_string(path).map_err(|e| SignatureError::Unreadable {
+        path: path.display().to_string(),
+        cause: e.to_string(),
+    })
+}
+
 /// Checks an armored SSHSIG over `bytes` against the public key at `pubkey`
 /// (an `ssh-ed25519 …` line); returns the key's SHA-256 fingerprint.
 pub fn verify(bytes: &[u8], signature: &str, pubkey: &Path) -> Result<String, SignatureError> {
     let path = pubkey.display().to_string();
-    let key = PublicKey::read_openssh_file(pubkey).map_err(|e| SignatureError::Key {
+    let key = PublicKey::from_openssh(&read_key(pubkey)?).map_err(|e| SignatureError::Key {
         path,
         cause: e.to_string(),
     })?;

@@ -481,3 +481,30 @@ fn the_reports_name_each_document_by_title() {
         "{page}"
     );
 }
+
+/// Issue 37: a key file that cannot be read is named with why, not "entity
+/// not found".
+#[test]
+fn a_missing_key_file_is_named_with_why() {
+    use canif_harness::certificate::{sign, verify};
+    let missing = std::path::Path::new("/nonexistent/canif-key");
+    let error = sign(b"x", missing).unwrap_err().to_string();
+    assert!(
+        error.starts_with("/nonexistent/canif-key: cannot read the key file: "),
+        "{error}"
+    );
+    assert!(!error.contains("entity not found"), "{error}");
+    let error = verify(b"x", "", missing).unwrap_err().to_string();
+    assert!(error.contains("cannot read the key file"), "{error}");
+}
+
+/// Issue 37: a profile's zero fail and error counts are not drawn red; a
+/// count that is not zero is.
+#[test]
+fn only_a_count_that_is_not_zero_is_coloured() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let html = report("el6751-mdp", vec![], 1, vec![]).html(&catalogue);
+    assert!(!html.contains("<td class=\"fail\">0</td>"), "{html}");
+    assert!(!html.contains("<td class=\"error\">0</td>"), "{html}");
+    assert!(html.contains("<td class=\"pass\">"), "{html}");
+}

@@ -60,12 +60,16 @@ impl RunReport {
         for p in &self.profiles {
             let _ = write!(profiles, "<tr><td>{}</td>", esc(&p.profile));
             for kind in VerdictKind::ALL {
-                let _ = write!(
-                    profiles,
-                    "<td class=\"{}\">{}</td>",
-                    kind.label().replace(' ', "-"),
-                    p.count(kind)
-                );
+                // A count is coloured by its verdict only when there is one:
+                // a zero fail is not alarming.
+                let count = p.count(kind);
+                match count {
+                    0 => profiles.push_str("<td>0</td>"),
+                    _ => {
+                        let class = kind.label().replace(' ', "-");
+                        let _ = write!(profiles, "<td class=\"{class}\">{count}</td>");
+                    }
+                }
             }
             let _ = writeln!(
                 profiles,
