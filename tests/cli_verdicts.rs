@@ -73,6 +73,35 @@ fn a_selection_that_matches_nothing_is_a_usage_error() {
     }
 }
 
+/// Issue 37: a mistyped name gets the nearest known one; a name near
+/// nothing gets none.
+#[test]
+fn a_typo_gets_a_did_you_mean() {
+    for (args, said) in [
+        (
+            &["run", "--profile", "el6751-mpd"][..],
+            "unknown profile `el6751-mpd` (did you mean `el6751-mdp`?)",
+        ),
+        (
+            &["run", "--fault", "fd-lenght-as-dlc"],
+            "unknown fault `fd-lenght-as-dlc` (did you mean `fd-length-as-dlc`?)",
+        ),
+        (
+            &["run", "--requirement", "HS-TX-07"],
+            "no such requirement (did you mean `HS-TX-007`?)",
+        ),
+    ] {
+        let out = canif(&[args, &["--report", "/nonexistent/never"]].concat());
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains(said), "{args:?}: {stderr}");
+    }
+    let out = canif(&["spec", "show", "hs-tx-007x"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("(did you mean `HS-TX-007`?)"), "{stderr}");
+    let out = canif(&["run", "--profile", "xyz", "--report", "/nonexistent/never"]);
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("did you mean"));
+}
+
 /// A requirement selected alone: its checks run, the rest is `not run`, and
 /// the run is not called conforming.
 #[test]

@@ -65,8 +65,9 @@ pub(crate) fn ethercat_terminal(
 ) -> Result<ExitCode, Stop> {
     use canif_harness::door::ethercat::{emulated_terminal, served, Emulated};
     let Some(profile) = catalogue.profile(profile) else {
+        let near = super::did_you_mean(profile, catalogue.profiles.iter().map(|p| p.name.as_str()));
         return Err(stop!(
-            "unknown profile `{profile}`; `canif profiles` lists them"
+            "unknown profile `{profile}`{near}; `canif profiles` lists them"
         ));
     };
     let Some(identity) = profile.ethercat else {

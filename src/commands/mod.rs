@@ -17,13 +17,31 @@ use canif_softdevice::{Choice, Fault};
 
 use crate::cli::{IutArg, IutOptions};
 
+/// ` (did you mean `NAME`?)` with the known name nearest `name`, where a
+/// typo is likely; nothing otherwise.
+pub(crate) fn did_you_mean<'a>(name: &str, known: impl IntoIterator<Item = &'a str>) -> String {
+    known
+        .into_iter()
+        .map(|k| {
+            (
+                strsim::jaro_winkler(&name.to_lowercase(), &k.to_lowercase()),
+                k,
+            )
+        })
+        .filter(|(likeness, _)| *likeness > 0.85)
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .map_or(String::new(), |(_, k)| format!(" (did you mean `{k}`?)"))
+}
+
 /// The soft-device faults named on the command line, or the exit code of a usage error.
 pub(crate) fn soft_device_faults(names: &[String]) -> Result<Vec<Fault>, Stop> {
     names
         .iter()
         .map(|name| {
-            Fault::from_name(name)
-                .ok_or_else(|| stop!("unknown fault `{name}`; `canif faults` lists them"))
+            Fault::from_name(name).ok_or_else(|| {
+                let near = did_you_mean(name, Fault::ALL.iter().map(|f| f.name()));
+                stop!("unknown fault `{name}`{near}; `canif faults` lists them")
+            })
         })
         .collect()
 }
@@ -33,8 +51,10 @@ fn soft_device_choices(names: &[String]) -> Result<Vec<Choice>, Stop> {
     names
         .iter()
         .map(|name| {
-            Choice::from_name(name)
-                .ok_or_else(|| stop!("unknown choice `{name}`; `canif faults` lists them"))
+            Choice::from_name(name).ok_or_else(|| {
+                let near = did_you_mean(name, Choice::ALL.iter().map(|c| c.name()));
+                stop!("unknown choice `{name}`{near}; `canif faults` lists them")
+            })
         })
         .collect()
 }

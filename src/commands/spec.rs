@@ -32,7 +32,11 @@ pub(crate) fn spec(
         }
         SpecCommand::Show { id } => {
             let Some(r) = catalogue.requirement(&id) else {
-                return Err(stop!("no requirement `{id}` (try `canif spec list`)"));
+                let near =
+                    super::did_you_mean(&id, catalogue.requirements().map(|r| r.id.as_str()));
+                return Err(stop!(
+                    "no requirement `{id}`{near}; `canif spec list` lists them"
+                ));
             };
             outln!(out, "{}  [{:?}]  {}:{}", r.id, r.status, r.file, r.line);
             outln!(out, "  {}", r.statement);

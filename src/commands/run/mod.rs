@@ -81,8 +81,9 @@ impl<'c, S: Side> Plan<'c, S> {
         let selection = self.options.selection();
         for id in &selection.requirements {
             if catalogue.requirement(id).is_none() {
+                let near = super::did_you_mean(id, catalogue.requirements().map(|r| r.id.as_str()));
                 return Err(stop!(
-                    "--requirement {id}: no such requirement; `canif spec list` lists them"
+                    "--requirement {id}: no such requirement{near}; `canif spec list` lists them"
                 ));
             }
         }
@@ -382,8 +383,9 @@ pub(crate) fn profiles<'c>(
             Some(_) => {}
             None => {
                 let known: Vec<_> = catalogue.profiles.iter().map(|p| p.name.as_str()).collect();
+                let near = super::did_you_mean(name, known.iter().copied());
                 return Err(stop!(
-                    "unknown profile `{name}`; known: {}",
+                    "unknown profile `{name}`{near}; known: {}",
                     known.join(", ")
                 ));
             }
