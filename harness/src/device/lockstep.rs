@@ -14,7 +14,7 @@ use canif_spec::ReqId;
 use crate::device::blame;
 use crate::device::bounds::Bounds;
 use crate::device::bus::Bus;
-use crate::device::diff::{DeclaredRx, Difference, InputCheck, RxState};
+use crate::device::diff::{DeclaredRx, Difference, Handshake, InputCheck};
 use crate::device::iut_kind::IutKind;
 use crate::device::pair::Pair;
 use crate::device::played_plc::{PlcSide, TaskReport, TaskStimulus};
@@ -278,8 +278,8 @@ impl<B: Bus + ?Sized> Lockstep<B> {
             .unwrap_or_default();
         let before = InputImage::new_checked(self.pair.model.inputs(), layout)
             .map_or((0, 0), |i| (i.rx_counter(), i.tx_counter()));
-        let rx = RxState {
-            before: before.0,
+        let handshake = Handshake {
+            rx_before: before.0,
             plc_released: written.rx_counter,
             fast: rules.fast_queue,
             no_of_tx_messages: written.no_of_tx_messages,
@@ -335,7 +335,7 @@ impl<B: Bus + ?Sized> Lockstep<B> {
                     waiting_to_send: &|n| model.waiting_transaction_numbers().any(|w| w == n),
                     time_stamp_tolerance: self.time_stamp_tolerance,
                     controller_reported: model.controller_reported(),
-                    rx,
+                    handshake,
                     declared: self.rules.declared_rx,
                 }
                 .compare(expected, &actual)

@@ -85,11 +85,12 @@ fn describe_slot(view: &MessageView<&[u8]>) -> String {
     }
 }
 
-/// What the Rx handshake looked like going into the cycle (both devices agreed
-/// until now, so one previous RxCounter serves both).
+/// What the handshake looked like going into the cycle (both devices agreed
+/// until now, so one previous RxCounter and TxCounter serve both).
 #[derive(Debug, Clone, Copy)]
-pub struct RxState {
-    pub before: u16,
+pub struct Handshake {
+    /// Inputs.RxCounter going into the cycle.
+    pub rx_before: u16,
     pub plc_released: u16,
     pub fast: bool,
     /// NoOfTxMessages of the output image the cycle ran on.
@@ -119,7 +120,7 @@ pub struct InputCheck<'a> {
     /// The controller has reported a status to the model (else InfoData
     /// holds INFO-009's initial words).
     pub controller_reported: bool,
-    pub rx: RxState,
+    pub handshake: Handshake,
     /// What the device declared of the freedoms the checks otherwise skip.
     pub declared: DeclaredRx,
 }
@@ -144,7 +145,7 @@ impl InputCheck<'_> {
         // The PLC reads NoOfRxMessages and the messages only when
         // Inputs.RxCounter differs from its Outputs.RxCounter (001 §6): in
         // Buffered mode they are don't-care otherwise (HS-RX-008).
-        let unread = !self.rx.fast && e.rx_counter() == self.rx.plc_released;
+        let unread = !self.handshake.fast && e.rx_counter() == self.handshake.plc_released;
         let layout = self.layout;
         let bytes = (expected, actual);
         self.header(&e, &a, unread)
@@ -173,13 +174,15 @@ impl InputCheck<'_> {
     ) -> Option<Difference> {
         let (e_image, a_image) = (e, a);
         let (e, a) = (e.header(), a.header());
-        let rx = self.rx;
+        let handshake = self.handshake;
         if e.tx_counter != a.tx_counter {
             return Some(Difference {
                 frames: None,
-                candidates: if rx.no_of_tx_messages == 0 {
+                candidates: if handshake.no_of_tx_messages == 0 {
                     blame::TX_EMPTY_BATCH
-                } else if a.tx_counter != rx.tx_before && a.tx_counter != rx.tx_requested {
+                } else if a.tx_counter != handshake.tx_before
+                    && a.tx_counter != handshake.tx_requested
+                {
                     blame::TX_ACKNOWLEDGE_VALUE
                 } else {
                     blame::TX_COUNTER
@@ -190,16 +193,19 @@ impl InputCheck<'_> {
             });
         }
         if e.rx_counter != a.rx_counter {
-            let (model_moved, iut_moved) = (e.rx_counter != rx.before, a.rx_counter != rx.before);
-            let released = rx.fast || rx.plc_released == rx.before;
+            let (model_moved, iut_moved) = (
+                e.rx_counter != handshake.rx_before,
+                a.rx_counter != handshake.rx_before,
+            );
+            let released = handshake.fast || handshake.plc_released == handshake.rx_before;
             let candidates = match (model_moved, iut_moved) {
                 (false, true) if !released => blame::RX_UNRELEASED,
                 (false, true) if a.no_of_rx_messages == 0 => blame::RX_EMPTY_DELIVERY,
                 (false, true) => self
                     .filter_statement_of(a_image)
                     .unwrap_or(blame::RX_ADMISSION),
-                (true, false) if rx.before == u16::MAX => blame::RX_COUNTING,
-                (true, false) if rx.fast => blame::RX_WITHHELD_FAST,
+                (true, false) if handshake.rx_before == u16::MAX => blame::RX_COUNTING,
+                (true, false) if handshake.fast => blame::RX_WITHHELD_FAST,
                 (true, false) => self
                     .filter_statement_of(e_image)
                     .unwrap_or(blame::RX_WITHHELD),
@@ -211,7 +217,7 @@ impl InputCheck<'_> {
                 what: "Inputs.RxCounter".into(),
                 expected: format!(
                     "{} (was {}, Outputs.RxCounter {})",
-                    e.rx_counter, rx.before, rx.plc_released
+                    e.rx_counter, handshake.rx_before, handshake.plc_released
                 ),
                 actual: a.rx_counter.to_string(),
             });
@@ -297,7 +303,7 @@ impl InputCheck<'_> {
         }
         // Past NoOfRxMessages only what the device declared is judged (and
         // never in the Fast CAN Queue's 3-buffer mode, G5).
-        if !self.declared.stale_slots || self.rx.fast {
+        if !self.declared.stale_slots || self.handshake.fast {
             return None;
         }
         (in_use..self.layout.rx_slots).find_map(|slot| {
@@ -339,7 +345,7 @@ impl InputCheck<'_> {
         // on arrival, so the device evicted it later.
         let taken = |frame: Option<Frame>| frame.and_then(|f| (self.received)(&f));
         let kept_what_the_model_dropped = different_frame
-            && !self.rx.fast
+            && !self.handshake.fast
             && (taken(parsed(a)) == Some(Taken::Lost)
                 || (self.overflowed && taken(parsed(e)) == Some(Taken::WithRoom)));
         // A frame the table holds back, let through; else one it lets

@@ -40,8 +40,8 @@ fn check(layout: &ImageLayout, plc_released: u16) -> InputCheck<'_> {
         waiting_to_send: &|_| false,
         time_stamp_tolerance: 0,
         controller_reported: true,
-        rx: RxState {
-            before: 0,
+        handshake: Handshake {
+            rx_before: 0,
             plc_released,
             fast: false,
             no_of_tx_messages: 1,
@@ -118,7 +118,7 @@ fn a_header_field_is_blamed_on_its_handshake() {
         .set_tx_counter(4);
     // The model acknowledged the PLC's 3; the device still shows its 4.
     let mut not_acknowledged = check(&layout, 0);
-    not_acknowledged.rx.tx_before = 4;
+    not_acknowledged.handshake.tx_before = 4;
     let difference = not_acknowledged.compare(&expected, &actual).unwrap();
     assert_eq!(difference.what, "Inputs.TxCounter");
     assert_eq!(difference.candidates, blame::TX_COUNTER);
@@ -256,8 +256,8 @@ fn an_acknowledge_that_is_no_copy_is_charged_to_the_copy() {
         .set_tx_counter(2);
     let judged = |tx_before, tx_requested| {
         let mut check = check(&layout, 1);
-        check.rx.tx_before = tx_before;
-        check.rx.tx_requested = tx_requested;
+        check.handshake.tx_before = tx_before;
+        check.handshake.tx_requested = tx_requested;
         check.compare(&expected, &acknowledged).unwrap().candidates
     };
     // The PLC stepped from 1 to 3; the device counted 1 up to 2.
