@@ -178,6 +178,116 @@ size_t canif_client_sent(void *client, uint16_t *numbers, size_t capacity);
  * application, restart, tells-sent. */
 const char *canif_client_declares(void);
 
+/* ---- The message structures of the process images -----------------------
+ * One per frame format and option (000/001 section 6, 8.3), as the images
+ * hold them: packed, little-endian. Generated from the model by
+ * `canif export --messages --format c`; a test holds this block to it. The
+ * images themselves depend on the slot counts: `canif export --profile P
+ * --format c` writes them for one interface. */
+#ifdef __cplusplus
+#define CANIF_STATIC_ASSERT static_assert
+#else
+#define CANIF_STATIC_ASSERT _Static_assert
+#endif
+#pragma pack(push, 1)
+/* 000/001 §8.3 */
+typedef uint8_t CANFDMESSAGE[64];
+
+/* 11-bit message: 10 bytes */
+typedef struct CAN11MESSAGE {
+    uint16_t CobID; /* byte 0: 000 §6: bits 0-3 length, bit 4 RTR, bits 5-15 identifier */
+    uint8_t Data[8]; /* byte 2: the data bytes */
+} CAN11MESSAGE;
+
+/* 11-bit with transaction number message: 12 bytes */
+typedef struct CAN11TXMESSAGE {
+    uint16_t TransactionNumber; /* byte 0: 000 §5.2: any number; the last one sent comes back in the inputs */
+    uint16_t CobID; /* byte 2: 000 §6: bits 0-3 length, bit 4 RTR, bits 5-15 identifier */
+    uint8_t Data[8]; /* byte 4: the data bytes */
+} CAN11TXMESSAGE;
+
+/* 29-bit message: 14 bytes */
+typedef struct CAN29MESSAGE {
+    uint16_t Length; /* byte 0: 000 §6: data length 0..8 */
+    uint32_t CobID; /* byte 2: 000 §6: bits 0-28 identifier, bit 30 RTR, bit 31 29-bit */
+    uint8_t Data[8]; /* byte 6: the data bytes */
+} CAN29MESSAGE;
+
+/* 29-bit with transaction number message: 16 bytes */
+typedef struct CAN29TXMESSAGE {
+    uint16_t TransactionNumber; /* byte 0: 000 §5.2: any number; the last one sent comes back in the inputs */
+    uint16_t Length; /* byte 2: 000 §6: data length 0..8 */
+    uint32_t CobID; /* byte 4: 000 §6: bits 0-28 identifier, bit 30 RTR, bit 31 29-bit */
+    uint8_t Data[8]; /* byte 8: the data bytes */
+} CAN29TXMESSAGE;
+
+/* 29-bit with time stamp message: 22 bytes */
+typedef struct CAN29TSRXMESSAGE {
+    uint16_t Length; /* byte 0: 000 §6: data length 0..8 */
+    uint32_t CobID; /* byte 2: 000 §6: bits 0-28 identifier, bit 30 RTR, bit 31 29-bit */
+    uint8_t Data[8]; /* byte 6: the data bytes */
+    uint64_t TimeStamp; /* byte 14: 000 §5.3: reception time in ns */
+} CAN29TSRXMESSAGE;
+
+/* CAN FD Tx (CANFDTXQUEUE) message: 72 bytes */
+typedef struct CANFDTXQUEUE {
+    uint16_t transactionNumber; /* byte 0: 000 §5.2: any number; the last one sent comes back in the inputs */
+    uint8_t dataLength; /* byte 2: 000 §8.3.1: data length in bytes, 0..64 */
+    uint8_t flags; /* byte 3: bit 0 EDL, bit 1 BSR, bit 2 ESI */
+#define CANFDTXQUEUE_EDL 0x01u /* 000 §8.3: FD frame */
+#define CANFDTXQUEUE_BSR 0x02u /* 000 §8.3: bit rate switch (BRS) */
+#define CANFDTXQUEUE_ESI 0x04u /* 000 §8.3: error state indicator */
+    uint32_t cobId; /* byte 4: 000 §6: bits 0-28 identifier, bit 30 RTR, bit 31 29-bit */
+    CANFDMESSAGE txData; /* byte 8: the data bytes */
+} CANFDTXQUEUE;
+
+/* CAN FD Rx (CANFDTSRXQUEUE) message: 78 bytes */
+typedef struct CANFDTSRXQUEUE {
+    uint8_t dataLength; /* byte 0: 000 §8.3.1: data length in bytes, 0..64 */
+    uint8_t flags; /* byte 1: bit 0 EDL, bit 1 BSR, bit 2 ESI */
+#define CANFDTSRXQUEUE_EDL 0x01u /* 000 §8.3: FD frame */
+#define CANFDTSRXQUEUE_BSR 0x02u /* 000 §8.3: bit rate switch (BRS) */
+#define CANFDTSRXQUEUE_ESI 0x04u /* 000 §8.3: error state indicator */
+    uint32_t cobId; /* byte 2: 000 §6: bits 0-28 identifier, bit 30 RTR, bit 31 29-bit */
+    CANFDMESSAGE rxData; /* byte 6: the data bytes */
+    uint64_t timeStamp; /* byte 70: 000 §5.3: reception time in ns */
+} CANFDTSRXQUEUE;
+#pragma pack(pop)
+
+CANIF_STATIC_ASSERT(offsetof(CAN11MESSAGE, CobID) == 0, "CAN11MESSAGE.CobID at byte 0");
+CANIF_STATIC_ASSERT(offsetof(CAN11MESSAGE, Data) == 2, "CAN11MESSAGE.Data at byte 2");
+CANIF_STATIC_ASSERT(sizeof(CAN11MESSAGE) == 10, "CAN11MESSAGE is 10 bytes");
+CANIF_STATIC_ASSERT(offsetof(CAN11TXMESSAGE, TransactionNumber) == 0, "CAN11TXMESSAGE.TransactionNumber at byte 0");
+CANIF_STATIC_ASSERT(offsetof(CAN11TXMESSAGE, CobID) == 2, "CAN11TXMESSAGE.CobID at byte 2");
+CANIF_STATIC_ASSERT(offsetof(CAN11TXMESSAGE, Data) == 4, "CAN11TXMESSAGE.Data at byte 4");
+CANIF_STATIC_ASSERT(sizeof(CAN11TXMESSAGE) == 12, "CAN11TXMESSAGE is 12 bytes");
+CANIF_STATIC_ASSERT(offsetof(CAN29MESSAGE, Length) == 0, "CAN29MESSAGE.Length at byte 0");
+CANIF_STATIC_ASSERT(offsetof(CAN29MESSAGE, CobID) == 2, "CAN29MESSAGE.CobID at byte 2");
+CANIF_STATIC_ASSERT(offsetof(CAN29MESSAGE, Data) == 6, "CAN29MESSAGE.Data at byte 6");
+CANIF_STATIC_ASSERT(sizeof(CAN29MESSAGE) == 14, "CAN29MESSAGE is 14 bytes");
+CANIF_STATIC_ASSERT(offsetof(CAN29TXMESSAGE, TransactionNumber) == 0, "CAN29TXMESSAGE.TransactionNumber at byte 0");
+CANIF_STATIC_ASSERT(offsetof(CAN29TXMESSAGE, Length) == 2, "CAN29TXMESSAGE.Length at byte 2");
+CANIF_STATIC_ASSERT(offsetof(CAN29TXMESSAGE, CobID) == 4, "CAN29TXMESSAGE.CobID at byte 4");
+CANIF_STATIC_ASSERT(offsetof(CAN29TXMESSAGE, Data) == 8, "CAN29TXMESSAGE.Data at byte 8");
+CANIF_STATIC_ASSERT(sizeof(CAN29TXMESSAGE) == 16, "CAN29TXMESSAGE is 16 bytes");
+CANIF_STATIC_ASSERT(offsetof(CAN29TSRXMESSAGE, Length) == 0, "CAN29TSRXMESSAGE.Length at byte 0");
+CANIF_STATIC_ASSERT(offsetof(CAN29TSRXMESSAGE, CobID) == 2, "CAN29TSRXMESSAGE.CobID at byte 2");
+CANIF_STATIC_ASSERT(offsetof(CAN29TSRXMESSAGE, Data) == 6, "CAN29TSRXMESSAGE.Data at byte 6");
+CANIF_STATIC_ASSERT(offsetof(CAN29TSRXMESSAGE, TimeStamp) == 14, "CAN29TSRXMESSAGE.TimeStamp at byte 14");
+CANIF_STATIC_ASSERT(sizeof(CAN29TSRXMESSAGE) == 22, "CAN29TSRXMESSAGE is 22 bytes");
+CANIF_STATIC_ASSERT(offsetof(CANFDTXQUEUE, transactionNumber) == 0, "CANFDTXQUEUE.transactionNumber at byte 0");
+CANIF_STATIC_ASSERT(offsetof(CANFDTXQUEUE, dataLength) == 2, "CANFDTXQUEUE.dataLength at byte 2");
+CANIF_STATIC_ASSERT(offsetof(CANFDTXQUEUE, flags) == 3, "CANFDTXQUEUE.flags at byte 3");
+CANIF_STATIC_ASSERT(offsetof(CANFDTXQUEUE, cobId) == 4, "CANFDTXQUEUE.cobId at byte 4");
+CANIF_STATIC_ASSERT(offsetof(CANFDTXQUEUE, txData) == 8, "CANFDTXQUEUE.txData at byte 8");
+CANIF_STATIC_ASSERT(sizeof(CANFDTXQUEUE) == 72, "CANFDTXQUEUE is 72 bytes");
+CANIF_STATIC_ASSERT(offsetof(CANFDTSRXQUEUE, dataLength) == 0, "CANFDTSRXQUEUE.dataLength at byte 0");
+CANIF_STATIC_ASSERT(offsetof(CANFDTSRXQUEUE, flags) == 1, "CANFDTSRXQUEUE.flags at byte 1");
+CANIF_STATIC_ASSERT(offsetof(CANFDTSRXQUEUE, cobId) == 2, "CANFDTSRXQUEUE.cobId at byte 2");
+CANIF_STATIC_ASSERT(offsetof(CANFDTSRXQUEUE, rxData) == 6, "CANFDTSRXQUEUE.rxData at byte 6");
+CANIF_STATIC_ASSERT(offsetof(CANFDTSRXQUEUE, timeStamp) == 70, "CANFDTSRXQUEUE.timeStamp at byte 70");
+CANIF_STATIC_ASSERT(sizeof(CANFDTSRXQUEUE) == 78, "CANFDTSRXQUEUE is 78 bytes");
+
 #ifdef __cplusplus
 }
 #endif

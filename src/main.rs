@@ -52,7 +52,7 @@ use clap::Parser;
 
 use cli::{Cli, Command, ListCommand, SideArg};
 use commands::run;
-use commands::{certify, device, spec, tools};
+use commands::{certify, device, plc_types, spec, tools};
 use stop::Stop;
 
 fn main() -> ExitCode {
@@ -185,6 +185,8 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, Stop> {
         Command::Faults => Ok(tools::faults(out)),
         Command::Spec { command } => spec::spec(&catalogue, command, out),
         Command::Profiles => spec::profiles(&catalogue, out),
+        Command::Export(args) => plc_types::export(&catalogue, &args, out),
+        Command::CheckLayout(args) => plc_types::check_layout(&catalogue, &args, out),
         Command::Esi { profile } => tools::esi(&catalogue, &profile, out),
         Command::Size {
             bitrate,

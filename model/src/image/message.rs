@@ -27,6 +27,10 @@ pub enum LengthField {
 #[derive(Debug, PartialEq, Eq)]
 pub struct MessageLayout {
     pub name: &'static str,
+    /// Its data type's name: 000/001 §8.3's for the CAN FD structures; the
+    /// manual draws the classic ones (Abb. 7, 8) without naming them, so
+    /// theirs are canif's, in the same style.
+    pub type_name: &'static str,
     pub transaction_number: Option<Field>,
     pub length: LengthField,
     /// CAN FD only: bit 0 EDL, bit 1 BRS ("BSR" in the manual), bit 2 ESI.
@@ -41,6 +45,7 @@ pub struct MessageLayout {
 impl MessageLayout {
     /// 11-bit message: COB ID word, 8 data bytes (10 bytes).
     pub const BASE11: MessageLayout = MessageLayout {
+        type_name: "CAN11MESSAGE",
         name: "11-bit",
         transaction_number: None,
         length: LengthField::InCobIdWord,
@@ -52,6 +57,7 @@ impl MessageLayout {
     };
     /// 11-bit Tx message with transaction number in front (12 bytes).
     pub const BASE11_TN: MessageLayout = MessageLayout {
+        type_name: "CAN11TXMESSAGE",
         name: "11-bit with transaction number",
         transaction_number: Some(0..2),
         length: LengthField::InCobIdWord,
@@ -63,6 +69,7 @@ impl MessageLayout {
     };
     /// 29-bit message: length UINT, COB ID UDINT, 8 data bytes (14 bytes).
     pub const EXT29: MessageLayout = MessageLayout {
+        type_name: "CAN29MESSAGE",
         name: "29-bit",
         transaction_number: None,
         length: LengthField::Word(0..2),
@@ -74,6 +81,7 @@ impl MessageLayout {
     };
     /// 29-bit Tx message with transaction number in front (16 bytes).
     pub const EXT29_TN: MessageLayout = MessageLayout {
+        type_name: "CAN29TXMESSAGE",
         name: "29-bit with transaction number",
         transaction_number: Some(0..2),
         length: LengthField::Word(2..4),
@@ -85,6 +93,7 @@ impl MessageLayout {
     };
     /// 29-bit Rx message with the time stamp behind the data (22 bytes).
     pub const EXT29_TS: MessageLayout = MessageLayout {
+        type_name: "CAN29TSRXMESSAGE",
         name: "29-bit with time stamp",
         transaction_number: None,
         length: LengthField::Word(0..2),
@@ -96,6 +105,7 @@ impl MessageLayout {
     };
     /// `CANFDTXQUEUE`: transactionNumber, dataLength, EDL/BRS/ESI, cobId, 64 bytes (72 bytes).
     pub const FD_TX: MessageLayout = MessageLayout {
+        type_name: "CANFDTXQUEUE",
         name: "CAN FD Tx (CANFDTXQUEUE)",
         transaction_number: Some(0..2),
         length: LengthField::Byte(2..3),
@@ -107,6 +117,7 @@ impl MessageLayout {
     };
     /// `CANFDTSRXQUEUE`: dataLength, EDL/BRS/ESI, cobId, 64 bytes, timeStamp (78 bytes).
     pub const FD_RX: MessageLayout = MessageLayout {
+        type_name: "CANFDTSRXQUEUE",
         name: "CAN FD Rx (CANFDTSRXQUEUE)",
         transaction_number: None,
         length: LengthField::Byte(0..1),

@@ -6,6 +6,9 @@ use std::path::PathBuf;
 use canif_harness::door::Timeouts;
 use clap::{Args, Parser, Subcommand};
 
+mod plc;
+pub(crate) use plc::{CheckLayoutArgs, ExportArgs, FrameArg, InterfaceArgs, LanguageArg};
+
 #[derive(Parser)]
 #[command(
     name = "canif",
@@ -462,6 +465,13 @@ pub(crate) enum Command {
         #[arg(long)]
         profile: String,
     },
+    /// The process image's data types for one interface of a profile, as
+    /// Structured Text, a C header or Rust (docs/plc-side.md); to stdout.
+    Export(ExportArgs),
+    /// Hold hand-written ST declarations of the image against it: every
+    /// member's offset and size as TwinCAT lays it out. Exit 1 on a
+    /// difference, 2 on a file canif cannot read or size.
+    CheckLayout(CheckLayoutArgs),
     /// Message slots a cycle time needs (the manual's §4, ruling R4).
     Size {
         /// Bit rate in bit/s, e.g. 500000.
