@@ -319,8 +319,8 @@ impl Checker<'_> {
                 },
                 TypeExpr::Array { low, high, element },
             ) => {
-                let expected_count = usize::try_from(e_high - e_low + 1).unwrap_or(0);
-                let count = usize::try_from(high - low + 1).unwrap_or(0);
+                let expected_count = crate::parse::element_count(*e_low, *e_high);
+                let count = crate::parse::element_count(*low, *high);
                 if low != e_low {
                     self.defect(
                         place,
@@ -425,7 +425,7 @@ impl Checker<'_> {
         match self.resolve(data_type) {
             DataType::Elementary(e) => e.size(),
             DataType::Array { low, high, element } => {
-                usize::try_from(high - low + 1).unwrap_or(0) * self.size(&element)
+                crate::parse::element_count(low, high).saturating_mul(self.size(&element))
             }
             DataType::Named(name) => self.image.structure(&name).map_or(0, |s| s.size),
         }
@@ -435,9 +435,8 @@ impl Checker<'_> {
         Ok(match data_type {
             TypeExpr::Elementary(e) => e.size(),
             TypeExpr::String { bytes } => *bytes,
-            TypeExpr::Array { low, high, element } => {
-                usize::try_from(high - low + 1).unwrap_or(0) * self.user_size(element, place)?
-            }
+            TypeExpr::Array { low, high, element } => crate::parse::element_count(*low, *high)
+                .saturating_mul(self.user_size(element, place)?),
             TypeExpr::Named(name) => match self.declarations.lay_out(name)? {
                 Some(laid) => laid.size,
                 None => {

@@ -8,6 +8,9 @@
 //! most aligned member and padded to a multiple of that. Consecutive `BIT`
 //! members share a byte, the next member starts on the byte after them.
 
+use std::cell::RefCell;
+use std::collections::HashMap;
+
 use crate::error::{Cause, DeclarationError, Place};
 use crate::parse::{Body, TypeDecl, TypeExpr};
 use crate::types::Elementary;
@@ -43,29 +46,35 @@ pub struct Laid {
 #[derive(Debug, Clone)]
 pub struct Declarations {
     types: Vec<TypeDecl>,
+    /// Lower-case name → index into `types`.
+    by_name: HashMap<String, usize>,
     default_pack_mode: u8,
+    /// Size and alignment of each structure laid out so far: a type used by
+    /// many members is laid out once, however deep the nesting.
+    laid: RefCell<HashMap<usize, (usize, usize)>>,
 }
 
 impl Declarations {
     /// Refuses a name declared twice.
     pub fn new(types: Vec<TypeDecl>, default_pack_mode: u8) -> Result<Self, DeclarationError> {
+        let mut by_name: HashMap<String, usize> = HashMap::new();
         for (i, t) in types.iter().enumerate() {
-            if let Some(first) = types[..i]
-                .iter()
-                .find(|u| u.name.eq_ignore_ascii_case(&t.name))
-            {
+            if let Some(&first) = by_name.get(&t.name.to_ascii_lowercase()) {
                 return Err(DeclarationError {
                     place: t.place.clone(),
                     cause: Cause::Duplicate {
                         name: t.name.clone(),
-                        first: first.place.clone(),
+                        first: types[first].place.clone(),
                     },
                 });
             }
+            by_name.insert(t.name.to_ascii_lowercase(), i);
         }
         Ok(Declarations {
             types,
+            by_name,
             default_pack_mode,
+            laid: RefCell::default(),
         })
     }
 
@@ -74,9 +83,9 @@ impl Declarations {
     }
 
     pub fn find(&self, name: &str) -> Option<&TypeDecl> {
-        self.types
-            .iter()
-            .find(|t| t.name.eq_ignore_ascii_case(name))
+        self.by_name
+            .get(&name.to_ascii_lowercase())
+            .map(|&i| &self.types[i])
     }
 
     /// The structure `name` laid out; `None` if it is no structure.
@@ -216,7 +225,7 @@ impl Declarations {
             TypeExpr::String { bytes } => Ok((*bytes, 1)),
             TypeExpr::Array { low, high, element } => {
                 let (size, align) = self.size_align(element, place, depth + 1)?;
-                let count = usize::try_from(high - low + 1).unwrap_or(0);
+                let count = crate::parse::element_count(*low, *high);
                 let total = size.checked_mul(count).ok_or_else(|| DeclarationError {
                     place: place.clone(),
                     cause: Cause::EmptyArray {
@@ -233,7 +242,12 @@ impl Declarations {
                         ..
                     },
                 ) => {
+                    let key = self.by_name[&name.to_ascii_lowercase()];
+                    if let Some(known) = self.laid.borrow().get(&key) {
+                        return Ok(*known);
+                    }
                     let laid = self.lay_out_struct(decl, depth + 1)?;
+                    self.laid.borrow_mut().insert(key, (laid.size, laid.align));
                     Ok((laid.size, laid.align))
                 }
                 _ => {

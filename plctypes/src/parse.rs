@@ -138,12 +138,13 @@ fn lex(source: &Source) -> Result<Vec<(Token, usize)>, DeclarationError> {
             tokens.push((Token::Pragma(text), opened));
             at = end + 1;
         } else if c == '\'' || c == '"' {
+            // A string ends on its line; a lone quote (an apostrophe in a
+            // file that is no ST) is left to the parser to refuse.
             let end = (at + 1..chars.len())
-                .find(|&i| chars[i] == c)
-                .ok_or_else(|| error(line, Cause::Unterminated("a string")))?;
-            line += chars[at..end].iter().filter(|&&c| c == '\n').count();
+                .take_while(|&i| chars[i] != '\n')
+                .find(|&i| chars[i] == c);
             tokens.push((Token::Other(c), line));
-            at = end + 1;
+            at = end.map_or(at + 1, |end| end + 1);
         } else if c.is_ascii_alphabetic() || c == '_' {
             let end = (at..chars.len())
                 .find(|&i| !(chars[i].is_ascii_alphanumeric() || chars[i] == '_'))
@@ -183,6 +184,8 @@ struct Parser<'a> {
     tokens: Vec<(Token, usize)>,
     at: usize,
     file: &'a str,
+    /// Nested `ARRAY … OF` of the type being read.
+    depth: usize,
 }
 
 impl Parser<'_> {
@@ -364,6 +367,10 @@ impl Parser<'_> {
 
     fn type_expr(&mut self) -> Result<TypeExpr, DeclarationError> {
         if self.eat_word("ARRAY") {
+            self.depth += 1;
+            if self.depth > 16 {
+                return Err(self.error(Cause::TooDeep("ARRAY".into())));
+            }
             self.expect("[")?;
             let mut ranges = vec![self.range()?];
             while self.eat(",") {
@@ -374,6 +381,7 @@ impl Parser<'_> {
                 return Err(self.expected("OF"));
             }
             let element = self.type_expr()?;
+            self.depth -= 1;
             if element == TypeExpr::Elementary(Elementary::Bit) {
                 return Err(self.error(Cause::ArrayOfBits));
             }
@@ -423,7 +431,7 @@ impl Parser<'_> {
         let low = self.bound()?;
         self.expect("..")?;
         let high = self.bound()?;
-        if high < low {
+        if high < low || i128::from(high) - i128::from(low) >= i128::from(MAX_ELEMENTS) {
             return Err(self.error(Cause::EmptyArray { low, high }));
         }
         Ok((low, high))
@@ -450,6 +458,15 @@ impl Parser<'_> {
     }
 }
 
+/// More elements than any array of an image could have (and few enough that
+/// no count overflows).
+const MAX_ELEMENTS: u32 = 1 << 24;
+
+/// Elements of `ARRAY [low..high]` (as parsed: at most [`MAX_ELEMENTS`]).
+pub(crate) fn element_count(low: i64, high: i64) -> usize {
+    usize::try_from(i128::from(high) - i128::from(low) + 1).unwrap_or(0)
+}
+
 /// `attribute 'pack_mode' := '0'` → `0`.
 fn pack_mode_of(pragma: &str) -> Option<&str> {
     let rest = pragma.trim().strip_prefix("attribute")?.trim_start();
@@ -464,6 +481,7 @@ pub fn parse(source: &Source) -> Result<Vec<TypeDecl>, DeclarationError> {
         tokens: lex(source)?,
         at: 0,
         file: &source.file,
+        depth: 0,
     };
     let mut types = Vec::new();
     let mut pending_pack = None;
