@@ -28,6 +28,10 @@ pub struct ScenarioInfo {
     /// Its steps' text, without the keywords (what a client's declaration is
     /// matched against: the interface set up, the traffic made).
     pub steps: Vec<String>,
+    /// Its steps as written, keyword first (`Given …`, `And …`), and whether
+    /// each is an expected result (a `Then` step or one continuing it), for
+    /// the test plan.
+    pub written: Vec<(String, bool)>,
 }
 
 impl ScenarioInfo {
@@ -175,6 +179,16 @@ pub fn scenarios() -> Result<Vec<ScenarioInfo>, String> {
                         Side::Device
                     },
                     steps: scenario.steps.iter().map(|s| s.value.clone()).collect(),
+                    written: scenario
+                        .steps
+                        .iter()
+                        .map(|s| {
+                            (
+                                format!("{} {}", s.keyword.trim(), s.value),
+                                s.ty == cucumber::gherkin::StepType::Then,
+                            )
+                        })
+                        .collect(),
                 });
             }
         }

@@ -130,6 +130,9 @@ pub struct Capability {
 pub struct Ruling {
     pub id: String,
     pub title: String,
+    /// The ruling as `shared/RULINGS.md` words it (what the documents say, the decision).
+    #[serde(default)]
+    pub text: Option<String>,
 }
 
 /// The whole catalogue, validated.

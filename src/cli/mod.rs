@@ -7,7 +7,9 @@ use canif_harness::door::Timeouts;
 use clap::{Args, Parser, Subcommand};
 
 mod plc;
+mod spec;
 pub(crate) use plc::{CheckLayoutArgs, ExportArgs, FrameArg, InterfaceArgs, LanguageArg};
+pub(crate) use spec::SpecCommand;
 
 #[derive(Parser)]
 #[command(
@@ -540,31 +542,6 @@ pub(crate) enum ListCommand {
         /// The device side's checks, or the PLC side's.
         #[arg(long, value_enum, default_value = "device")]
         side: SideArg,
-    },
-}
-
-#[derive(Subcommand)]
-pub(crate) enum SpecCommand {
-    /// Every requirement, one line each.
-    List {
-        /// Only ids starting with this prefix (e.g. HS-TX).
-        #[arg(long)]
-        area: Option<String>,
-    },
-    /// One requirement in full.
-    Show { id: String },
-    /// Counts by area and status, and the assumptions.
-    Summary,
-    /// Validates the catalogue (the embedded one, or --spec DIR).
-    Check,
-    /// Which tests name which requirement; exit 1 if a normative or derived one has none.
-    Coverage {
-        /// The workspace whose tests to read.
-        #[arg(long, default_value = ".")]
-        root: PathBuf,
-        /// List every requirement with the tests, properties and scenarios that cover it.
-        #[arg(long)]
-        each: bool,
     },
 }
 

@@ -56,7 +56,12 @@ pub(crate) fn spec(
             }
             for id in &r.rulings {
                 match catalogue.rulings.iter().find(|ruling| ruling.id == *id) {
-                    Some(ruling) => outln!(out, "  ruling {id}: {}", ruling.title),
+                    Some(ruling) => {
+                        outln!(out, "  ruling {id}: {}", ruling.title);
+                        if let Some(text) = &ruling.text {
+                            outln!(out, "    {text}");
+                        }
+                    }
                     None => outln!(out, "  ruling {id}"),
                 }
             }
@@ -93,6 +98,7 @@ pub(crate) fn spec(
                 catalogue.capabilities.len()
             );
         }
+        SpecCommand::Plan { out: dir } => return super::plan::write(catalogue, &dir, out),
         SpecCommand::Coverage { root, each } => return spec_coverage(catalogue, &root, each, out),
     }
     Ok(ExitCode::SUCCESS)

@@ -13,6 +13,7 @@
 pub mod application;
 pub mod faulty;
 mod judge;
+pub mod kill_table;
 pub mod master;
 pub mod played_device;
 pub mod rig;

@@ -17,6 +17,7 @@ pub mod cases;
 pub mod diff;
 pub(crate) mod history;
 pub mod iut_kind;
+pub mod kill_table;
 pub mod lockstep;
 pub(crate) mod pair;
 pub mod played_plc;

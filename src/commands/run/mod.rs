@@ -58,7 +58,7 @@ impl<'c, S: Side> Plan<'c, S> {
     }
 
     /// Every check the plan could run: (profile, name, requirements exercised).
-    fn candidates(&self) -> Vec<(String, String, Vec<String>)> {
+    pub(crate) fn candidates(&self) -> Vec<(String, String, Vec<String>)> {
         let mut list = Vec::new();
         for profile in &self.profiles {
             for case in self.options.cases(profile) {
