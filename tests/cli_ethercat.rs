@@ -19,16 +19,13 @@ fn report_dir(name: &str) -> String {
 }
 
 #[test]
-fn every_terminal_profile_conforms_through_ethercat_and_a_fault_fails_its_requirement() {
+fn every_terminal_profile_conforms_through_ethercat_without_naming_them_and_a_fault_fails_its_requirement(
+) {
     let dir = report_dir("pass");
     let out = canif(&[
         "run",
         "--iut",
         "ethercat:emulated",
-        "--profile",
-        "el6751-legacy",
-        "--profile",
-        "el6751-mdp",
         "--requirement",
         "HS-TX-001",
         "--requirement",
@@ -49,6 +46,12 @@ fn every_terminal_profile_conforms_through_ethercat_and_a_fault_fails_its_requir
         "{stdout}"
     );
     assert!(stdout.contains(" 0 fail, 0 error"), "{stdout}");
+    // Without --profile, `all` is every terminal profile, and only those.
+    let progress = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        progress.contains("[1/2] el6751-legacy") && progress.contains("[2/2] el6751-mdp"),
+        "{progress}"
+    );
 
     let dir = report_dir("fault");
     let out = canif(&[

@@ -236,12 +236,12 @@ pub enum Unobserved {
 impl fmt::Display for NotRunReason {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            NotRunReason::NotSelected => f.write_str("not selected"),
+            NotRunReason::NotSelected => f.write_str("no check of this run reached it (nothing was left out by a selection)"),
             NotRunReason::Selection(flags) => write!(f, "left out by the selection ({flags})"),
             NotRunReason::LeftOut(what) => f.write_str(what),
             NotRunReason::StoppedEarlier(check) => write!(
                 f,
-                "its check stopped at an earlier failure of other requirements ({check})"
+                "not reached: its check stopped at an earlier failure of other requirements ({check})"
             ),
             NotRunReason::Refused { interface, reason } => write!(
                 f,
@@ -488,7 +488,7 @@ mod tests {
         assert_eq!(verdicts["RXQ-003"].kind(), VerdictKind::Fail);
         assert_eq!(
             verdicts["RXQ-001"].reason().unwrap(),
-            "its check stopped at an earlier failure of other requirements (gherkin: queue depth)"
+            "not reached: its check stopped at an earlier failure of other requirements (gherkin: queue depth)"
         );
     }
 

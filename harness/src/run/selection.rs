@@ -63,7 +63,10 @@ mod tests {
             selection.describe(),
             "left out by the selection (--scenario tx-batches --requirement HS-RX-001)"
         );
-        assert_eq!(Selection::default().describe(), "not selected");
+        assert_eq!(
+            Selection::default().describe(),
+            "no check of this run reached it (nothing was left out by a selection)"
+        );
         assert!(Selection::default().admits("anything", std::iter::empty()));
     }
 }

@@ -292,7 +292,13 @@ pub(crate) fn command(catalogue: &Catalogue, args: RunArgs) -> Result<ExitCode, 
         let plan = Plan::new(vec![&profile], side, product.product())?;
         return canopen::run(catalogue, &target, &plan, seed, &report);
     }
-    let profiles = profiles(catalogue, &profile)?;
+    let mut profiles = profiles(catalogue, &profile)?;
+    // A terminal over EtherCAT can only be one of the terminal profiles:
+    // `all` (the default) means all of those.
+    let every = profile.is_empty() || profile.iter().any(|p| p == "all");
+    if every && matches!(iut.iut, Some(crate::cli::IutArg::Ethercat(_))) {
+        profiles.retain(|p| p.ethercat.is_some());
+    }
     if side == SideArg::Plc {
         let client_bus = plc::client_bus(&bus)?;
         let kind = crate::commands::resolve_client(&iut)?;
