@@ -24,6 +24,8 @@ pub struct Failure {
     pub timeline: Timeline,
     /// The frames that differ, when the failure is a frame.
     pub frames: Option<FrameDiff>,
+    /// The input images, when the failure is one of the image's fields.
+    pub images: Option<Box<ImageDiff>>,
     /// What the failure says of the rest of what the scenario covers.
     pub rest: crate::verdict::Rest,
     /// Later breaches of the same scenario, each of requirements not blamed
@@ -36,6 +38,63 @@ pub struct Failure {
 pub struct FrameDiff {
     pub expected: Option<canif_model::frame::Frame>,
     pub actual: Option<canif_model::frame::Frame>,
+}
+
+/// The input image the model expected and the one the IUT wrote.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ImageDiff {
+    pub layout: canif_model::image::ImageLayout,
+    pub expected: Vec<u8>,
+    pub actual: Vec<u8>,
+}
+
+impl ImageDiff {
+    /// One line per member whose bytes differ, named as `canif export`
+    /// declares it (`Inputs.RxMessage[0].CobID`), with both values' bytes;
+    /// the first `most`, then how many more.
+    pub fn lines(&self, most: usize) -> Vec<String> {
+        use canif_plctypes::{ImageTypes, INPUTS};
+        let types = ImageTypes::of(&self.layout, String::new());
+        let hex = |bytes: &[u8]| {
+            bytes
+                .iter()
+                .map(|b| format!("{b:02X}"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        let length = self.expected.len().max(self.actual.len());
+        let byte = |image: &[u8], at: usize| image.get(at).copied();
+        let mut lines = Vec::new();
+        let mut at = 0;
+        while at < length {
+            if byte(&self.expected, at) == byte(&self.actual, at) {
+                at += 1;
+                continue;
+            }
+            let (name, range) = types
+                .path_at(INPUTS, at)
+                .map(|(path, range)| (format!("Inputs.{path}"), range))
+                .unwrap_or_else(|| ("beyond the image".to_string(), at..at + 1));
+            let part = |image: &[u8]| {
+                let end = range.end.min(image.len());
+                hex(image.get(range.start.min(end)..end).unwrap_or_default())
+            };
+            lines.push(format!(
+                "byte {}..{} {name}: expected {}, actual {}",
+                range.start,
+                range.end,
+                part(&self.expected),
+                part(&self.actual)
+            ));
+            at = range.end.max(at + 1);
+        }
+        if lines.len() > most {
+            let more = lines.len() - most;
+            lines.truncate(most);
+            lines.push(format!("… and {more} more members differ"));
+        }
+        lines
+    }
 }
 
 impl Failure {
@@ -71,8 +130,15 @@ impl Failure {
 
     /// Expected and actual, and the cycles before.
     pub fn details(&self) -> String {
+        let bytes = match &self.images {
+            Some(images) => format!(
+                "\nthe input image's members that differ:\n  {}",
+                images.lines(12).join("\n  ")
+            ),
+            None => String::new(),
+        };
         format!(
-            "{}\n  expected: {}\n  actual:   {}\n  at t = {:.6} ms\ncycles before:\n  {}",
+            "{}\n  expected: {}\n  actual:   {}\n  at t = {:.6} ms{bytes}\ncycles before:\n  {}",
             self.headline(),
             self.expected,
             self.actual,

@@ -517,3 +517,65 @@ fn only_a_count_that_is_not_zero_is_coloured() {
     assert!(!html.contains("<td class=\"error\">0</td>"), "{html}");
     assert!(html.contains("<td class=\"pass\">"), "{html}");
 }
+
+/// Issue 37: the verdicts are grouped by area, the areas with a failure
+/// first and open, their failing rows before the folded passes, each row
+/// with the requirement's text.
+#[test]
+fn verdicts_are_grouped_by_area_with_failures_first_and_passes_folded() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let html = report("fc532x", vec![Fault::FdPaddingFf], 2, vec![]).html(&catalogue);
+    let section = &html[html.find("<div id=\"verdicts\">").expect("the verdicts")..];
+    let section = &section[..section.find("</div>").unwrap()];
+    let folds: Vec<&str> = section.split("<details class=\"area\"").skip(1).collect();
+    assert!(folds.len() > 5, "one fold per area");
+    assert!(
+        folds[0].starts_with(" open><summary>FD"),
+        "{}",
+        &folds[0][..80]
+    );
+    assert!(
+        folds[0].contains("<span class=\"fail\">"),
+        "the count says fail"
+    );
+    let fail_row = folds[0].find("<tr class=\"fail\">").expect("a failing row");
+    let others = folds[0]
+        .find("<details class=\"others\">")
+        .expect("the passes folded");
+    assert!(fail_row < others, "failures before the folded passes");
+    assert!(
+        folds[0].contains("Bytes added by rounding up are sent as 0x00"),
+        "the statement inline"
+    );
+    let last = folds.last().unwrap();
+    assert!(
+        last.starts_with("><summary>"),
+        "an area without failures is closed"
+    );
+    assert!(!last.contains("<tr class=\"fail\">"));
+}
+
+/// Issue 37: a failure in the input image shows the members that differ,
+/// named as `canif export` declares them, with both values' bytes.
+#[test]
+fn an_image_failure_names_the_members_whose_bytes_differ() {
+    let catalogue = Catalogue::embedded().unwrap();
+    let run = report("fc510x", vec![Fault::CobIdWordBigEndian], 1, vec![]);
+    let summary = run.summary(&catalogue);
+    let line = summary
+        .lines()
+        .find(|l| l.contains("Inputs.RxMessage[0].CobID: expected"))
+        .unwrap_or_else(|| panic!("no member diff in:\n{summary}"));
+    // The word's two bytes, swapped: the fault writes the COB ID big-endian.
+    let expected = line
+        .split("expected ")
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .next()
+        .unwrap();
+    let actual = line.split("actual ").nth(1).unwrap().trim();
+    let swapped: Vec<&str> = expected.split(' ').rev().collect();
+    assert_eq!(actual, swapped.join(" "), "{line}");
+    assert!(line.trim_start().starts_with("byte 6..8 "), "{line}");
+}

@@ -285,6 +285,68 @@ impl ImageTypes {
         self.structs.iter().find(|s| s.name == name)
     }
 
+    /// Bytes a type takes (aliases and structures looked up here).
+    pub fn size_of(&self, data_type: &DataType) -> usize {
+        match data_type {
+            DataType::Elementary(e) => e.size(),
+            DataType::Array { low, high, element } => {
+                crate::parse::element_count(*low, *high).saturating_mul(self.size_of(element))
+            }
+            DataType::Named(name) => match self.aliases.iter().find(|a| &a.name == name) {
+                Some(alias) => self.size_of(&alias.data_type),
+                None => self.structure(name).map_or(0, |s| s.size),
+            },
+        }
+    }
+
+    /// The member of structure `root` that holds byte `offset`, as a path
+    /// (`RxMessage[2].cobId`, `EDL/BSR/ESI` for a byte of bits), and the
+    /// bytes it spans within `root`.
+    pub fn path_at(&self, root: &str, offset: usize) -> Option<(String, core::ops::Range<usize>)> {
+        let structure = self.structure(root)?;
+        let bits: Vec<&str> = structure
+            .members
+            .iter()
+            .filter(|m| m.bit.is_some() && m.offset == offset)
+            .map(|m| m.name.as_str())
+            .collect();
+        if !bits.is_empty() {
+            return Some((bits.join("/"), offset..offset + 1));
+        }
+        let member = structure.members.iter().find(|m| {
+            m.bit.is_none() && (m.offset..m.offset + self.size_of(&m.data_type)).contains(&offset)
+        })?;
+        self.path_in(&member.name, &member.data_type, member.offset, offset)
+    }
+
+    fn path_in(
+        &self,
+        path: &str,
+        data_type: &DataType,
+        start: usize,
+        offset: usize,
+    ) -> Option<(String, core::ops::Range<usize>)> {
+        match data_type {
+            DataType::Elementary(e) => Some((path.to_string(), start..start + e.size())),
+            DataType::Array { low, element, .. } => {
+                let size = self.size_of(element).max(1);
+                let index = (offset - start) / size;
+                let path = format!("{path}[{}]", *low + index as i64);
+                self.path_in(&path, element, start + index * size, offset)
+            }
+            DataType::Named(name) => match self.aliases.iter().find(|a| &a.name == name) {
+                Some(alias) => self.path_in(path, &alias.data_type, start, offset),
+                None => {
+                    let (inner, range) = self.path_at(name, offset - start)?;
+                    Some((
+                        format!("{path}.{inner}"),
+                        start + range.start..start + range.end,
+                    ))
+                }
+            },
+        }
+    }
+
     fn add_message(&mut self, layout: &'static MessageLayout, role: Role) {
         if self.structure(layout.type_name).is_some() {
             return;
@@ -433,6 +495,32 @@ mod tests {
             ]
         );
         assert_eq!(rx.size, 78);
+    }
+
+    #[test]
+    fn a_byte_of_the_inputs_is_named_by_its_member() {
+        let layout = ImageLayout::new(&InterfaceConfig::new(FrameFormat::Fd, 3), true);
+        let types = ImageTypes::of(&layout, String::new());
+        let cob_id = layout.rx_slot(2).start + 3;
+        let (path, range) = types.path_at(INPUTS, cob_id).expect("inside the image");
+        assert_eq!(path, "RxMessage[2].cobId");
+        assert_eq!(
+            range,
+            layout.rx_slot(2).start + 2..layout.rx_slot(2).start + 6
+        );
+        let flags = layout.rx_slot(0).start + 1;
+        assert_eq!(
+            types.path_at(INPUTS, flags).unwrap().0,
+            "RxMessage[0].EDL/BSR/ESI"
+        );
+        let data = layout.rx_slot(1).start + 6 + 63;
+        assert_eq!(
+            types.path_at(INPUTS, data).unwrap().0,
+            "RxMessage[1].rxData[63]"
+        );
+        let info = layout.info_data_start() + 4 * 15;
+        assert_eq!(types.path_at(INPUTS, info).unwrap().0, "InfoData[15]");
+        assert_eq!(types.path_at(INPUTS, layout.input_size()), None);
     }
 
     #[test]

@@ -200,6 +200,7 @@ impl Side for CanopenSide {
                         context: Vec::new(),
                         timeline: Default::default(),
                         frames: None,
+                        images: None,
                         rest: Rest::Stopped,
                         further: Vec::new(),
                     })),

@@ -152,6 +152,7 @@ impl Tracker {
                 row: judge::row_of(breach.requirements),
             },
             frames: None,
+            images: None,
             rest: crate::verdict::Rest::Stopped,
             further: Vec::new(),
         }

@@ -342,7 +342,16 @@ impl<B: Bus + ?Sized> Lockstep<B> {
             }
         };
         if let Some(difference) = difference {
-            return Err(self.pair.fail(difference));
+            let images = crate::outcome::ImageDiff {
+                layout,
+                expected: expected.to_vec(),
+                actual: actual.clone(),
+            };
+            let mut outcome = self.pair.fail(difference);
+            if let Outcome::Fail(failure) = &mut outcome {
+                failure.images = Some(Box::new(images));
+            }
+            return Err(outcome);
         }
         self.pair.tolerated += u64::from(!identical);
         self.plc.device_cycle_done(&actual);

@@ -144,6 +144,7 @@ impl Pair {
             },
             timeline: crate::outcome::Timeline::Cycles(self.history.timeline()),
             frames: difference.frames.map(|f| *f),
+            images: None,
             rest: crate::verdict::Rest::Stopped,
             further: Vec::new(),
         }))

@@ -61,6 +61,7 @@ pub fn refused(scenario: &str, config: &InterfaceConfig, reason: String) -> Fail
         context: Vec::new(),
         timeline: Default::default(),
         frames: None,
+        images: None,
         rest: Rest::NotRun(NotRunReason::Refused { interface, reason }),
         further: Vec::new(),
     }
@@ -262,6 +263,7 @@ fn mismatch(
         context: Vec::new(),
         timeline: Default::default(),
         frames: None,
+        images: None,
         rest: Rest::Stopped,
         further: Vec::new(),
     }

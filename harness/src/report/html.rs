@@ -164,46 +164,7 @@ impl RunReport {
                 )
             })
             .collect();
-        let mut rows = String::new();
-        for p in &self.profiles {
-            let index: BTreeMap<&Evidence, usize> = p
-                .checks
-                .iter()
-                .enumerate()
-                .map(|(i, c)| (&c.evidence, i))
-                .collect();
-            for requirement in catalogue.requirements() {
-                let Some(verdict) = p.verdicts.get(&requirement.id) else {
-                    continue;
-                };
-                let evidence: Vec<String> = verdict
-                    .evidence()
-                    .into_iter()
-                    .map(|e| match index.get(e) {
-                        Some(i) => format!(
-                            "<a href=\"#{}\">{}</a>",
-                            anchor(&p.profile, *i),
-                            esc(&e.key())
-                        ),
-                        None => esc(&e.key()),
-                    })
-                    .collect();
-                let why = match verdict {
-                    Verdict::Pass(_) => String::new(),
-                    _ => esc(&verdict.reason().unwrap_or_default()),
-                };
-                let _ = writeln!(
-                    rows,
-                    "<tr class=\"{}\"><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{why}</td><td class=\"evidence\">{}</td></tr>",
-                    verdict.label().replace(' ', "-"),
-                    esc(&p.profile),
-                    requirement.id,
-                    verdict.label(),
-                    esc(&requirement.statement),
-                    evidence.join("<br>")
-                );
-            }
-        }
+        let verdicts = self.verdicts_by_area(catalogue);
         let none = |html: String| {
             if html.is_empty() {
                 "<p>None.</p>".to_string()
@@ -216,7 +177,8 @@ impl RunReport {
 <html lang="en"><head><meta charset="utf-8"><title>canif report — {iut}</title>
 <style>
 body{{font-family:sans-serif;margin:1.5em}} table{{border-collapse:collapse;font-size:13px}} td,th{{border:1px solid #ddd;padding:2px 6px;vertical-align:top;text-align:left}}
-tr.fail td:nth-child(3),tr.error td:nth-child(3),td.fail,td.error{{color:#b00;font-weight:bold}} tr.pass td:nth-child(3){{color:#070}} tr.not-applicable,tr.not-testable,tr.not-run{{color:#888}}
+tr.fail td:nth-child(3),tr.error td:nth-child(3),td.fail,td.error,span.fail,span.error{{color:#b00;font-weight:bold}} tr.pass td:nth-child(3),td.pass,span.pass{{color:#070}} td.not-run,span.not-run{{color:#a60}} tr.not-applicable,tr.not-testable,tr.not-run{{color:#888}}
+details.area{{margin:4px 0;border:1px solid #ddd;padding:2px 6px}} details.area>summary{{font-weight:bold;cursor:pointer}} details.others>summary{{cursor:pointer;color:#555}}
 pre{{background:#f6f6f6;padding:6px;overflow-x:auto;font-size:12px}} svg.timing{{border:1px solid #ccc;background:#fff;margin:6px 0}} td.evidence{{font-size:11px}}
 </style></head>
 <body>
@@ -232,12 +194,12 @@ pre{{background:#f6f6f6;padding:6px;overflow-x:auto;font-size:12px}} svg.timing{
 {failures}
 <h2>Errors</h2>
 {errors}
-<h2>Verdicts</h2>
+<h2>Verdicts by area</h2>
 <p><label>Filter: <input id="filter" type="search" placeholder="profile, id, verdict, words"></label>
 <label><input id="only-problems" type="checkbox"> only fail and error</label> <span id="shown"></span></p>
-<table id="verdicts"><thead><tr><th>profile</th><th>requirement</th><th>verdict</th><th>statement</th><th>why</th><th>evidence</th></tr></thead>
-<tbody>
-{rows}</tbody></table>
+<p class="legend">Areas with a failure or an error come first and open; in each, fail and error first, the other verdicts folded below.</p>
+<div id="verdicts">
+{verdicts}</div>
 <h2>Checks</h2>
 <table id="checks"><thead><tr><th>profile</th><th>check</th><th>outcome</th><th>exercises</th><th>cause</th></tr></thead>
 <tbody>
@@ -250,8 +212,11 @@ window.addEventListener('error', function (e) {{ document.body.dataset.errors = 
 (function () {{
   var input = document.getElementById('filter'), problems = document.getElementById('only-problems');
   var rows = Array.prototype.slice.call(document.querySelectorAll('#verdicts tbody tr'));
+  var folds = Array.prototype.slice.call(document.querySelectorAll('#verdicts details'));
   function apply() {{
     var words = input.value.toLowerCase().split(/\s+/).filter(Boolean), shown = 0;
+    // A search opens every fold, so that what it finds is seen.
+    if (words.length) folds.forEach(function (d) {{ d.open = true; }});
     rows.forEach(function (row) {{
       var text = row.textContent.toLowerCase();
       var ok = words.every(function (w) {{ return text.indexOf(w) >= 0; }});
@@ -293,5 +258,97 @@ window.addEventListener('error', function (e) {{ document.body.dataset.errors = 
                 format!("<ul>{errors}</ul>")
             },
         )
+    }
+}
+
+impl RunReport {
+    /// The verdict table, one fold per catalogue area: the areas with a
+    /// failure or an error first and open, in each the fail and error rows
+    /// first and the others folded, every row with the requirement's text.
+    fn verdicts_by_area(&self, catalogue: &Catalogue) -> String {
+        const HEAD: &str = "<thead><tr><th>profile</th><th>requirement</th><th>verdict</th><th>statement</th><th>why</th><th>evidence</th></tr></thead>";
+        let mut folds: Vec<(bool, String)> = Vec::new();
+        for area in &catalogue.areas {
+            let (mut problems, mut others) = (String::new(), String::new());
+            let mut counts: BTreeMap<VerdictKind, usize> = BTreeMap::new();
+            for p in &self.profiles {
+                let index: BTreeMap<&Evidence, usize> = p
+                    .checks
+                    .iter()
+                    .enumerate()
+                    .map(|(i, c)| (&c.evidence, i))
+                    .collect();
+                for requirement in &area.requirements {
+                    let Some(verdict) = p.verdicts.get(&requirement.id) else {
+                        continue;
+                    };
+                    let evidence: Vec<String> = verdict
+                        .evidence()
+                        .into_iter()
+                        .map(|e| match index.get(e) {
+                            Some(i) => format!(
+                                "<a href=\"#{}\">{}</a>",
+                                anchor(&p.profile, *i),
+                                esc(&e.key())
+                            ),
+                            None => esc(&e.key()),
+                        })
+                        .collect();
+                    let why = match verdict {
+                        Verdict::Pass(_) => String::new(),
+                        _ => esc(&verdict.reason().unwrap_or_default()),
+                    };
+                    *counts.entry(verdict.kind()).or_default() += 1;
+                    let problem = matches!(verdict.kind(), VerdictKind::Fail | VerdictKind::Error);
+                    let _ = writeln!(
+                        if problem { &mut problems } else { &mut others },
+                        "<tr class=\"{}\"><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{why}</td><td class=\"evidence\">{}</td></tr>",
+                        verdict.label().replace(' ', "-"),
+                        esc(&p.profile),
+                        requirement.id,
+                        verdict.label(),
+                        esc(&requirement.statement),
+                        evidence.join("<br>")
+                    );
+                }
+            }
+            if counts.is_empty() {
+                continue;
+            }
+            let counted: Vec<String> = VerdictKind::ALL
+                .iter()
+                .filter_map(|kind| {
+                    let n = counts.get(kind)?;
+                    let label = kind.label();
+                    Some(format!(
+                        "<span class=\"{}\">{n} {label}</span>",
+                        label.replace(' ', "-")
+                    ))
+                })
+                .collect();
+            let has_problems = !problems.is_empty();
+            let mut fold = format!(
+                "<details class=\"area\"{}><summary>{} — {}: {}</summary>\n",
+                if has_problems { " open" } else { "" },
+                esc(&area.area),
+                esc(&area.title),
+                counted.join(", ")
+            );
+            if has_problems {
+                let _ = writeln!(fold, "<table>{HEAD}<tbody>\n{problems}</tbody></table>");
+            }
+            if !others.is_empty() {
+                let n = others.lines().count();
+                let _ = writeln!(
+                    fold,
+                    "<details class=\"others\"><summary>{n} other verdicts (pass, not applicable, not run, not testable)</summary><table>{HEAD}<tbody>\n{others}</tbody></table></details>"
+                );
+            }
+            fold.push_str("</details>\n");
+            folds.push((has_problems, fold));
+        }
+        // Stable: the catalogue's order within each group.
+        folds.sort_by_key(|(has_problems, _)| !*has_problems);
+        folds.into_iter().map(|(_, fold)| fold).collect()
     }
 }

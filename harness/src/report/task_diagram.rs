@@ -143,6 +143,7 @@ mod tests {
                 row: TaskRow::RxCounter,
             },
             frames: None,
+            images: None,
             rest: crate::verdict::Rest::Stopped,
             further: Vec::new(),
         };

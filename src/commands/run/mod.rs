@@ -426,6 +426,25 @@ pub(crate) fn finish(
             report_dir.join("summary.md").display()
         );
     }
+    // The first failures whose input image differs, member by member: what
+    // to look at first, without opening a report.
+    let imaged = report.profiles.iter().flat_map(|p| {
+        p.lockstep
+            .failures
+            .iter()
+            .filter_map(move |f| Some((p, f, f.images.as_ref()?)))
+    });
+    for (p, failure, images) in imaged.take(3) {
+        errln!(
+            "{} {} at cycle {}: the input image's members that differ:",
+            p.profile,
+            failure.scenario,
+            failure.cycle
+        );
+        for line in images.lines(6) {
+            errln!("  {line}");
+        }
+    }
     sayln!(
         "{} {}: {} — reports in {}",
         report.meta.iut,
