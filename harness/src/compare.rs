@@ -17,15 +17,27 @@ use crate::verdict::VerdictKind;
 /// Verdicts and check outcomes of a report, keyed `profile::REQ-ID` and
 /// `profile::scenario: …` (`gherkin: …`, `canopen: …`).
 pub fn verdicts(report: &ReportFile) -> BTreeMap<String, VerdictKind> {
+    outcomes(report)
+        .into_iter()
+        .map(|(key, (kind, _))| (key, kind))
+        .collect()
+}
+
+/// [`verdicts`] with each one's reason as the report gives it (a verdict's
+/// reason, a check's cause): what a regression is shown with.
+fn outcomes(report: &ReportFile) -> BTreeMap<String, (VerdictKind, Option<String>)> {
     let mut all = BTreeMap::new();
     for profile in &report.profiles {
         for (id, verdict) in &profile.verdicts {
-            all.insert(format!("{}::{id}", profile.profile), verdict.verdict);
+            all.insert(
+                format!("{}::{id}", profile.profile),
+                (verdict.verdict, verdict.reason.clone()),
+            );
         }
         for check in &profile.checks {
             all.insert(
                 format!("{}::{}", profile.profile, check.check),
-                check.outcome,
+                (check.outcome, check.cause.clone()),
             );
         }
     }
@@ -48,6 +60,10 @@ pub struct Change {
     /// `absent` when the report lacks it.
     pub before: String,
     pub now: String,
+    /// Why it is what it is now, as the new report says (a failure's cause,
+    /// why it was not run); none for a pass.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub why: Option<String>,
 }
 
 /// The comparison of two runs.
@@ -115,7 +131,7 @@ pub fn compare(
     if !mismatched.is_empty() && !options.force {
         return Err(mismatched);
     }
-    let (before_all, now_all) = (verdicts(base), verdicts(new));
+    let (before_all, now_all) = (verdicts(base), outcomes(new));
     let mut result = Comparison {
         removed_allowed: options.allow_removed,
         forced_despite: mismatched,
@@ -123,12 +139,17 @@ pub fn compare(
     };
     let keys: BTreeSet<&String> = before_all.keys().chain(now_all.keys()).collect();
     for key in keys {
-        let (before, now) = (before_all.get(key).copied(), now_all.get(key).copied());
+        let before = before_all.get(key).copied();
+        let (now, why) = match now_all.get(key) {
+            Some((kind, why)) => (Some(*kind), why.clone()),
+            None => (None, None),
+        };
         let label = |v: Option<VerdictKind>| v.map_or("absent", VerdictKind::label).to_string();
         let change = Change {
             check: key.clone(),
             before: label(before),
             now: label(now),
+            why,
         };
         let bad = |v: Option<VerdictKind>| v.is_some_and(VerdictKind::is_bad);
         if before == now {
@@ -193,13 +214,14 @@ impl Comparison {
             }
             let _ = write!(
                 md,
-                "\n## {title}\n\n| check | before | now |\n|---|---|---|\n"
+                "\n## {title}\n\n| check | before | now | why |\n|---|---|---|---|\n"
             );
             for change in rows {
+                let why = change.why.as_deref().unwrap_or("").replace('|', "\\|");
                 let _ = writeln!(
                     md,
-                    "| {} | {} | {} |",
-                    change.check, change.before, change.now
+                    "| {} | {} | {} | {} |",
+                    change.check, change.before, change.now, why
                 );
             }
         }

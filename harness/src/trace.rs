@@ -2,7 +2,8 @@
 //! (`(sec.usec) iface ID#DATA`, `##` for FD) and pcapng (written by the
 //! `pcap-file` crate) with link type CAN_SOCKETCAN (227), the interface named,
 //! nanosecond time stamps, and each frame's direction as the IUT sees it
-//! (EPB flags: outbound = the IUT sent it, inbound = another node did). Both
+//! (EPB flags: outbound = the IUT sent it, inbound = another node did), and
+//! the frame a failure is about carrying the failure as its comment. Both
 //! are written as the run goes, so a long run holds no trace in memory.
 
 use std::borrow::Cow;
@@ -106,6 +107,24 @@ impl TraceWriter {
 
     /// A frame that ended on the bus at `at`; `from_iut`: the IUT sent it.
     pub fn frame(&mut self, at: Nanos, frame: &Frame, from_iut: bool) -> io::Result<()> {
+        self.packet(at, frame, from_iut, None)
+    }
+
+    /// The IUT's frame a failure is about, with the failure as its packet
+    /// comment (Wireshark shows it, `frame.comment` finds it). The candump
+    /// log stays as candump writes it: its readers (canplayer, python-can)
+    /// take every line for a frame, so it has no place for a comment.
+    pub fn failing_frame(&mut self, at: Nanos, frame: &Frame, comment: &str) -> io::Result<()> {
+        self.packet(at, frame, true, Some(comment))
+    }
+
+    fn packet(
+        &mut self,
+        at: Nanos,
+        frame: &Frame,
+        from_iut: bool,
+        comment: Option<&str>,
+    ) -> io::Result<()> {
         let at = self.epoch.saturating_add(at);
         writeln!(self.candump, "{}", candump_line(at, &self.interface, frame))?;
         let packet = socketcan_packet(frame);
@@ -120,7 +139,9 @@ impl TraceWriter {
                 timestamp: Duration::from_nanos(at),
                 original_len: packet.len() as u32,
                 data: Cow::Owned(packet),
-                options: vec![EnhancedPacketOption::Flags(flags)],
+                options: std::iter::once(EnhancedPacketOption::Flags(flags))
+                    .chain(comment.map(|c| EnhancedPacketOption::Comment(Cow::Borrowed(c))))
+                    .collect(),
             })
             .map_err(pcap_error)?;
         Ok(())

@@ -152,6 +152,13 @@ fn a_failure_shrinks_to_a_minimal_run() {
 /// An FD scenario on the soft device traced into a folder of its own:
 /// the folder and the run.
 fn fd_trace(tag: &str) -> (std::path::PathBuf, canif_harness::ScenarioRun) {
+    let (dir, run) = fd_trace_of(tag, vec![]);
+    assert_eq!(run.outcome, Outcome::Pass);
+    (dir, run)
+}
+
+/// The same scenario on the soft device with `faults`.
+fn fd_trace_of(tag: &str, faults: Vec<Fault>) -> (std::path::PathBuf, canif_harness::ScenarioRun) {
     use canif_harness::device::run_scenario;
     use canif_harness::device::scenario;
     let dir = std::env::temp_dir().join(format!("canif-trace-{tag}-{}", std::process::id()));
@@ -162,15 +169,45 @@ fn fd_trace(tag: &str) -> (std::path::PathBuf, canif_harness::ScenarioRun) {
     scenario.trace = Some((dir.clone(), "fd".into(), 0));
     let run = run_scenario(
         &IutKind::SoftDevice {
-            faults: vec![],
+            faults,
             choices: vec![],
         },
         &Capabilities::everything(),
         &scenario,
         scenario.steps(),
     );
-    assert_eq!(run.outcome, Outcome::Pass);
     (dir, run)
+}
+
+/// Issue 37: the frame a failure is about carries the failure as its
+/// packet comment, read back with the pcapng reader canif writes with.
+#[test]
+fn the_failing_frame_is_marked_in_the_pcapng() {
+    use pcap_file::pcapng::blocks::enhanced_packet::EnhancedPacketOption;
+    use pcap_file::pcapng::{Block, PcapNgReader};
+    let (dir, run) = fd_trace_of("failing", vec![Fault::FdPaddingFf]);
+    let Outcome::Fail(failure) = &run.outcome else {
+        panic!("fd-padding-ff fails fd-lengths: {:?}", run.outcome)
+    };
+    let file = std::fs::File::open(dir.join("fd.pcapng")).unwrap();
+    let mut reader = PcapNgReader::new(file).unwrap();
+    let mut comments = Vec::new();
+    while let Some(block) = reader.next_block() {
+        if let Block::EnhancedPacket(packet) = block.unwrap() {
+            for option in &packet.options {
+                if let EnhancedPacketOption::Comment(text) = option {
+                    comments.push(text.to_string());
+                }
+            }
+        }
+    }
+    assert_eq!(comments.len(), 1, "one failing frame: {comments:?}");
+    assert!(
+        comments[0].starts_with("canif FAIL FD-LEN-005: cycle ")
+            && comments[0].contains(&failure.actual),
+        "{comments:?}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
 }
 
 /// The pcapng's blocks, read here without a library: the block kinds, each

@@ -579,3 +579,26 @@ fn an_image_failure_names_the_members_whose_bytes_differ() {
     assert_eq!(actual, swapped.join(" "), "{line}");
     assert!(line.trim_start().starts_with("byte 6..8 "), "{line}");
 }
+
+/// Issue 37: a regression is shown with its reason, as the new report gives it.
+#[test]
+fn compare_shows_each_regression_with_its_reason() {
+    let base = json(&report("fc532x", vec![], 1, vec![]));
+    let new = json(&report("fc532x", vec![Fault::FdPaddingFf], 1, vec![]));
+    let forced = CompareOptions {
+        allow_removed: false,
+        force: true,
+    };
+    let gate = compare(&base, &new, forced).unwrap();
+    let regression = gate
+        .regressions
+        .iter()
+        .find(|c| c.check == "fc532x::FD-LEN-005")
+        .expect("FD-LEN-005 regressed");
+    let why = regression.why.as_deref().expect("a reason");
+    assert!(
+        why.contains("frame handed to the controller differs"),
+        "{why}"
+    );
+    assert!(gate.markdown().contains(&format!("| fail | {why} |")));
+}

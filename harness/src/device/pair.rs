@@ -123,7 +123,16 @@ impl Pair {
             }),
         ) = (self.trace.as_mut(), difference.frames.as_deref())
         {
-            let _ = trace.frame(self.now, frame, true);
+            let requirements = blame::narrow(&self.covers, difference.candidates);
+            let comment = format!(
+                "canif FAIL {}: cycle {}: {}: expected {}, actual {}",
+                ReqId::join(&requirements, ", "),
+                self.cycle,
+                difference.what,
+                difference.expected,
+                difference.actual
+            );
+            let _ = trace.failing_frame(self.now, frame, &comment);
         }
         Outcome::Fail(Box::new(Failure {
             requirements: blame::narrow(&self.covers, difference.candidates),
