@@ -16,6 +16,7 @@ fn runs(program: &str) -> bool {
 fn main() {
     println!("cargo::rustc-check-cfg=cfg(canif_no_tshark)");
     println!("cargo::rustc-check-cfg=cfg(canif_no_chromium)");
+    println!("cargo::rustc-check-cfg=cfg(canif_no_ssh_keygen)");
     println!("cargo:rerun-if-env-changed=PATH");
     println!("cargo:rerun-if-env-changed=CI");
     if std::env::var_os("CI").is_none() {

@@ -70,10 +70,30 @@ pub struct Certificate {
     pub profiles: Vec<String>,
     pub seed: u64,
     pub side: Side,
+    /// The key that signs it, named inside what it signs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub signer: Option<Signer>,
     pub suite: SuiteKind,
     pub totals: TotalsEntry,
     /// Keyed `profile::REQ-ID`.
     pub verdicts: BTreeMap<String, CertifiedVerdict>,
+}
+
+/// Who signed a certificate: the key's SHA-256 fingerprint (as `ssh-keygen
+/// -l` prints it) and its comment (`ssh-keygen -C`, often user@host).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Signer {
+    pub comment: String,
+    pub fingerprint: String,
+}
+
+impl std::fmt::Display for Signer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.comment.is_empty() {
+            true => f.write_str(&self.fingerprint),
+            false => write!(f, "{} ({})", self.fingerprint, self.comment),
+        }
+    }
 }
 
 impl Certificate {
@@ -102,6 +122,7 @@ impl Certificate {
             profiles: report.profiles.iter().map(|p| p.profile.clone()).collect(),
             seed: m.seed,
             side: m.side,
+            signer: None,
             suite: m.suite,
             totals: TotalsEntry::of(&report.totals()),
             verdicts: report
@@ -152,7 +173,13 @@ pub enum SignatureError {
     Encrypted(String),
     NotEd25519(String),
     Signature(String),
+    /// The certificate changed after it was signed (the key is the signer's).
     DoesNotVerify(String),
+    /// The signature is another key's than the one given.
+    OtherKey {
+        signed_by: String,
+        given: String,
+    },
 }
 
 impl std::fmt::Display for SignatureError {
@@ -163,7 +190,8 @@ impl std::fmt::Display for SignatureError {
             SignatureError::Encrypted(path) => write!(f, "{path}: the key is encrypted; canif signs with an unencrypted key (ssh-keygen -t ed25519 -N '')"),
             SignatureError::NotEd25519(path) => write!(f, "{path}: certificates are signed with Ed25519 keys (ssh-keygen -t ed25519)"),
             SignatureError::Signature(cause) => write!(f, "not an SSH signature: {cause}"),
-            SignatureError::DoesNotVerify(cause) => write!(f, "the signature does not verify: {cause}"),
+            SignatureError::DoesNotVerify(cause) => write!(f, "the signature does not verify: the certificate changed after it was signed ({cause})"),
+            SignatureError::OtherKey { signed_by, given } => write!(f, "signed by the key {signed_by}, not by the one given ({given})"),
         }
     }
 }
@@ -206,9 +234,80 @@ pub fn verify(bytes: &[u8], signature: &str, pubkey: &Path) -> Result<String, Si
     })?;
     let signature =
         SshSig::from_pem(signature).map_err(|e| SignatureError::Signature(e.to_string()))?;
+    let given = key.fingerprint(HashAlg::Sha256).to_string();
+    // The signature names the key that made it: a wrong key is told apart
+    // from a certificate that changed.
+    let signed_by = signature
+        .public_key()
+        .fingerprint(HashAlg::Sha256)
+        .to_string();
+    if signed_by != given {
+        return Err(SignatureError::OtherKey { signed_by, given });
+    }
     key.verify(NAMESPACE, bytes, &signature)
         .map_err(|e| SignatureError::DoesNotVerify(e.to_string()))?;
-    Ok(key.fingerprint(HashAlg::Sha256).to_string())
+    Ok(given)
+}
+
+/// The signer the private key at `key` makes: its fingerprint and comment.
+pub fn signer(key: &Path) -> Result<Signer, SignatureError> {
+    let path = key.display().to_string();
+    let key = PrivateKey::from_openssh(read_key(key)?).map_err(|e| SignatureError::Key {
+        path,
+        cause: e.to_string(),
+    })?;
+    Ok(Signer {
+        comment: key.comment().to_string(),
+        fingerprint: key.public_key().fingerprint(HashAlg::Sha256).to_string(),
+    })
+}
+
+/// What differs between a certificate and the run report it was made from
+/// (`run/report.json` beside it): what an edit changed, for a certificate
+/// whose signature no longer verifies. Keys as the certificate's.
+pub fn differences_from_run(
+    certificate: &Certificate,
+    run: &crate::report::ReportFile,
+) -> Vec<String> {
+    let mut found = Vec::new();
+    if certificate.iut != run.meta.iut {
+        found.push(format!(
+            "implementation: `{}` in the certificate, `{}` in the run",
+            certificate.iut, run.meta.iut
+        ));
+    }
+    let mut in_run = BTreeMap::new();
+    for profile in &run.profiles {
+        for (id, verdict) in &profile.verdicts {
+            in_run.insert(format!("{}::{id}", profile.profile), verdict.verdict);
+        }
+    }
+    for (key, verdict) in &certificate.verdicts {
+        match in_run.remove(key) {
+            Some(kind) if kind == verdict.verdict => {}
+            Some(kind) => found.push(format!(
+                "{key}: {} in the certificate, {} in the run",
+                verdict.verdict.label(),
+                kind.label()
+            )),
+            None => found.push(format!("{key}: in the certificate, not in the run")),
+        }
+    }
+    found.extend(
+        in_run
+            .keys()
+            .map(|key| format!("{key}: in the run, not in the certificate")),
+    );
+    let run_conforms = run
+        .profiles
+        .iter()
+        .all(|p| p.verdicts.values().all(|v| !v.verdict.is_bad()));
+    if certificate.conforms && !run_conforms {
+        found.push(
+            "conforms: true in the certificate, but the run has a failure or an error".into(),
+        );
+    }
+    found
 }
 
 /// The certificate for people: one self-contained page.
@@ -259,6 +358,7 @@ pub fn html(certificate: &Certificate, catalogue: &canif_spec::Catalogue) -> Str
 <p><b>{verdict}</b> — <code>{iut}</code>{product}, {side} side, profiles {profiles}</p>
 <table><tr><th>date</th><td>{date}</td></tr><tr><th>bus</th><td>{bus}</td></tr>{masters}{choices}{not_served}{left_out}<tr><th>canif</th><td>{version} ({commit})</td></tr>
 <tr><th>catalogue SHA-256</th><td><code>{catalogue}</code></td></tr>{sources}<tr><th>seed</th><td>{seed}</td></tr>
+<tr><th>signed by</th><td>{signer}</td></tr>
 <tr><th>totals</th><td>{pass} pass, {fail} fail, {error} error, {na} not applicable, {nr} not run, {nt} not testable</td></tr></table>
 <p>certificate.json carries this page's SHA-256 and is signed in certificate.json.sig; see docs/certificates.md for checking it with <code>ssh-keygen -Y verify</code>.</p>
 <table><tr><th>profile</th><th>requirement</th><th>verdict</th><th>statement</th><th>reason</th><th>evidence</th></tr>
@@ -307,6 +407,10 @@ pub fn html(certificate: &Certificate, catalogue: &canif_spec::Catalogue) -> Str
         commit = esc(&certificate.canif_commit),
         catalogue = esc(&certificate.catalogue_sha256),
         seed = certificate.seed,
+        signer = certificate.signer.as_ref().map_or_else(
+            || "nobody: unsigned".to_string(),
+            |s| format!("<code>{}</code>", esc(&s.to_string()))
+        ),
         pass = t.pass,
         fail = t.fail,
         error = t.error,

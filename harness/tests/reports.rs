@@ -299,18 +299,16 @@ fn junit_is_read_back_with_matching_counts() {
     );
 }
 
-fn ssh_keygen() -> Option<&'static str> {
-    let found = Command::new("ssh-keygen").arg("-?").output().is_ok();
-    if !found {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "ssh-keygen is not installed in CI (.ci/run installs openssh-client)"
-        );
-        eprintln!(
-            "SKIPPED: ssh-keygen is not installed (apt-get install openssh-client; .ci/run does)"
-        );
-    }
-    found.then_some("ssh-keygen")
+/// A fresh Ed25519 key pair `dir/NAME`, `dir/NAME.pub`, with `comment`.
+fn key_pair(dir: &Path, name: &str, comment: &str) -> std::path::PathBuf {
+    let key = dir.join(name);
+    let made = Command::new("ssh-keygen")
+        .args(["-q", "-t", "ed25519", "-N", "", "-C", comment, "-f"])
+        .arg(&key)
+        .status()
+        .expect("ssh-keygen (.ci/run installs openssh-client; elsewhere these tests are ignored without it)");
+    assert!(made.success());
+    key
 }
 
 fn external_verify(dir: &Path, certificate: &Path) -> bool {
@@ -336,17 +334,14 @@ fn external_verify(dir: &Path, certificate: &Path) -> bool {
 /// Problem 5: the certificate is signed with Ed25519 (SSHSIG); ssh-keygen,
 /// not canif, accepts the genuine one and rejects a tampered one.
 #[test]
+#[cfg_attr(
+    canif_no_ssh_keygen,
+    ignore = "ssh-keygen is not installed (apt-get install openssh-client; .ci/run does)"
+)]
 fn ssh_keygen_verifies_a_genuine_certificate_and_rejects_a_tampered_one() {
     use canif_harness::certificate::{sign, verify, Certificate};
-    let Some(keygen) = ssh_keygen() else { return };
     let dir = temp("certificate");
-    let key = dir.join("key");
-    let made = Command::new(keygen)
-        .args(["-q", "-t", "ed25519", "-N", "", "-C", "certifier", "-f"])
-        .arg(&key)
-        .status()
-        .unwrap();
-    assert!(made.success());
+    let key = key_pair(&dir, "key", "certifier");
     let run = report("fc510x", vec![], 9, vec![]);
     let cert = Certificate::of(&run);
     assert_eq!(cert.catalogue_sha256, Catalogue::embedded().unwrap().sha256);
@@ -601,4 +596,70 @@ fn compare_shows_each_regression_with_its_reason() {
         "{why}"
     );
     assert!(gate.markdown().contains(&format!("| fail | {why} |")));
+}
+
+/// Issue 37: the certificate names its signer's key inside what is signed,
+/// and a failed verification says which went wrong: another key signed it,
+/// or it changed after signing, and then what changed against its run.
+#[test]
+#[cfg_attr(
+    canif_no_ssh_keygen,
+    ignore = "ssh-keygen is not installed (apt-get install openssh-client; .ci/run does)"
+)]
+fn a_certificate_names_its_signer_and_a_failed_check_says_what_went_wrong() {
+    use canif_harness::certificate::{
+        differences_from_run, sign, signer, verify, Certificate, SignatureError,
+    };
+    let dir = temp("signer");
+    let key = key_pair(&dir, "key", "lab@certifier");
+    let other = key_pair(&dir, "other", "someone@else");
+    let run = report("fc510x", vec![], 9, vec![]);
+    let mut cert = Certificate::of(&run);
+    cert.signer = Some(signer(&key).unwrap());
+    let page = canif_harness::certificate::html(&cert, &Catalogue::embedded().unwrap());
+    let named = cert.signer.clone().unwrap();
+    assert!(named.fingerprint.starts_with("SHA256:") && named.comment == "lab@certifier");
+    assert!(
+        page.contains(&named.to_string()),
+        "the page names the signer"
+    );
+    let bytes = cert.canonical();
+    assert!(
+        String::from_utf8_lossy(&bytes).contains("lab@certifier"),
+        "signed with the rest"
+    );
+    let sig = sign(&bytes, &key).unwrap();
+    assert_eq!(
+        verify(&bytes, &sig, &dir.join("key.pub")).unwrap(),
+        named.fingerprint
+    );
+
+    match verify(&bytes, &sig, &dir.join("other.pub")) {
+        Err(SignatureError::OtherKey { signed_by, given }) => {
+            assert_eq!(signed_by, named.fingerprint);
+            assert_eq!(given, signer(&other).unwrap().fingerprint);
+        }
+        other => panic!("another key's check: {other:?}"),
+    }
+    let mut edited = cert.clone();
+    let (key_of_pass, _) = edited
+        .verdicts
+        .iter()
+        .find(|(_, v)| v.verdict == VerdictKind::Pass)
+        .map(|(k, v)| (k.clone(), v.clone()))
+        .unwrap();
+    edited.verdicts.get_mut(&key_of_pass).unwrap().verdict = VerdictKind::Fail;
+    assert!(matches!(
+        verify(&edited.canonical(), &sig, &dir.join("key.pub")),
+        Err(SignatureError::DoesNotVerify(_))
+    ));
+    let changes = differences_from_run(&edited, &json(&run));
+    assert_eq!(
+        changes,
+        [format!(
+            "{key_of_pass}: fail in the certificate, pass in the run"
+        )]
+    );
+    assert!(differences_from_run(&cert, &json(&run)).is_empty());
+    let _ = std::fs::remove_dir_all(dir);
 }

@@ -90,6 +90,11 @@ pub(crate) fn certify(
     };
     let code = finish(catalogue, &report, &out.join("run"));
     let mut cert = Certificate::of(&report);
+    // The signer is named inside what it signs, so that the page and the
+    // JSON say whose key vouches for them.
+    if let Some(key) = key {
+        cert.signer = Some(certificate::signer(key).map_err(|e| stop!("--key {e}"))?);
+    }
     let page = certificate::html(&cert, catalogue);
     cert.html_sha256 = certificate::sha256_hex(page.as_bytes());
     let bytes = cert.canonical();
@@ -107,12 +112,15 @@ pub(crate) fn certify(
     match key {
         Some(key) => match certificate::sign(&bytes, key).map(|s| std::fs::write(&sig, s)) {
             Ok(Ok(())) => sayln!(
-                "certificate: {} — signed in {}; check it without canif:\n  {}",
+                "certificate: {} — signed by {} in {}; check it without canif:\n  {}",
                 if cert.conforms {
                     "CONFORMS"
                 } else {
                     "DOES NOT CONFORM"
                 },
+                cert.signer
+                    .as_ref()
+                    .map_or_else(String::new, ToString::to_string),
                 sig.display(),
                 ssh_keygen_command(&json)
             ),
@@ -180,8 +188,12 @@ pub(crate) fn verify_certificate(path: &Path, pubkey: &Path) -> Result<ExitCode,
                 }
                 Err(_) => format!("no {} to check", html.display()),
             };
+            let by = match &cert.signer {
+                Some(signer) if signer.fingerprint == fingerprint => signer.to_string(),
+                _ => fingerprint,
+            };
             sayln!(
-                "{}: good signature by {fingerprint}; {}, {} on {}; {page}",
+                "{}: good signature by {by}; {}, {} on {}; {page}",
                 path.display(),
                 if cert.conforms {
                     "CONFORMS"
@@ -195,8 +207,34 @@ pub(crate) fn verify_certificate(path: &Path, pubkey: &Path) -> Result<ExitCode,
         }
         Err(error) => {
             sayln!("{}: {error}", path.display());
+            if let certificate::SignatureError::DoesNotVerify(_) = error {
+                say_what_changed(path, &cert);
+            }
             Ok(ExitCode::from(1))
         }
+    }
+}
+
+/// For a certificate that changed after it was signed: what differs from
+/// the run report it was made from (`run/report.json` beside it).
+fn say_what_changed(path: &Path, cert: &Certificate) {
+    let run = path.with_file_name("run").join("report.json");
+    let Some(report) = std::fs::read_to_string(&run)
+        .ok()
+        .and_then(|text| ReportFile::parse(&text).ok())
+    else {
+        sayln!("  (no {} beside it to tell what changed)", run.display());
+        return;
+    };
+    let changes = certificate::differences_from_run(cert, &report);
+    if changes.is_empty() {
+        sayln!(
+            "  its verdicts still match {}: what changed is elsewhere in it (a field the run does not hold)",
+            run.display()
+        );
+    }
+    for change in changes.iter().take(20) {
+        sayln!("  changed: {change}");
     }
 }
 
