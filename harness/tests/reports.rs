@@ -55,6 +55,7 @@ fn report(profile: &str, faults: Vec<Fault>, seed: u64, gherkin: Vec<GherkinRun>
         )],
         wall_time_ms: 1,
         interrupted: false,
+        flaky: Vec::new(),
     }
 }
 
@@ -144,6 +145,7 @@ fn a_run_that_checked_nothing_does_not_conform() {
         )],
         wall_time_ms: 1,
         interrupted: false,
+        flaky: Vec::new(),
     };
     assert_eq!(report.exit_code(), 2);
     assert_eq!(report.headline(), "NOTHING CHECKED");

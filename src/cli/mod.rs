@@ -290,6 +290,23 @@ pub(crate) struct RunArgs {
     /// (by default they are reported as skipped, and the Gherkin stage is left out).
     #[arg(long)]
     pub(crate) no_fail_fast: bool,
+    /// Profiles run at once, each on a thread of its own; the verdicts are
+    /// a serial run's. On the simulated bus only, and not for a library in
+    /// canif's process or an EtherCAT terminal (they share one process or link).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=256))]
+    pub(crate) jobs: u16,
+    /// Run again only what failed or erred in a report (default the last
+    /// run's, reports/latest/report.json), on the profiles it failed on. A
+    /// check that failed there and passes now is reported FLAKY, exit 1:
+    /// never a pass.
+    #[arg(
+        long,
+        value_name = "REPORT",
+        num_args = 0..=1,
+        default_missing_value = "reports/latest/report.json",
+        conflicts_with_all = ["scenario", "requirement"]
+    )]
+    pub(crate) rerun_failed: Option<PathBuf>,
     /// Only checks whose name contains this text (repeatable: any of them):
     /// lockstep and Gherkin scenarios, as `canif list scenarios` names them.
     #[arg(long, value_name = "TEXT")]
@@ -309,6 +326,8 @@ pub(crate) struct RunArgs {
     pub(crate) coupler_fault: Option<String>,
 }
 
+// Parsed once per process: the size of its largest variant costs nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Subcommand)]
 pub(crate) enum Command {
     /// Certify an implementation against the model, per profile, on the

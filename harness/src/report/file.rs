@@ -135,6 +135,9 @@ pub struct ReportFile {
     /// Present only when the run was asked to stop before it ended.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub interrupted: bool,
+    /// Checks that failed in the run before and pass now (`--rerun-failed`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub flaky: Vec<String>,
     pub meta: RunMeta,
     pub profiles: Vec<ProfileEntry>,
     pub totals: TotalsEntry,
@@ -271,6 +274,7 @@ impl ReportFile {
         ReportFile {
             format: REPORT_FORMAT,
             interrupted: report.interrupted,
+            flaky: report.flaky.clone(),
             meta: report.meta.clone(),
             profiles: report
                 .profiles

@@ -73,7 +73,9 @@ impl RunReport {
             }
             let _ = writeln!(
                 profiles,
-                "<td>{}</td><td>{}</td><td>{}</td></tr>",
+                "<td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                p.lockstep.runs.len(),
+                p.gherkin.len(),
                 p.checks.len(),
                 p.lockstep.cycles(),
                 p.lockstep.frames_checked()
@@ -186,7 +188,7 @@ pre{{background:#f6f6f6;padding:6px;overflow-x:auto;font-size:12px}} svg.timing{
 <p id="headline"><b>{headline}</b>: {totals}.</p>
 <table id="meta">{meta}</table>
 <h2>Profiles</h2>
-<table id="profiles"><tr><th>profile</th><th>pass</th><th>fail</th><th>error</th><th>not applicable</th><th>not run</th><th>not testable</th><th>checks</th><th>cycles</th><th>frames checked</th></tr>
+<table id="profiles"><tr><th>profile</th><th>pass</th><th>fail</th><th>error</th><th>not applicable</th><th>not run</th><th>not testable</th><th>scenarios</th><th>Gherkin scenarios</th><th>checks</th><th>cycles</th><th>frames checked</th></tr>
 {profiles}</table>
 {not_served}{advisories}<h2>Failing and erring requirements</h2>
 {problems}

@@ -128,6 +128,9 @@ pub struct RunReport {
     pub wall_time_ms: u128,
     /// The run was asked to stop (SIGINT, SIGTERM): it reports what ran.
     pub interrupted: bool,
+    /// `--rerun-failed`: checks that failed in the run before and pass now,
+    /// `profile::check`. Flaky is never a pass.
+    pub flaky: Vec<String>,
 }
 
 /// Counts of verdicts over every requirement × profile.
@@ -164,13 +167,13 @@ impl RunReport {
     }
 
     /// 130 when interrupted, 1 on any failure (what the implementation did
-    /// wrong, whatever else broke), 2 on an error or when nothing was
+    /// wrong, whatever else broke) or a flaky check, 2 on an error or when nothing was
     /// checked, 0 when everything that ran passed.
     pub fn exit_code(&self) -> u8 {
         let totals = self.totals();
         if self.interrupted {
             130
-        } else if totals[&VerdictKind::Fail] > 0 {
+        } else if totals[&VerdictKind::Fail] > 0 || !self.flaky.is_empty() {
             1
         } else if totals[&VerdictKind::Error] > 0 || totals[&VerdictKind::Pass] == 0 {
             2
@@ -184,6 +187,10 @@ impl RunReport {
         let totals = self.totals();
         match self.exit_code() {
             130 => "INTERRUPTED".into(),
+            1 if totals[&VerdictKind::Fail] == 0 => format!(
+                "FLAKY ({} check(s) failed in the run before and pass now)",
+                self.flaky.len()
+            ),
             1 => "DOES NOT CONFORM".into(),
             2 if totals[&VerdictKind::Error] > 0 => "ERROR".into(),
             2 => "NOTHING CHECKED".into(),

@@ -95,11 +95,12 @@ impl RunReport {
                 );
             }
         }
-        md.push_str("\n| profile | pass | fail | error | n/a | not run | not testable | checks | cycles | frames checked |\n|---|---|---|---|---|---|---|---|---|---|\n");
+        // The scenario counts are those the run's progress lines say.
+        md.push_str("\n| profile | pass | fail | error | n/a | not run | not testable | scenarios | Gherkin scenarios | checks | cycles | frames checked |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n");
         for p in &self.profiles {
             let _ = writeln!(
                 md,
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
                 p.profile,
                 p.count(VerdictKind::Pass),
                 p.count(VerdictKind::Fail),
@@ -107,6 +108,8 @@ impl RunReport {
                 p.count(VerdictKind::NotApplicable),
                 p.count(VerdictKind::NotRun),
                 p.count(VerdictKind::NotTestable),
+                p.lockstep.runs.len(),
+                p.gherkin.len(),
                 p.checks.len(),
                 p.lockstep.cycles(),
                 p.lockstep.frames_checked()
@@ -140,6 +143,12 @@ impl RunReport {
             .into_iter()
             .filter(|p| p.verdict.kind() == VerdictKind::Fail)
             .peekable();
+        if !self.flaky.is_empty() {
+            md.push_str("\n## Flaky: failed in the run before, pass now (never a pass)\n\n");
+            for key in &self.flaky {
+                let _ = writeln!(md, "- {key}");
+            }
+        }
         if failing.peek().is_some() {
             md.push_str("\n## Failing requirements\n\n");
             for problem in failing {

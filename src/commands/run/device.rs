@@ -28,6 +28,9 @@ pub(crate) fn run(
     report_dir: &Path,
 ) -> Result<ExitCode, Stop> {
     let kind = resolve_iut(iut)?;
+    if let Some(rerun) = &plan.rerun {
+        rerun.same_iut(&kind.name())?;
+    }
     plan.check_selection(catalogue)?;
     if let IutKind::Door(Door::Ethercat {
         link: canif_harness::door::ethercat::EthercatLink::Interface { name, .. },
@@ -150,7 +153,7 @@ pub(crate) fn execute(
     );
     let mut meta = meta;
     meta.terminals = survey_terminals(kind, plan, pace);
-    let lockstep = plan.run_profiles(catalogue, kind, Some("cycles"));
+    let lockstep = plan.run_profiles_on(catalogue, kind, Some("cycles"), plan.jobs);
     meta.choices = judged_choices(options, kind);
     let iut_broke = lockstep.iter().flat_map(|p| &p.runs).any(|r| {
         matches!(

@@ -6,8 +6,11 @@
 
 mod canopen;
 pub(crate) mod device;
+mod plan;
 pub(crate) mod plc;
 mod progress;
+mod rerun;
+mod self_check;
 
 use std::path::Path;
 use std::process::ExitCode;
@@ -15,236 +18,13 @@ use std::process::ExitCode;
 use crate::cli::{RunArgs, SideArg, Suite};
 use crate::stop::{stop, Stop};
 
-use canif_features::{ScenarioInfo, UnderTest};
-use canif_harness::report::{Product, ProfileReport, RunMeta, RunReport};
-use canif_harness::run::{run_profile, KillRow, ProfileRun, Side};
-use canif_harness::verdict::NotRunReason;
-use canif_harness::GherkinRun;
-use canif_spec::{Catalogue, Profile, ReqId};
+use canif_harness::report::RunReport;
+use canif_harness::run::Side;
+use canif_spec::{Catalogue, Profile};
 
-pub(crate) use progress::Progress;
+pub(crate) use plan::Plan;
+pub(crate) use self_check::self_check;
 
-/// A run of one side, checked before anything starts.
-pub(crate) struct Plan<'c, S> {
-    pub profiles: Vec<&'c Profile>,
-    pub options: S,
-    pub product: Option<Product>,
-    /// The Gherkin scenarios of this side these profiles run, read once: (profile, scenario).
-    pub gherkin: Vec<(String, ScenarioInfo)>,
-}
-
-impl<'c, S: Side> Plan<'c, S> {
-    /// The plan, or the exit code of feature files that do not parse (said on stderr).
-    pub(crate) fn new(
-        profiles: Vec<&'c Profile>,
-        options: S,
-        product: Option<Product>,
-    ) -> Result<Self, Stop> {
-        let scenarios = canif_features::scenarios()
-            .map_err(|error| stop!("the feature files do not parse: {error}"))?;
-        // The feature files are the interface suite's.
-        let gherkin = match S::SUITE {
-            canif_spec::Suite::Interface => {
-                canif_features::schedule::targets(&scenarios, &profiles, S::SIDE)
-            }
-            canif_spec::Suite::Canopen => Vec::new(),
-        };
-        Ok(Plan {
-            profiles,
-            options,
-            product,
-            gherkin,
-        })
-    }
-
-    /// Every check the plan could run: (profile, name, requirements exercised).
-    pub(crate) fn candidates(&self) -> Vec<(String, String, Vec<String>)> {
-        let mut list = Vec::new();
-        for profile in &self.profiles {
-            for case in self.options.cases(profile) {
-                let covers = S::covers(&case).iter().map(ReqId::to_string).collect();
-                list.push((profile.name.clone(), S::name(&case), covers));
-            }
-            for (_, scenario) in self.gherkin.iter().filter(|(p, _)| *p == profile.name) {
-                list.push((
-                    profile.name.clone(),
-                    scenario.id(),
-                    scenario.requirements.clone(),
-                ));
-            }
-        }
-        list
-    }
-
-    /// An unknown requirement or a selection that matches nothing is a usage error.
-    pub(crate) fn check_selection(&self, catalogue: &Catalogue) -> Result<(), Stop> {
-        let selection = self.options.selection();
-        for id in &selection.requirements {
-            if catalogue.requirement(id).is_none() {
-                let near = super::did_you_mean(id, catalogue.requirements().map(|r| r.id.as_str()));
-                return Err(stop!(
-                    "--requirement {id}: no such requirement{near}; `canif spec list` lists them"
-                ));
-            }
-        }
-        if selection.is_everything()
-            || self
-                .candidates()
-                .iter()
-                .any(|(_, name, covers)| selection.admits(name, covers.iter().map(String::as_str)))
-        {
-            return Ok(());
-        }
-        // A statement of the other side: say where it is judged, and this side's own.
-        for id in &selection.requirements {
-            let Some(requirement) = catalogue.requirement(id) else {
-                continue;
-            };
-            if requirement.side != S::SIDE {
-                let own: Vec<&str> = requirement
-                    .related
-                    .iter()
-                    .filter(|r| catalogue.requirement(r).is_some_and(|r| r.side == S::SIDE))
-                    .map(String::as_str)
-                    .collect();
-                let own = match own.is_empty() {
-                    true => String::new(),
-                    false => format!("; this side's own statement: {}", own.join(", ")),
-                };
-                return Err(stop!(
-                    "--requirement {id} binds the {} side, not the {} side: `canif run --side {} --requirement {id}` judges it{own}",
-                    requirement.side,
-                    S::SIDE,
-                    requirement.side,
-                ));
-            }
-        }
-        Err(stop!(
-            "{} matches no check on {}; `canif list scenarios` lists them",
-            selection.flags(),
-            self.profiles
-                .iter()
-                .map(|p| p.name.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ))
-    }
-
-    /// Each profile's cases against what is under test, with a progress line each.
-    fn run_profiles(
-        &self,
-        catalogue: &Catalogue,
-        under_test: &S::UnderTest,
-        unit: Option<&str>,
-    ) -> Vec<ProfileRun> {
-        let count = self.profiles.len();
-        let mut runs = Vec::new();
-        for (n, profile) in self.profiles.iter().enumerate() {
-            if canif_harness::interrupt::requested() {
-                errln!("interrupted: the remaining profiles are not run");
-                break;
-            }
-            let mut progress = Progress::new(n, count, &profile.name);
-            let run = run_profile(profile, under_test, &self.options, |run| {
-                progress.scenario(run)
-            });
-            progress.done(&run, catalogue, profile, unit);
-            runs.push(run);
-        }
-        runs
-    }
-
-    /// The selected Gherkin scenarios against what is under test: (profile, run).
-    fn run_gherkin(&self, under_test: &UnderTest) -> Vec<(String, GherkinRun)> {
-        let mut results = Vec::new();
-        let selection = self.options.selection();
-        for (profile_name, scenario) in &self.gherkin {
-            if !selection.admits(
-                &scenario.id(),
-                scenario.requirements.iter().map(String::as_str),
-            ) {
-                continue;
-            }
-            if canif_harness::interrupt::requested() {
-                break;
-            }
-            let Some(profile) = self.profiles.iter().find(|p| p.name == *profile_name) else {
-                continue;
-            };
-            let run = canif_features::schedule::run(profile, scenario, under_test);
-            results.push((profile_name.clone(), run));
-        }
-        let count = |f: fn(&GherkinRun) -> bool| results.iter().filter(|(_, r)| f(r)).count();
-        errln!(
-            "Gherkin scenarios: {} run, {} failed, {} error",
-            results.len(),
-            count(|r| matches!(r.outcome, canif_harness::GherkinOutcome::Fail { .. })),
-            count(|r| matches!(r.outcome, canif_harness::GherkinOutcome::Error(_))),
-        );
-        results
-    }
-
-    /// The report: every profile's checks judged once, with what the run left out.
-    fn assemble(
-        &self,
-        catalogue: &Catalogue,
-        lockstep: Vec<ProfileRun>,
-        gherkin: Vec<(String, GherkinRun)>,
-        left_out: Vec<String>,
-        meta: RunMeta,
-        started: std::time::Instant,
-    ) -> RunReport {
-        for line in &left_out {
-            errln!("left out: {line}");
-        }
-        let interrupted = canif_harness::interrupt::requested();
-        let profiles = lockstep
-            .into_iter()
-            .zip(&self.profiles)
-            .map(|(run, profile)| {
-                let mut reach = run.reach.clone();
-                reach.here.extend(
-                    self.gherkin
-                        .iter()
-                        .filter(|(p, _)| *p == profile.name)
-                        .flat_map(|(_, s)| s.requirements.iter().cloned()),
-                );
-                if !left_out.is_empty() {
-                    reach.left_out = NotRunReason::LeftOut(left_out.join("; "));
-                } else if interrupted {
-                    reach.left_out = NotRunReason::LeftOut("interrupted".into());
-                }
-                let runs: Vec<GherkinRun> = gherkin
-                    .iter()
-                    .filter(|(p, _)| *p == profile.name)
-                    .map(|(_, r)| r.clone())
-                    .collect();
-                ProfileReport::new(catalogue, profile, run, runs, Vec::new(), &reach)
-            })
-            .collect();
-        RunReport {
-            meta: RunMeta {
-                complete: left_out.is_empty() && !interrupted,
-                product: self.product.clone(),
-                left_out: (!left_out.is_empty()).then(|| left_out.join("; ")),
-                ..meta
-            },
-            profiles,
-            wall_time_ms: started.elapsed().as_millis(),
-            interrupted,
-        }
-    }
-
-    /// The selection as the run's first left-out line, when it leaves anything out.
-    fn selection_left_out(&self) -> Vec<String> {
-        let selection = self.options.selection();
-        if selection.is_everything() {
-            Vec::new()
-        } else {
-            vec![selection.describe()]
-        }
-    }
-}
 /// `canif run`: either side, or the CANopen suite, with its reports.
 pub(crate) fn command(catalogue: &Catalogue, args: RunArgs) -> Result<ExitCode, Stop> {
     let RunArgs {
@@ -268,9 +48,33 @@ pub(crate) fn command(catalogue: &Catalogue, args: RunArgs) -> Result<ExitCode, 
         coupler_fault,
         side,
         master,
+        jobs,
+        rerun_failed,
     } = args;
+    let jobs = usize::from(jobs);
     let bus = device::bus_choice(&bus, &real_time);
     let pace = device::pace(&real_time);
+    let rerun = match &rerun_failed {
+        Some(path) => {
+            let role = match side {
+                SideArg::Device => canif_spec::Side::Device,
+                SideArg::Plc => canif_spec::Side::Plc,
+            };
+            Some(rerun::Rerun::read(path, role)?)
+        }
+        None => None,
+    };
+    let (scenario, profile) = match &rerun {
+        Some(rerun) if rerun.failed.is_empty() => {
+            sayln!(
+                "--rerun-failed: nothing failed or erred in {}; nothing to rerun",
+                rerun.report.display()
+            );
+            return Ok(ExitCode::SUCCESS);
+        }
+        Some(rerun) => (rerun.scenarios(), rerun.profiles()),
+        None => (scenario, profile),
+    };
     let selection = canif_harness::run::Selection {
         scenarios: scenario,
         requirements: requirement,
@@ -285,6 +89,24 @@ pub(crate) fn command(catalogue: &Catalogue, args: RunArgs) -> Result<ExitCode, 
     ];
     let plc_only = [(!master.is_empty(), "--master")];
     crate::cli::side_conflicts(side, &device_only, &plc_only)?;
+    if jobs > 1 {
+        let shared = match &iut.iut {
+            Some(crate::cli::IutArg::Ethercat(_)) => Some("an EtherCAT terminal: one link"),
+            Some(crate::cli::IutArg::Lib(_)) if iut.lib_in_process => {
+                Some("--lib-in-process: one library in canif's process")
+            }
+            _ if bus != canif_harness::device::bus::BusChoice::Sim => {
+                Some("a SocketCAN bus: one interface")
+            }
+            _ if suite == Suite::Canopen => Some("the CANopen suite: one node"),
+            _ => None,
+        };
+        if let Some(why) = shared {
+            return Err(stop!(
+                "--jobs {jobs}: the profiles would share {why}; run them one at a time"
+            ));
+        }
+    }
     if suite == Suite::Canopen {
         let target = canopen::target(&iut, &bus, node, coupler_fault.as_deref())?;
         let profile = canopen::node_profile(catalogue, &target)?;
@@ -314,7 +136,12 @@ pub(crate) fn command(catalogue: &Catalogue, args: RunArgs) -> Result<ExitCode, 
         };
         // What the client declares of itself, asked once.
         let options = options.declared_by(&kind);
-        let plan = Plan::new(profiles, options, product.product())?;
+        if let Some(rerun) = &rerun {
+            rerun.same_iut(&kind.name())?;
+        }
+        let mut plan = Plan::new(profiles, options, product.product())?;
+        plan.jobs = jobs;
+        plan.rerun = rerun;
         return plc::run(catalogue, &kind, &plan, &report);
     }
     if let Some(dir) = &trace {
@@ -355,7 +182,9 @@ pub(crate) fn command(catalogue: &Catalogue, args: RunArgs) -> Result<ExitCode, 
         observed: Default::default(),
         iut_declared: Default::default(),
     };
-    let plan = Plan::new(profiles, options, product.product())?;
+    let mut plan = Plan::new(profiles, options, product.product())?;
+    plan.jobs = jobs;
+    plan.rerun = rerun;
     device::run(catalogue, &iut, &plan, pace, &report)
 }
 
@@ -453,139 +282,4 @@ pub(crate) fn finish(
         report_dir.display()
     );
     Ok(ExitCode::from(report.exit_code()))
-}
-
-/// `canif self-check`: both kill matrices, every fault of each side on every profile.
-pub(crate) fn self_check(catalogue: &Catalogue, seed: u64) -> Result<ExitCode, Stop> {
-    let options = canif_harness::device::Options {
-        cases: 2,
-        generated_cycles: 150,
-        ..canif_harness::device::Options::quick(seed)
-    };
-    let mut devices = canif_harness::run::kill_matrix(catalogue, &options, |fault| {
-        errln!("running {fault} on every profile")
-    });
-    let plan = Plan::new(catalogue.profiles.iter().collect(), options, None)?;
-    for row in &mut devices {
-        errln!("running {} in the Gherkin scenarios", row.fault.name());
-        add_gherkin_failures(&plan, catalogue, row);
-    }
-    let uncaught = print_kill_table("device fault", &devices, |f| f.name());
-    let device_unreached = print_unreached::<canif_harness::device::Options>(
-        catalogue,
-        devices.iter().flat_map(KillRow::failed),
-    );
-    let clients = canif_harness::run::kill_matrix(
-        catalogue,
-        &canif_harness::client::suite::ClientOptions {
-            counter_wrap: false,
-            ..canif_harness::client::suite::ClientOptions::new(seed)
-        },
-        |fault| errln!("running client fault {fault} on every profile"),
-    );
-    sayln!();
-    let clients_uncaught = print_kill_table("client fault", &clients, |f| f.name());
-    let client_unreached = print_unreached::<canif_harness::client::suite::ClientOptions>(
-        catalogue,
-        clients.iter().flat_map(KillRow::failed),
-    );
-    let short = uncaught + clients_uncaught + device_unreached + client_unreached;
-    Ok(ExitCode::from(u8::from(short > 0)))
-}
-
-/// What the Gherkin scenarios failed with the device fault of `row`, added
-/// to what its lockstep scenarios failed: a run blames both, and some
-/// statements only a scenario tagged with them isolates (RXQ-001's depth).
-fn add_gherkin_failures(
-    plan: &Plan<'_, canif_harness::device::Options>,
-    catalogue: &Catalogue,
-    row: &mut KillRow<canif_softdevice::Fault>,
-) {
-    let kind = canif_harness::device::IutKind::SoftDevice {
-        faults: vec![row.fault],
-        choices: vec![],
-    };
-    let faulty = UnderTest::Device(kind.clone(), kind.declared());
-    for (profile_name, run) in plan.run_gherkin(&faulty) {
-        let canif_harness::GherkinOutcome::Fail { blamed, .. } = run.outcome else {
-            continue;
-        };
-        let Some(profile) = catalogue.profile(&profile_name) else {
-            continue;
-        };
-        let applies = |id: &String| {
-            catalogue
-                .requirement(id)
-                .is_some_and(|r| profile.lacks(&r.capabilities).is_empty())
-        };
-        let caught = match row
-            .caught
-            .iter_mut()
-            .find(|(name, _)| *name == profile_name)
-        {
-            Some((_, ids)) => ids,
-            None => {
-                row.caught.push((profile_name.clone(), Vec::new()));
-                &mut row.caught.last_mut().expect("just pushed").1
-            }
-        };
-        for id in blamed.into_iter().filter(applies) {
-            if !caught.contains(&id) {
-                caught.push(id);
-            }
-        }
-    }
-}
-
-/// The side's requirements no fault failed, listed (issue 36: every
-/// requirement is shown able to fail); how many.
-fn print_unreached<'a, S: canif_harness::run::SelfCheck>(
-    catalogue: &Catalogue,
-    failed: impl IntoIterator<Item = &'a str>,
-) -> usize {
-    let unreached = canif_harness::run::unreached::<S>(catalogue, failed);
-    match unreached.as_slice() {
-        [] => sayln!("\nevery {} requirement is failed by some fault", S::SIDE),
-        ids => sayln!(
-            "\n{} {} requirements no fault fails yet: {}",
-            ids.len(),
-            S::SIDE,
-            ids.join(", ")
-        ),
-    }
-    unreached.len()
-}
-
-/// One kill matrix as Markdown: each fault, the profiles it was caught on and
-/// the requirements that failed. The faults not caught anywhere, counted.
-fn print_kill_table<F: Copy>(
-    what: &str,
-    rows: &[KillRow<F>],
-    name: impl Fn(F) -> &'static str,
-) -> usize {
-    let mut uncaught = 0;
-    sayln!("| {what} | caught on | requirements that failed |\n|---|---|---|");
-    for row in rows {
-        let on = row.caught.iter().filter(|(_, ids)| !ids.is_empty()).count();
-        let ids: std::collections::BTreeSet<&str> = row.failed().collect();
-        if on == 0 {
-            uncaught += 1;
-        }
-        sayln!(
-            "| {} | {on}/{} profiles | {} |",
-            name(row.fault),
-            row.caught.len(),
-            if ids.is_empty() {
-                "NOT CAUGHT".to_string()
-            } else {
-                ids.into_iter().collect::<Vec<_>>().join(", ")
-            }
-        );
-    }
-    sayln!(
-        "\n{} of {} {what}s caught",
-        rows.len() - uncaught,
-        rows.len()
-    );
-    uncaught
 }

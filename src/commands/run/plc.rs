@@ -103,8 +103,10 @@ pub(crate) fn execute(
         options: plan.options.clone(),
         product: plan.product.clone(),
         gherkin,
+        jobs: plan.jobs,
+        rerun: plan.rerun.clone(),
     };
-    let mut lockstep = plan.run_profiles(catalogue, kind, Some("task cycles"));
+    let mut lockstep = plan.run_profiles_on(catalogue, kind, Some("task cycles"), plan.jobs);
     for run in &mut lockstep {
         for (profile, scenario) in declined.iter().filter(|(p, _)| *p == run.profile) {
             let profile = plan.profiles.iter().find(|p| p.name == *profile);

@@ -1,5 +1,7 @@
 //! What a run says on stderr while it works through the profiles: the
-//! scenario running (on a terminal), then one line per profile.
+//! scenario running (on a terminal), then one line per profile with how
+//! many are done and about how long the rest take. Its scenario counts are
+//! the summary's `scenarios` column.
 
 use std::io::{IsTerminal, Write as _};
 
@@ -41,18 +43,43 @@ impl<'a> Progress<'a> {
         }
     }
 
+    /// The line of a profile run beside others (`--jobs`): how many are
+    /// done after how long, and about how long the rest take at that pace.
+    pub(crate) fn done_after(
+        self,
+        result: &ProfileRun,
+        (catalogue, profile, unit): (&Catalogue, &Profile, Option<&str>),
+        (done, elapsed): (usize, std::time::Duration),
+    ) {
+        let left = elapsed.as_secs_f64() / done as f64 * (self.count - done) as f64;
+        let pace = match self.count - done {
+            0 => format!(
+                "{done} of {} profiles done in {:.0} s",
+                self.count,
+                elapsed.as_secs_f64()
+            ),
+            _ => format!(
+                "{done} of {} profiles done in {:.0} s, about {left:.0} s left",
+                self.count,
+                elapsed.as_secs_f64()
+            ),
+        };
+        if self.terminal {
+            err!("\r\x1b[2K");
+        }
+        let line = self.line(result, catalogue, profile, unit);
+        errln!("{line} [{pace}]");
+    }
+
     /// The profile's line; `unit`: what its cycles are (device or task
     /// cycles), `None` for cases that run no cycles (the CANopen checks).
-    pub(crate) fn done(
-        self,
+    fn line(
+        &self,
         result: &ProfileRun,
         catalogue: &Catalogue,
         profile: &Profile,
         unit: Option<&str>,
-    ) {
-        if self.terminal {
-            err!("\r\x1b[2K");
-        }
+    ) -> String {
         let count = |error: bool| {
             result
                 .runs
@@ -73,7 +100,7 @@ impl<'a> Progress<'a> {
             ),
             None => format!("{} checks", result.runs.len()),
         };
-        errln!(
+        format!(
             "[{}/{}] {:<22} {volume}: {}",
             self.n + 1,
             self.count,
@@ -86,6 +113,6 @@ impl<'a> Progress<'a> {
                 ),
                 (f, e) => format!("{f} fail, {e} ERROR"),
             }
-        );
+        )
     }
 }

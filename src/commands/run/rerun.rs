@@ -1,0 +1,104 @@
+//! `canif run --rerun-failed [REPORT]`: only what failed or erred in a
+//! report, on the profiles it failed on; and a check that failed there and
+//! passes now is flaky, reported as such and never as a pass.
+
+use std::path::{Path, PathBuf};
+
+use canif_harness::report::{ProfileReport, ReportFile};
+use canif_harness::verdict::{CheckResult, VerdictKind};
+
+use crate::stop::{stop, Stop};
+
+/// What a report said failed: `(profile, check key)`.
+#[derive(Debug, Clone)]
+pub(crate) struct Rerun {
+    pub report: PathBuf,
+    pub iut: String,
+    pub failed: Vec<(String, String)>,
+}
+
+impl Rerun {
+    /// The report's failing and erring checks, from a run of the same side.
+    pub(crate) fn read(path: &Path, side: canif_spec::Side) -> Result<Self, Stop> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| stop!("--rerun-failed {}: {e}", path.display()))?;
+        let report = ReportFile::parse(&text)
+            .map_err(|e| stop!("--rerun-failed {}: {e}", path.display()))?;
+        if report.meta.side != side {
+            return Err(stop!(
+                "--rerun-failed {}: a {} side run; this is the {} side",
+                path.display(),
+                report.meta.side,
+                side
+            ));
+        }
+        let mut failed = Vec::new();
+        for profile in &report.profiles {
+            for check in &profile.checks {
+                let key = (profile.profile.clone(), check.check.clone());
+                if check.outcome.is_bad() && !failed.contains(&key) {
+                    failed.push(key);
+                }
+            }
+        }
+        Ok(Rerun {
+            report: path.to_path_buf(),
+            iut: report.meta.iut,
+            failed,
+        })
+    }
+
+    /// The checks' names as `--scenario` takes them (without `scenario: `).
+    pub(crate) fn scenarios(&self) -> Vec<String> {
+        let mut names: Vec<String> = self
+            .failed
+            .iter()
+            .map(|(_, key)| {
+                key.split_once(": ")
+                    .map_or(key.as_str(), |(_, n)| n)
+                    .to_string()
+            })
+            .collect();
+        names.sort();
+        names.dedup();
+        names
+    }
+
+    pub(crate) fn profiles(&self) -> Vec<String> {
+        let mut names: Vec<String> = self.failed.iter().map(|(p, _)| p.clone()).collect();
+        names.sort();
+        names.dedup();
+        names
+    }
+
+    /// The rerun is of the implementation the report was.
+    pub(crate) fn same_iut(&self, iut: &str) -> Result<(), Stop> {
+        match self.iut == iut {
+            true => Ok(()),
+            false => Err(stop!(
+                "--rerun-failed {}: that run was of `{}`, this one of `{iut}`",
+                self.report.display(),
+                self.iut
+            )),
+        }
+    }
+
+    /// `profile::check` of every check that failed before and all of whose
+    /// runs pass now.
+    pub(crate) fn flaky(&self, profiles: &[ProfileReport]) -> Vec<String> {
+        self.failed
+            .iter()
+            .filter(|(profile, key)| {
+                let now: Vec<&CheckResult> = profiles
+                    .iter()
+                    .filter(|p| p.profile == *profile)
+                    .flat_map(|p| &p.checks)
+                    .filter(|c| c.evidence.key() == *key)
+                    .map(|c| &c.result)
+                    .collect();
+                !now.is_empty() && now.iter().all(|r| r.kind() == VerdictKind::Pass)
+            })
+            .map(|(profile, key)| format!("{profile}::{key}"))
+            .collect()
+    }
+}
