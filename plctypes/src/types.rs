@@ -203,16 +203,12 @@ impl ImageTypes {
             "NoOfTxMessages",
             "003: 0x700z:03, messages to send from TxMessage[0]",
         );
-        outputs.push(Member {
-            name: "TxMessage".into(),
-            data_type: DataType::array(
-                layout.tx_slots,
-                DataType::Named(layout.tx_message.type_name.into()),
-            ),
-            offset: layout.tx_slot(0).start,
-            bit: None,
-            comment: "003: 0x700z:04.., the Tx slots, counted from 0 (000 §6)",
-        });
+        outputs.push(slots(
+            "TxMessage",
+            (layout.tx_slots, layout.tx_message),
+            layout.tx_slot(0).start,
+            "003: 0x700z:04.., the Tx slots, counted from 0 (000 §6)",
+        ));
         types.structs.push(StructType {
             name: OUTPUTS.into(),
             members: outputs,
@@ -231,16 +227,12 @@ impl ImageTypes {
                 "003: 0x600z:04, that of the last Tx message sent (000 §5.2)",
             ));
         }
-        inputs.push(Member {
-            name: "RxMessage".into(),
-            data_type: DataType::array(
-                layout.rx_slots,
-                DataType::Named(layout.rx_message.type_name.into()),
-            ),
-            offset: layout.rx_slot(0).start,
-            bit: None,
-            comment: "003: 0x600z:05.., the Rx slots, counted from 0 (000 §6)",
-        });
+        inputs.push(slots(
+            "RxMessage",
+            (layout.rx_slots, layout.rx_message),
+            layout.rx_slot(0).start,
+            "003: 0x600z:05.., the Rx slots, counted from 0 (000 §6)",
+        ));
         if layout.info_data {
             inputs.push(Member {
                 name: "InfoData".into(),
@@ -362,6 +354,22 @@ impl ImageTypes {
             });
         }
         self.structs.push(message(layout, role));
+    }
+}
+
+/// An image's message slots: `ARRAY [0..count-1] OF` the message's type.
+fn slots(
+    name: &str,
+    (count, message): (usize, &MessageLayout),
+    offset: usize,
+    comment: &'static str,
+) -> Member {
+    Member {
+        name: name.into(),
+        data_type: DataType::array(count, DataType::Named(message.type_name.into())),
+        offset,
+        bit: None,
+        comment,
     }
 }
 

@@ -9,8 +9,8 @@ use canif_harness::verdict::NotRunReason;
 use canif_harness::GherkinRun;
 use canif_spec::{Catalogue, Profile, ReqId};
 
-use super::rerun::Rerun;
 use super::progress::Progress;
+use super::rerun::Rerun;
 use crate::stop::{stop, Stop};
 
 /// A run of one side, checked before anything starts.
