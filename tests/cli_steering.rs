@@ -145,3 +145,35 @@ fn a_rerun_runs_only_what_failed_and_calls_a_check_that_now_passes_flaky() {
     let output = canif(&["run", "--rerun-failed", &edited, "--fault", "fd-padding-ff"]);
     assert_eq!(output.status.code(), Some(2));
 }
+
+/// On a terminal a run says which scenario of how many it is at and about
+/// how long the rest take; its count is the summary's `scenarios` column.
+#[test]
+fn a_run_on_a_terminal_shows_its_pace_with_the_summarys_counts() {
+    let report = dir("tty");
+    let command = format!(
+        "{} run --profile fc510x --report {report}",
+        env!("CARGO_BIN_EXE_canif")
+    );
+    // script(1) gives canif a terminal, as a user's shell would.
+    let output = Command::new("script")
+        .args(["-qc", &command, "/dev/null"])
+        .output()
+        .expect("script (util-linux) gives the run a terminal");
+    let shown = String::from_utf8_lossy(&output.stdout).replace('\r', "\n");
+    let summary = std::fs::read_to_string(format!("{report}/summary.md")).unwrap();
+    let row = summary
+        .lines()
+        .find(|l| l.starts_with("| fc510x |"))
+        .expect("the profile's row");
+    let scenarios: usize = row.split('|').nth(8).unwrap().trim().parse().unwrap();
+    assert!(
+        shown.contains(&format!("(1 of {scenarios} scenarios, ")),
+        "{shown}"
+    );
+    assert!(shown.contains("s left)"), "{shown}");
+    assert!(
+        shown.contains(&format!("{scenarios} scenarios, ")),
+        "the profile's line says the summary's count: {shown}"
+    );
+}

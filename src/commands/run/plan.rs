@@ -143,7 +143,17 @@ impl<'c, S: Side> Plan<'c, S> {
                 errln!("interrupted: the remaining profiles are not run");
                 break;
             }
-            let mut progress = Progress::new(n, count, &profile.name);
+            // How many of its cases the selection takes, for the terminal's pace.
+            let selection = self.options.selection();
+            let cases = self
+                .options
+                .cases(profile)
+                .iter()
+                .filter(|case| {
+                    selection.admits(&S::name(case), S::covers(case).iter().map(ReqId::as_str))
+                })
+                .count();
+            let mut progress = Progress::new(n, count, &profile.name).of_cases(cases);
             let run = run_profile(profile, under_test, &self.options, |run| {
                 progress.scenario(run)
             });

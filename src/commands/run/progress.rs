@@ -14,6 +14,9 @@ pub(crate) struct Progress<'a> {
     count: usize,
     profile: &'a str,
     done: usize,
+    /// The profile's cases, when known; and when its first began.
+    cases: Option<usize>,
+    started: std::time::Instant,
     terminal: bool,
 }
 
@@ -24,20 +27,40 @@ impl<'a> Progress<'a> {
             count,
             profile,
             done: 0,
+            cases: None,
+            started: std::time::Instant::now(),
             terminal: std::io::stderr().is_terminal(),
+        }
+    }
+
+    /// With the number of cases the profile's run has: the terminal's line
+    /// then says how far it is and about how long the rest take.
+    pub(crate) fn of_cases(self, cases: usize) -> Self {
+        Progress {
+            cases: Some(cases),
+            ..self
         }
     }
 
     pub(crate) fn scenario(&mut self, run: &ScenarioRun) {
         self.done += 1;
         if self.terminal {
+            let elapsed = self.started.elapsed().as_secs_f64();
+            let pace = match self.cases {
+                Some(cases) if cases > self.done => format!(
+                    "{} of {cases} scenarios, {elapsed:.0} s, about {:.0} s left",
+                    self.done,
+                    elapsed / self.done as f64 * (cases - self.done) as f64
+                ),
+                Some(cases) => format!("{} of {cases} scenarios, {elapsed:.0} s", self.done),
+                None => format!("{} scenarios, {elapsed:.0} s", self.done),
+            };
             err!(
-                "\r\x1b[2K[{}/{}] {}: {} ({} scenarios)",
+                "\r\x1b[2K[{}/{}] {}: {} ({pace})",
                 self.n + 1,
                 self.count,
                 self.profile,
                 run.scenario,
-                self.done
             );
             let _ = std::io::stderr().flush();
         }
