@@ -12,8 +12,12 @@ pub struct Place {
 }
 
 impl fmt::Display for Place {
+    /// `file:line`, or the file alone for what concerns all of it (line 0).
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}:{}", self.file, self.line)
+        match self.line {
+            0 => write!(f, "{}", self.file),
+            line => write!(f, "{}:{line}", self.file),
+        }
     }
 }
 

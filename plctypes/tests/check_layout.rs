@@ -295,4 +295,10 @@ fn input_canif_cannot_size_is_an_error_naming_file_and_line() {
     )
     .unwrap_err();
     assert!(matches!(missing.cause, Cause::Unreadable(_)), "{missing}");
+    assert!(
+        missing
+            .to_string()
+            .starts_with("/nonexistent/x.st: cannot read"),
+        "a file-wide error names the file alone: {missing}"
+    );
 }

@@ -135,6 +135,12 @@ pub(crate) fn check_layout(
             n => format!("{n} differences"),
         }
     );
+    if !checked.defects.is_empty() && args.interface.frame.is_none() {
+        outln!(
+            out,
+            "(checked against the profile's first frame format; --frame, --transaction-number and the slot counts choose the interface your declarations are for)"
+        );
+    }
     Ok(match checked.defects.is_empty() {
         true => ExitCode::SUCCESS,
         false => ExitCode::from(1),
