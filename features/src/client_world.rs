@@ -114,7 +114,9 @@ impl ClientWorld {
     fn next_frame(&mut self) -> Frame {
         let id = CanId::Standard(self.next_id);
         self.next_id += 1;
-        Frame::classic(id, &self.next_id.to_le_bytes()).expect("two bytes")
+        let mut count = [0u8; 2];
+        canif_model::image::le::write(&mut count, 0..2, self.next_id.into());
+        Frame::classic(id, &count).expect("two bytes")
     }
 
     pub fn application_sends(&mut self, n: u32) {

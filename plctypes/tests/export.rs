@@ -89,9 +89,8 @@ fn size(decls: &Declarations, ty: &TypeExpr) -> usize {
 }
 
 fn read(image: &[u8], (_, at, size, bit): &Leaf) -> u64 {
-    let mut bytes = [0u8; 8];
-    bytes[..(*size).max(1)].copy_from_slice(&image[*at..*at + (*size).max(1)]);
-    let value = u64::from_le_bytes(bytes);
+    // At the ST layout's offset, with the images' encoding (a BIT's byte whole).
+    let value = canif_model::image::le::read(image, *at..*at + (*size).max(1));
     match bit {
         Some(b) => (value >> b) & 1,
         None => value,

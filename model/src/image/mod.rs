@@ -16,6 +16,7 @@
 
 mod header;
 mod input;
+pub mod le;
 mod message;
 mod output;
 
@@ -155,31 +156,25 @@ impl core::fmt::Display for SizeError {
 impl std::error::Error for SizeError {}
 
 pub(crate) fn read_u16(buf: &[u8], field: Field) -> u16 {
-    let mut bytes = [0u8; 2];
-    bytes.copy_from_slice(&buf[field]);
-    u16::from_le_bytes(bytes)
+    le::read(buf, field) as u16
 }
 
 pub(crate) fn write_u16(buf: &mut [u8], field: Field, value: u16) {
-    buf[field].copy_from_slice(&value.to_le_bytes());
+    le::write(buf, field, value.into());
 }
 
 pub(crate) fn read_u32(buf: &[u8], field: Field) -> u32 {
-    let mut bytes = [0u8; 4];
-    bytes.copy_from_slice(&buf[field]);
-    u32::from_le_bytes(bytes)
+    le::read(buf, field) as u32
 }
 
 pub(crate) fn write_u32(buf: &mut [u8], field: Field, value: u32) {
-    buf[field].copy_from_slice(&value.to_le_bytes());
+    le::write(buf, field, value.into());
 }
 
 pub(crate) fn read_u64(buf: &[u8], field: Field) -> u64 {
-    let mut bytes = [0u8; 8];
-    bytes.copy_from_slice(&buf[field]);
-    u64::from_le_bytes(bytes)
+    le::read(buf, field)
 }
 
 pub(crate) fn write_u64(buf: &mut [u8], field: Field, value: u64) {
-    buf[field].copy_from_slice(&value.to_le_bytes());
+    le::write(buf, field, value);
 }

@@ -6,7 +6,7 @@
 use std::ops::Range;
 
 /// `"CNF3"`, at offset 0, written by the harness when it makes the mapping.
-pub const MAGIC: u32 = u32::from_le_bytes(*b"CNF3");
+pub const MAGIC: u32 = canif_model::image::le::read(b"CNF3", 0..4) as u32;
 
 /// The header's words (each a 32-bit atomic both processes touch).
 pub mod header {

@@ -4,6 +4,8 @@
 //! `canif device --stdio` or `canif lib-host` serving) read and write the
 //! same [`Request`] and [`Answer`] values the lines carry.
 
+// A record's numbers are little-endian as the images' are: one codec.
+use canif_model::image::le::{read as get, write as put};
 use canif_model::info_data::ControllerStatus;
 
 use super::layout::{entry, record, MAX_ENTRIES};
@@ -66,17 +68,6 @@ pub fn head(bytes: &[u8]) -> (usize, usize, usize) {
         get(bytes, record::OUTPUTS_LEN) as usize,
         get(bytes, record::INPUTS_LEN) as usize,
     )
-}
-
-fn put(bytes: &mut [u8], at: std::ops::Range<usize>, value: u64) {
-    let len = at.len();
-    bytes[at].copy_from_slice(&value.to_le_bytes()[..len]);
-}
-
-fn get(bytes: &[u8], at: std::ops::Range<usize>) -> u64 {
-    let mut word = [0u8; 8];
-    word[..at.len()].copy_from_slice(&bytes[at]);
-    u64::from_le_bytes(word)
 }
 
 struct Builder<'a> {
