@@ -292,7 +292,7 @@ impl Checker<'_> {
             }
             return Ok(());
         }
-        let expected_type = self.resolve(&expected.data_type);
+        let expected_type = self.image.resolve(&expected.data_type);
         self.data_type(
             &expected_type,
             &placed.data_type,
@@ -355,7 +355,7 @@ impl Checker<'_> {
                 }
                 let element = self.declarations.resolve(element, place)?;
                 self.data_type(
-                    &self.resolve(e_element),
+                    &self.image.resolve(e_element),
                     &element,
                     place,
                     &format!("{user_path}[]"),
@@ -372,8 +372,8 @@ impl Checker<'_> {
                 }
             }
             _ => {
-                let expected_size = self.size(expected);
-                let actual_size = self.user_size(actual, place)?;
+                let expected_size = self.image.size_of(expected);
+                let actual_size = self.declarations.size_of(actual, place)?;
                 if expected_size != actual_size {
                     self.defect(
                         place,
@@ -403,48 +403,6 @@ impl Checker<'_> {
             image_member,
             difference,
         });
-    }
-
-    /// An image type with its aliases replaced.
-    fn resolve(&self, data_type: &DataType) -> DataType {
-        match data_type {
-            DataType::Named(name) => match self.image.aliases.iter().find(|a| &a.name == name) {
-                Some(alias) => self.resolve(&alias.data_type),
-                None => data_type.clone(),
-            },
-            DataType::Array { low, high, element } => DataType::Array {
-                low: *low,
-                high: *high,
-                element: Box::new(self.resolve(element)),
-            },
-            other => other.clone(),
-        }
-    }
-
-    fn size(&self, data_type: &DataType) -> usize {
-        match self.resolve(data_type) {
-            DataType::Elementary(e) => e.size(),
-            DataType::Array { low, high, element } => {
-                crate::parse::element_count(low, high).saturating_mul(self.size(&element))
-            }
-            DataType::Named(name) => self.image.structure(&name).map_or(0, |s| s.size),
-        }
-    }
-
-    fn user_size(&self, data_type: &TypeExpr, place: &Place) -> Result<usize, DeclarationError> {
-        Ok(match data_type {
-            TypeExpr::Elementary(e) => e.size(),
-            TypeExpr::String { bytes } => *bytes,
-            TypeExpr::Array { low, high, element } => crate::parse::element_count(*low, *high)
-                .saturating_mul(self.user_size(element, place)?),
-            TypeExpr::Named(name) => match self.declarations.lay_out(name)? {
-                Some(laid) => laid.size,
-                None => {
-                    let resolved = self.declarations.resolve(data_type, place)?;
-                    self.user_size(&resolved, place)?
-                }
-            },
-        })
     }
 }
 

@@ -207,6 +207,11 @@ impl Declarations {
         })
     }
 
+    /// Bytes `data_type` takes as TwinCAT lays it out (a `BIT` none).
+    pub fn size_of(&self, data_type: &TypeExpr, place: &Place) -> Result<usize, DeclarationError> {
+        self.size_align(data_type, place, 0).map(|(size, _)| size)
+    }
+
     /// Size and natural alignment of a resolved type.
     fn size_align(
         &self,

@@ -277,6 +277,22 @@ impl ImageTypes {
         self.structs.iter().find(|s| s.name == name)
     }
 
+    /// `data_type` with every alias replaced by what it names.
+    pub fn resolve(&self, data_type: &DataType) -> DataType {
+        match data_type {
+            DataType::Named(name) => match self.aliases.iter().find(|a| &a.name == name) {
+                Some(alias) => self.resolve(&alias.data_type),
+                None => data_type.clone(),
+            },
+            DataType::Array { low, high, element } => DataType::Array {
+                low: *low,
+                high: *high,
+                element: Box::new(self.resolve(element)),
+            },
+            other => other.clone(),
+        }
+    }
+
     /// Bytes a type takes (aliases and structures looked up here).
     pub fn size_of(&self, data_type: &DataType) -> usize {
         match data_type {

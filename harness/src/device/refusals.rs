@@ -68,7 +68,7 @@ pub fn refused(scenario: &str, config: &InterfaceConfig, reason: String) -> Fail
 }
 
 /// The refusal check's name.
-pub(super) const REFUSALS: &str = "configuration refusals";
+pub const REFUSALS: &str = "configuration refusals";
 
 /// Requirements the refusal check exercises.
 pub(super) const REFUSAL_IDS: &[ReqId] = req_ids![

@@ -51,13 +51,13 @@ fn side_name(role: Role) -> &'static str {
 
 /// What every lockstep case of a side expects, in the suite's own words.
 fn lockstep_expectation(case: &Case) -> &'static str {
-    if case.name == "configuration refusals" {
+    if case.name == canif_harness::device::refusals::REFUSALS {
         return "the device accepts exactly the configurations of the grid the model accepts, and refuses the others";
     }
-    match (case.role, case.covers.iter().any(|id| id.starts_with("CO-") || id.starts_with("QS-"))) {
-        (_, true) => "the node answers every telegram as 002 and 004 (with CiA 301) say",
-        (Role::Device, false) => "in every cycle the input image and every frame the device sends equal the reference model's; a difference fails the requirement of the field that differs",
-        (Role::Plc, false) => "in every task the output image and what the client hands its application keep the CL-* rules the reference client keeps, task by task",
+    match (case.suite, case.role) {
+        (canif_spec::Suite::Canopen, _) => "the node answers every telegram as 002 and 004 (with CiA 301) say",
+        (_, Role::Device) => "in every cycle the input image and every frame the device sends equal the reference model's; a difference fails the requirement of the field that differs",
+        (_, Role::Plc) => "in every task the output image and what the client hands its application keep the CL-* rules the reference client keeps, task by task",
     }
 }
 

@@ -21,6 +21,8 @@ use crate::stop::{stop, Stop};
 /// One case of a side's run, with the profiles it runs on.
 pub(crate) struct Case {
     pub role: Role,
+    /// The CAN interface's suite, or the CANopen node checks'.
+    pub suite: canif_spec::Suite,
     pub name: String,
     pub covers: Vec<String>,
     pub profiles: Vec<String>,
@@ -101,8 +103,11 @@ fn add_cases<S: Side>(cases: &mut Vec<Case>, plan: Plan<'_, S>) {
     let gherkin: BTreeMap<String, &ScenarioInfo> =
         plan.gherkin.iter().map(|(_, s)| (s.id(), s)).collect();
     for (profile, name, covers) in plan.candidates() {
-        let role = S::SIDE;
-        match cases.iter_mut().find(|c| c.role == role && c.name == name) {
+        let (role, suite) = (S::SIDE, S::SUITE);
+        match cases
+            .iter_mut()
+            .find(|c| c.role == role && c.suite == suite && c.name == name)
+        {
             Some(case) => {
                 if !case.profiles.contains(&profile) {
                     case.profiles.push(profile);
@@ -115,6 +120,7 @@ fn add_cases<S: Side>(cases: &mut Vec<Case>, plan: Plan<'_, S>) {
             }
             None => cases.push(Case {
                 role,
+                suite,
                 gherkin: gherkin.get(&name).map(|s| (*s).clone()),
                 name,
                 covers,
