@@ -52,7 +52,7 @@ use clap::Parser;
 
 use cli::{Cli, Command, ListCommand, SideArg};
 use commands::run;
-use commands::{certify, device, plc_types, spec, tools};
+use commands::{certify, device, merge, plc_types, spec, tools};
 use stop::Stop;
 
 fn main() -> ExitCode {
@@ -182,6 +182,20 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, Stop> {
             path,
             control,
         } => device::lib_host(role, &path, control),
+        Command::Merge {
+            shards,
+            report,
+            certificate,
+            key,
+        } => merge::merge(
+            &catalogue,
+            merge::MergeArgs {
+                shards: &shards,
+                report: &report,
+                certificate: certificate.as_deref(),
+                key: key.as_deref(),
+            },
+        ),
         Command::Faults => Ok(tools::faults(out)),
         Command::Spec { command } => spec::spec(&catalogue, command, out),
         Command::Profiles => spec::profiles(&catalogue, out),

@@ -249,6 +249,7 @@ fn a_command_that_does_not_exist_is_an_error_and_the_report_says_error() {
         wall_time_ms: 0,
         interrupted: false,
         flaky: Vec::new(),
+        part: None,
     };
     assert_eq!(report.exit_code(), 2);
     let dir = std::env::temp_dir().join(format!("canif-broken-{}", std::process::id()));

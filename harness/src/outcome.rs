@@ -8,7 +8,7 @@ use canif_spec::ReqId;
 use crate::error::RunError;
 
 /// One non-conformance: where, what, and which requirements it breaks.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Failure {
     pub requirements: Vec<ReqId>,
     pub scenario: String,
@@ -34,14 +34,14 @@ pub struct Failure {
 }
 
 /// The frame the model expected and the one the IUT gave (`None`: no frame).
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct FrameDiff {
     pub expected: Option<canif_model::frame::Frame>,
     pub actual: Option<canif_model::frame::Frame>,
 }
 
 /// The input image the model expected and the one the IUT wrote.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct ImageDiff {
     pub layout: canif_model::image::ImageLayout,
     pub expected: Vec<u8>,
@@ -149,7 +149,7 @@ impl Failure {
 }
 
 /// A frame that ended on the bus, as a failure's history shows it.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct BusFrame {
     /// The end of its last bit.
     pub end: Nanos,
@@ -159,7 +159,7 @@ pub struct BusFrame {
 }
 
 /// A failure's last cycles as data: each side's own rows.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Timeline {
     /// A device under test: the model's input header against the IUT's.
     Cycles(Vec<CycleView>),
@@ -186,7 +186,7 @@ impl Default for Timeline {
 /// One task of a client's failure: the input header the master handed it,
 /// the output header it left, what its application asked and got, and the
 /// frames that ended on the bus since the task before.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct TaskView {
     pub task: u64,
     pub time: Nanos,
@@ -200,7 +200,7 @@ pub struct TaskView {
 }
 
 /// What a client's breach is about, as a row of its diagram.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum TaskRow {
     TxCounter,
     RxCounter,
@@ -214,7 +214,7 @@ pub enum TaskRow {
 /// One cycle of a failure's history: the PLC's outputs, the model's (expected)
 /// and the IUT's (actual) input header, and the frames that ended on the bus
 /// since the cycle before.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct CycleView {
     pub cycle: u64,
     pub time: Nanos,

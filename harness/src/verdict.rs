@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 
 /// One check that ran against the implementation, named stably (no line
 /// numbers, no statement text), so that two runs can be compared.
-#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 pub enum Evidence {
     /// A lockstep scenario of the interface suite (scripted or generated).
     Scenario(String),
@@ -42,7 +42,7 @@ impl fmt::Display for Evidence {
 }
 
 /// What a failing check found: the requirements it blames and why, in one line.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Finding {
     pub requirements: Vec<String>,
     /// One line: where it differs and how.
@@ -56,7 +56,7 @@ pub struct Finding {
 }
 
 /// What a failing check says of the requirements it covers and does not blame.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Rest {
     /// It stopped at the failure: they were exercised up to it only, which
     /// is evidence neither way.
@@ -69,7 +69,7 @@ pub enum Rest {
 }
 
 /// How one check ended.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub enum CheckResult {
     Pass,
     Fail(Finding),
@@ -98,7 +98,7 @@ impl CheckResult {
 }
 
 /// One check against one profile, with the requirements it exercises.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Check {
     pub evidence: Evidence,
     pub covers: Vec<String>,
@@ -208,7 +208,7 @@ impl Verdict {
 }
 
 /// Why a requirement the run could not judge was not run.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 pub enum NotRunReason {
     /// The run selected everything, yet no check of it ran.
     NotSelected,
@@ -227,7 +227,7 @@ pub enum NotRunReason {
 }
 
 /// What an implementation did not show, so that a requirement had nothing to judge.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Unobserved {
     /// CL-TN-002: the client told its application of no message sent.
     SentMessages,
@@ -255,7 +255,7 @@ impl fmt::Display for NotRunReason {
 }
 
 /// What the suite can exercise on a profile, beyond what this run did.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Reach {
     /// The side and suite the run judges: requirements outside it get no verdict.
     pub scope: Scope,

@@ -56,6 +56,7 @@ fn report(profile: &str, faults: Vec<Fault>, seed: u64, gherkin: Vec<GherkinRun>
         wall_time_ms: 1,
         interrupted: false,
         flaky: Vec::new(),
+        part: None,
     }
 }
 
@@ -111,6 +112,7 @@ fn a_run_that_checked_nothing_does_not_conform() {
         selection: canif_harness::run::Selection {
             scenarios: vec!["no-such-scenario-xyz".into()],
             requirements: vec![],
+            shard: None,
         },
         ..Options::quick(1)
     };
@@ -146,6 +148,7 @@ fn a_run_that_checked_nothing_does_not_conform() {
         wall_time_ms: 1,
         interrupted: false,
         flaky: Vec::new(),
+        part: None,
     };
     assert_eq!(report.exit_code(), 2);
     assert_eq!(report.headline(), "NOTHING CHECKED");

@@ -15,6 +15,7 @@ pub const EXTENDED_ID_MAX: u32 = 0x1FFF_FFFF;
 ///
 /// Requirements: LAY-GEN-001.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum CanId {
     Standard(u16),
     Extended(u32),
@@ -48,6 +49,7 @@ impl CanId {
 ///
 /// Requirements: FD-BIT-001, FD-BIT-002, FD-BIT-003.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum FrameKind {
     /// Classic CAN (EDL = 0). `rtr`: a remote transmission request.
     Classic { rtr: bool },

@@ -63,5 +63,7 @@ pub mod freedoms;
 pub mod handshake;
 pub mod image;
 pub mod info_data;
+#[cfg(feature = "serde")]
+mod persist;
 pub mod sizing;
 pub mod timing;

@@ -45,6 +45,22 @@ impl AsRef<str> for ReqId {
     }
 }
 
+impl serde::Serialize for ReqId {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.0)
+    }
+}
+
+/// An id read back from a file (a shard's part of a run). Code names its ids
+/// as literals; one read from a file is kept for the life of the process,
+/// which reads each id of a part once (`canif merge`).
+impl<'de> serde::Deserialize<'de> for ReqId {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let id = String::deserialize(deserializer)?;
+        Ok(ReqId(Box::leak(id.into_boxed_str())))
+    }
+}
+
 /// A `&'static [ReqId]` from string literals: `req_ids!["HS-TX-002", "FQ-003"]`.
 #[macro_export]
 macro_rules! req_ids {

@@ -46,7 +46,7 @@ pub enum Suite {
 }
 
 /// What one run judges: a side under one suite.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Scope {
     pub side: Side,
     pub suite: Suite,

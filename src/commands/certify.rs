@@ -89,7 +89,18 @@ pub(crate) fn certify(
         }
     };
     let code = finish(catalogue, &report, &out.join("run"));
-    let mut cert = Certificate::of(&report);
+    write_certificate(catalogue, &report, out, key)?;
+    code
+}
+
+/// certificate.json, .html and (with a key) .json.sig of a run's report, in `out`.
+pub(crate) fn write_certificate(
+    catalogue: &Catalogue,
+    report: &canif_harness::report::RunReport,
+    out: &Path,
+    key: Option<&Path>,
+) -> Result<(), Stop> {
+    let mut cert = Certificate::of(report);
     // The signer is named inside what it signs, so that the page and the
     // JSON say whose key vouches for them.
     if let Some(key) = key {
@@ -145,7 +156,7 @@ pub(crate) fn certify(
             );
         }
     }
-    code
+    Ok(())
 }
 
 /// `certify --verify CERT --pubkey KEY.pub`: the signature, and the HTML's hash.

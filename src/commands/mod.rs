@@ -2,6 +2,7 @@
 
 pub(crate) mod certify;
 pub(crate) mod device;
+pub(crate) mod merge;
 pub(crate) mod plan;
 pub(crate) mod plc_types;
 pub(crate) mod run;

@@ -296,6 +296,7 @@ mod tests {
         let side = CanopenSide::new(Selection {
             scenarios: vec!["heartbeat".into()],
             requirements: Vec::new(),
+            shard: None,
         });
         let run = run_profile(&profile(), &simulated(None), &side, |_| {});
         assert!(!run.runs.is_empty());

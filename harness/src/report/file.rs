@@ -51,6 +51,9 @@ pub struct RunMeta {
     /// The EtherCAT master models a PLC-side run used (none on the device side).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub masters: Vec<String>,
+    /// `--shard K/N`: this run is one shard of a campaign, `canif merge` joins them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shard: Option<crate::run::Shard>,
     /// Seconds since the Unix epoch when the run started.
     pub started_unix: u64,
     pub suite: SuiteKind,
@@ -117,6 +120,7 @@ impl RunMeta {
             left_out: None,
             side: Side::Device,
             masters: Vec::new(),
+            shard: None,
             started_unix: std::time::SystemTime::now()
                 .duration_since(std::time::UNIX_EPOCH)
                 .map_or(0, |d| d.as_secs()),
@@ -281,7 +285,6 @@ impl ReportFile {
                 .iter()
                 .map(|p| ProfileEntry {
                     not_served: p
-                        .lockstep
                         .reach
                         .not_served
                         .iter()
@@ -290,7 +293,7 @@ impl ReportFile {
                             why: why.clone(),
                         })
                         .collect(),
-                    advisories: p.lockstep.advisories(),
+                    advisories: p.advisories,
                     checks: p
                         .checks
                         .iter()
@@ -306,9 +309,9 @@ impl ReportFile {
                             outcome: c.result.kind(),
                         })
                         .collect(),
-                    cycles: p.lockstep.cycles(),
-                    failures: p.lockstep.failures.iter().map(FailureEntry::from).collect(),
-                    frames_checked: p.lockstep.frames_checked(),
+                    cycles: p.tally.cycles,
+                    failures: p.failures.iter().map(FailureEntry::from).collect(),
+                    frames_checked: p.tally.frames_checked,
                     profile: p.profile.clone(),
                     verdicts: catalogue
                         .requirements()

@@ -74,11 +74,11 @@ impl RunReport {
             let _ = writeln!(
                 profiles,
                 "<td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-                p.lockstep.runs.len(),
-                p.gherkin.len(),
+                p.tally.scenarios,
+                p.tally.gherkin_scenarios,
                 p.checks.len(),
-                p.lockstep.cycles(),
-                p.lockstep.frames_checked()
+                p.tally.cycles,
+                p.tally.frames_checked
             );
         }
         let problems: String = self
@@ -89,9 +89,9 @@ impl RunReport {
         let advisories: String = self
             .profiles
             .iter()
-            .filter(|p| !p.lockstep.advisories().is_empty())
+            .filter(|p| !p.advisories.is_empty())
             .map(|p| {
-                let line = p.lockstep.advisories().line();
+                let line = p.advisories.line();
                 format!("<li>{}: {}</li>\n", esc(&p.profile), esc(&line))
             })
             .collect();
@@ -132,7 +132,7 @@ impl RunReport {
                 };
                 let diagram = finding
                     .failure
-                    .and_then(|n| p.lockstep.failures.get(n))
+                    .and_then(|n| p.failures.get(n))
                     .map(|f| {
                         format!(
                             "<p>expected <code>{}</code><br>actual <code>{}</code></p>\n{}",

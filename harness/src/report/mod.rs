@@ -7,6 +7,8 @@ mod diagram;
 mod file;
 mod html;
 mod junit;
+mod merge;
+mod part;
 mod summary;
 mod task_diagram;
 
@@ -15,6 +17,8 @@ pub use file::{
     CheckEntry, ChoiceEntry, ChoiceSource, FailureEntry, Product, ProfileEntry, ReportFile,
     RunMeta, SuiteKind, TerminalEntry, TotalsEntry, VerdictEntry, REPORT_FORMAT,
 };
+pub use merge::{merge, MergeError};
+pub use part::{ProfilePart, ShardPart, PART_FORMAT};
 pub use summary::utc;
 
 use std::collections::BTreeMap;
@@ -23,22 +27,50 @@ use std::path::Path;
 use canif_spec::{Catalogue, Profile};
 
 use crate::canopen::NodeCheck;
-use crate::outcome::{GherkinOutcome, GherkinRun};
+use serde::{Deserialize, Serialize};
+
+use crate::advisory::Advisories;
+use crate::outcome::{Failure, GherkinOutcome, GherkinRun};
 use crate::run::ProfileRun;
 use crate::verdict::{self, Check, CheckResult, Evidence, Finding, Reach, Verdict, VerdictKind};
 
-/// Everything that ran against one profile, and the merged verdicts.
+/// Everything that ran against one profile, and the merged verdicts. It
+/// keeps what the reports show, not the runs themselves, so that shards'
+/// parts can be joined into one (`merge`).
 #[derive(Debug, Clone)]
 pub struct ProfileReport {
     pub profile: String,
-    /// The lockstep scenarios (empty for the CANopen suite).
-    pub lockstep: ProfileRun,
-    pub gherkin: Vec<GherkinRun>,
-    pub node_checks: Vec<NodeCheck>,
-    /// Every check above, in that order.
+    pub tally: Tally,
+    /// What the documents allow but a client's author wants to know (never a verdict).
+    pub advisories: Advisories,
+    /// The lockstep scenarios' failures, each drawn and listed; a finding's
+    /// `failure` indexes this list.
+    pub failures: Vec<Failure>,
+    /// What the verdicts rest on besides the checks.
+    pub reach: Reach,
+    /// Every check: the lockstep scenarios, the Gherkin scenarios, the node checks.
     pub checks: Vec<Check>,
     /// One per requirement: [`verdict::judge`] over every check.
     pub verdicts: BTreeMap<String, Verdict>,
+}
+
+/// How much one profile's checks ran: the summary's columns.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Tally {
+    /// Lockstep scenarios (or, in the CANopen suite, node checks) run.
+    pub scenarios: usize,
+    pub gherkin_scenarios: usize,
+    pub cycles: u64,
+    pub frames_checked: u64,
+}
+
+impl std::ops::AddAssign for Tally {
+    fn add_assign(&mut self, other: Tally) {
+        self.scenarios += other.scenarios;
+        self.gherkin_scenarios += other.gherkin_scenarios;
+        self.cycles += other.cycles;
+        self.frames_checked += other.frames_checked;
+    }
 }
 
 impl ProfileReport {
@@ -53,13 +85,35 @@ impl ProfileReport {
         let mut checks = lockstep.checks();
         checks.extend(gherkin.iter().map(gherkin_check));
         checks.extend(node_checks.iter().map(NodeCheck::check));
-        let verdicts = verdict::judge(catalogue, profile, &checks, reach);
+        let tally = Tally {
+            scenarios: lockstep.runs.len(),
+            gherkin_scenarios: gherkin.len(),
+            cycles: lockstep.cycles(),
+            frames_checked: lockstep.frames_checked(),
+        };
+        Self::judged(
+            catalogue,
+            profile,
+            ProfileChecks {
+                tally,
+                advisories: lockstep.advisories(),
+                failures: lockstep.failures,
+                reach: reach.clone(),
+                checks,
+            },
+        )
+    }
+
+    /// The verdicts over `checks`, judged once.
+    pub fn judged(catalogue: &Catalogue, profile: &Profile, checks: ProfileChecks) -> Self {
+        let verdicts = verdict::judge(catalogue, profile, &checks.checks, &checks.reach);
         ProfileReport {
             profile: profile.name.clone(),
-            lockstep,
-            gherkin,
-            node_checks,
-            checks,
+            tally: checks.tally,
+            advisories: checks.advisories,
+            failures: checks.failures,
+            reach: checks.reach,
+            checks: checks.checks,
             verdicts,
         }
     }
@@ -67,6 +121,28 @@ impl ProfileReport {
     pub fn count(&self, kind: VerdictKind) -> usize {
         self.verdicts.values().filter(|v| v.kind() == kind).count()
     }
+
+    /// The checks and what they rest on, without the verdicts.
+    pub fn unjudged(&self) -> ProfileChecks {
+        ProfileChecks {
+            tally: self.tally,
+            advisories: self.advisories,
+            failures: self.failures.clone(),
+            reach: self.reach.clone(),
+            checks: self.checks.clone(),
+        }
+    }
+}
+
+/// A profile's checks before they are judged: what a shard keeps of its run
+/// for `merge`.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct ProfileChecks {
+    pub tally: Tally,
+    pub advisories: Advisories,
+    pub failures: Vec<Failure>,
+    pub reach: Reach,
+    pub checks: Vec<Check>,
 }
 
 /// A Gherkin scenario as a check: it covers the scenario's tags, and a
@@ -131,6 +207,9 @@ pub struct RunReport {
     /// `--rerun-failed`: checks that failed in the run before and pass now,
     /// `profile::check`. Flaky is never a pass.
     pub flaky: Vec<String>,
+    /// A shard's run (`--shard K/N`): what it keeps for `canif merge`,
+    /// written as `shard.json` beside its reports.
+    pub part: Option<Box<ShardPart>>,
 }
 
 /// Counts of verdicts over every requirement × profile.
@@ -151,7 +230,7 @@ impl RunReport {
         self.profiles
             .iter()
             .flat_map(|p| {
-                let served = &p.lockstep.reach.not_served;
+                let served = &p.reach.not_served;
                 served
                     .iter()
                     .map(move |(what, why)| format!("{}: {what} — {why}", p.profile))
@@ -232,6 +311,18 @@ impl RunReport {
         )?;
         std::fs::write(dir.join("summary.md"), self.summary(catalogue))?;
         std::fs::write(dir.join("report.html"), self.html(catalogue))?;
+        let part = dir.join("shard.json");
+        match &self.part {
+            Some(part_of_run) => std::fs::write(
+                part,
+                serde_json::to_string(part_of_run).map_err(std::io::Error::other)?,
+            )?,
+            // A shard.json left by an earlier run in this folder is not this run's.
+            None => match std::fs::remove_file(part) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(e),
+                _ => {}
+            },
+        }
         Ok(())
     }
 

@@ -60,6 +60,12 @@ impl RunReport {
         if let Some(left_out) = &self.meta.left_out {
             let _ = writeln!(md, "\nLeft out: {left_out}.");
         }
+        if let Some(shard) = self.meta.shard {
+            let _ = writeln!(
+                md,
+                "\nShard {shard} of a campaign: the other shards run the rest, and `canif merge` joins their folders (each with its shard.json) into one verdict."
+            );
+        }
         if !self.meta.choices.is_empty() {
             let choices: Vec<String> = self.meta.choices.iter().map(ToString::to_string).collect();
             let _ = writeln!(
@@ -108,11 +114,11 @@ impl RunReport {
                 p.count(VerdictKind::NotApplicable),
                 p.count(VerdictKind::NotRun),
                 p.count(VerdictKind::NotTestable),
-                p.lockstep.runs.len(),
-                p.gherkin.len(),
+                p.tally.scenarios,
+                p.tally.gherkin_scenarios,
                 p.checks.len(),
-                p.lockstep.cycles(),
-                p.lockstep.frames_checked()
+                p.tally.cycles,
+                p.tally.frames_checked
             );
         }
         let not_served: Vec<String> = self
@@ -130,8 +136,8 @@ impl RunReport {
         let advised: Vec<String> = self
             .profiles
             .iter()
-            .filter(|p| !p.lockstep.advisories().is_empty())
-            .map(|p| format!("- {}: {}", p.profile, p.lockstep.advisories().line()))
+            .filter(|p| !p.advisories.is_empty())
+            .map(|p| format!("- {}: {}", p.profile, p.advisories.line()))
             .collect();
         if !advised.is_empty() {
             md.push_str("\n## Advisories (allowed, never a verdict)\n\n");

@@ -18,4 +18,4 @@ pub use kill::{kill_matrix, unreached, KillRow, SelfCheck};
 pub use profile::{run_profile, ProfileRun, Side};
 pub use ring::{Ring, CONTEXT};
 pub use rng::Rng;
-pub use selection::Selection;
+pub use selection::{Selection, Shard};

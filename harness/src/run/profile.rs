@@ -162,10 +162,11 @@ pub fn run_profile<S: Side>(
     let mut broken: Option<Broke> = None;
     for case in side.cases(profile) {
         let name = S::name(&case);
-        if !side
-            .selection()
-            .admits(&name, S::covers(&case).iter().map(ReqId::as_str))
-        {
+        if !side.selection().admits(
+            &profile.name,
+            &name,
+            S::covers(&case).iter().map(ReqId::as_str),
+        ) {
             continue;
         }
         if crate::interrupt::requested() {

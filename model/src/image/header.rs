@@ -9,6 +9,7 @@ use super::{InputImage, OutputImage};
 ///
 /// Requirements: LAY-GEN-002.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct OutputHeader {
     pub tx_counter: u16,
     pub rx_counter: u16,
@@ -36,6 +37,7 @@ impl OutputHeader {
 ///
 /// Requirements: LAY-GEN-004, TN-002.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct InputHeader {
     pub tx_counter: u16,
     pub rx_counter: u16,

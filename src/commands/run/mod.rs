@@ -50,6 +50,7 @@ pub(crate) fn command(catalogue: &Catalogue, args: RunArgs) -> Result<ExitCode, 
         master,
         jobs,
         rerun_failed,
+        shard,
     } = args;
     let jobs = usize::from(jobs);
     let bus = device::bus_choice(&bus, &real_time);
@@ -78,6 +79,7 @@ pub(crate) fn command(catalogue: &Catalogue, args: RunArgs) -> Result<ExitCode, 
     let selection = canif_harness::run::Selection {
         scenarios: scenario,
         requirements: requirement,
+        shard,
     };
     let device_only = [
         (suite == Suite::Canopen, "--suite canopen"),
@@ -258,8 +260,7 @@ pub(crate) fn finish(
     // The first failures whose input image differs, member by member: what
     // to look at first, without opening a report.
     let imaged = report.profiles.iter().flat_map(|p| {
-        p.lockstep
-            .failures
+        p.failures
             .iter()
             .filter_map(move |f| Some((p, f, f.images.as_ref()?)))
     });
@@ -281,5 +282,11 @@ pub(crate) fn finish(
         report.totals_line(),
         report_dir.display()
     );
+    if let Some(shard) = report.meta.shard {
+        sayln!(
+            "shard {shard}: `canif merge` joins {} with the other shards' folders into one verdict",
+            report_dir.display()
+        );
+    }
     Ok(ExitCode::from(report.exit_code()))
 }

@@ -3,7 +3,9 @@
 //! the Gherkin scenarios, and the report assembled from both.
 
 use canif_features::{ScenarioInfo, UnderTest};
-use canif_harness::report::{Product, ProfileReport, RunMeta, RunReport};
+use canif_harness::report::{
+    Product, ProfilePart, ProfileReport, RunMeta, RunReport, ShardPart, PART_FORMAT,
+};
 use canif_harness::run::{run_profile, ProfileRun, Side};
 use canif_harness::verdict::NotRunReason;
 use canif_harness::GherkinRun;
@@ -86,10 +88,9 @@ impl<'c, S: Side> Plan<'c, S> {
             }
         }
         if selection.is_everything()
-            || self
-                .candidates()
-                .iter()
-                .any(|(_, name, covers)| selection.admits(name, covers.iter().map(String::as_str)))
+            || self.candidates().iter().any(|(profile, name, covers)| {
+                selection.admits(profile, name, covers.iter().map(String::as_str))
+            })
         {
             return Ok(());
         }
@@ -150,7 +151,11 @@ impl<'c, S: Side> Plan<'c, S> {
                 .cases(profile)
                 .iter()
                 .filter(|case| {
-                    selection.admits(&S::name(case), S::covers(case).iter().map(ReqId::as_str))
+                    selection.admits(
+                        &profile.name,
+                        &S::name(case),
+                        S::covers(case).iter().map(ReqId::as_str),
+                    )
                 })
                 .count();
             let mut progress = Progress::new(n, count, &profile.name).of_cases(cases);
@@ -208,8 +213,9 @@ impl<'c, S: Side> Plan<'c, S> {
         let chosen: Vec<(&Profile, &ScenarioInfo)> = self
             .gherkin
             .iter()
-            .filter(|(_, scenario)| {
+            .filter(|(profile, scenario)| {
                 selection.admits(
+                    profile,
                     &scenario.id(),
                     scenario.requirements.iter().map(String::as_str),
                 )
@@ -284,18 +290,53 @@ impl<'c, S: Side> Plan<'c, S> {
         for key in &flaky {
             errln!("FLAKY {key}: it failed in the run before and passes now");
         }
+        let meta = RunMeta {
+            complete: left_out.is_empty() && !interrupted,
+            product: self.product.clone(),
+            left_out: (!left_out.is_empty()).then(|| left_out.join("; ")),
+            shard: self.options.selection().shard,
+            ..meta
+        };
+        let wall_time_ms = started.elapsed().as_millis();
+        let part = self.options.selection().shard.map(|shard| {
+            Box::new(ShardPart {
+                format: PART_FORMAT,
+                shard,
+                meta: meta.clone(),
+                selection: self.options.selection().clone(),
+                left_out,
+                interrupted,
+                flaky: flaky.clone(),
+                wall_time_ms: wall_time_ms as u64,
+                profiles: profiles.iter().map(|p| self.part_of(p)).collect(),
+            })
+        });
         RunReport {
-            meta: RunMeta {
-                complete: left_out.is_empty() && !interrupted,
-                product: self.product.clone(),
-                left_out: (!left_out.is_empty()).then(|| left_out.join("; ")),
-                ..meta
-            },
+            meta,
             profiles,
-            wall_time_ms: started.elapsed().as_millis(),
+            wall_time_ms,
             interrupted,
             flaky,
+            part,
         }
+    }
+
+    /// A profile's checks as a shard keeps them, each placed among the plan's cases.
+    fn part_of(&self, report: &ProfileReport) -> ProfilePart {
+        let lockstep: Vec<String> = self
+            .profiles
+            .iter()
+            .filter(|p| p.name == report.profile)
+            .flat_map(|p| self.options.cases(p))
+            .map(|case| S::name(&case))
+            .collect();
+        let gherkin: Vec<String> = self
+            .gherkin
+            .iter()
+            .filter(|(p, _)| *p == report.profile)
+            .map(|(_, scenario)| scenario.id())
+            .collect();
+        ProfilePart::new(&report.profile, report.unjudged(), &lockstep, &gherkin)
     }
 
     /// The selection as the run's first left-out line, when it leaves anything out.
