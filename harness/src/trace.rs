@@ -4,7 +4,9 @@
 //! nanosecond time stamps, and each frame's direction as the IUT sees it
 //! (EPB flags: outbound = the IUT sent it, inbound = another node did), and
 //! the frame a failure is about carrying the failure as its comment. Both
-//! are written as the run goes, so a long run holds no trace in memory.
+//! are written as the run goes, so a long run holds no trace in memory. The
+//! candump log has no place for a comment, so a failing frame is marked in
+//! `NAME.failing.txt` beside it, by its line in the log.
 
 use std::borrow::Cow;
 use std::fs::File;
@@ -30,11 +32,16 @@ mod direction {
     pub(super) const OUTBOUND: u32 = 0b10;
 }
 
-/// Writes one scenario's bus to `NAME.log` and `NAME.pcapng`.
+/// Writes one scenario's bus to `NAME.log` and `NAME.pcapng` (and, when
+/// it fails at a frame, `NAME.failing.txt`).
 pub struct TraceWriter {
     epoch: Nanos,
     interface: String,
     candump: BufWriter<File>,
+    /// Lines written to the candump log.
+    lines: usize,
+    /// Where the failing-frame marks go, and the log's name they refer to.
+    failing: (std::path::PathBuf, String),
     pcapng: PcapNgWriter<BufWriter<File>>,
 }
 
@@ -97,10 +104,18 @@ impl TraceWriter {
             })
             .map_err(pcap_error)?;
         let candump = BufWriter::new(File::create(dir.join(format!("{name}.log")))?);
+        let failing = dir.join(format!("{name}.failing.txt"));
+        // Marks of an earlier run of this scenario are not this run's.
+        match std::fs::remove_file(&failing) {
+            Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(e),
+            _ => {}
+        }
         Ok(TraceWriter {
             epoch,
             interface: interface.to_string(),
             candump,
+            lines: 0,
+            failing: (failing, format!("{name}.log")),
             pcapng,
         })
     }
@@ -113,9 +128,17 @@ impl TraceWriter {
     /// The IUT's frame a failure is about, with the failure as its packet
     /// comment (Wireshark shows it, `frame.comment` finds it). The candump
     /// log stays as candump writes it: its readers (canplayer, python-can)
-    /// take every line for a frame, so it has no place for a comment.
+    /// take every line for a frame, so the mark is `NAME.failing.txt`:
+    /// `NAME.log:LINE: the line  <- the failure`.
     pub fn failing_frame(&mut self, at: Nanos, frame: &Frame, comment: &str) -> io::Result<()> {
-        self.packet(at, frame, true, Some(comment))
+        self.packet(at, frame, true, Some(comment))?;
+        let (path, log) = &self.failing;
+        let mut marks = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(path)?;
+        let line = candump_line(self.epoch.saturating_add(at), &self.interface, frame);
+        writeln!(marks, "{log}:{}: {line}  <- {comment}", self.lines)
     }
 
     fn packet(
@@ -127,6 +150,7 @@ impl TraceWriter {
     ) -> io::Result<()> {
         let at = self.epoch.saturating_add(at);
         writeln!(self.candump, "{}", candump_line(at, &self.interface, frame))?;
+        self.lines += 1;
         let packet = socketcan_packet(frame);
         let flags = if from_iut {
             direction::OUTBOUND

@@ -207,6 +207,23 @@ fn the_failing_frame_is_marked_in_the_pcapng() {
             && comments[0].contains(&failure.actual),
         "{comments:?}"
     );
+    // The candump log stays candump's; the mark beside it names its line.
+    let marks = std::fs::read_to_string(dir.join("fd.failing.txt")).expect("fd.failing.txt");
+    let log = std::fs::read_to_string(dir.join("fd.log")).unwrap();
+    assert_eq!(marks.lines().count(), 1, "{marks}");
+    let (place, rest) = marks.split_once(": ").unwrap();
+    let line: usize = place.strip_prefix("fd.log:").unwrap().parse().unwrap();
+    let (frame, comment) = rest.split_once("  <- ").unwrap();
+    assert_eq!(
+        log.lines().nth(line - 1),
+        Some(frame),
+        "line {line} of fd.log"
+    );
+    assert_eq!(comment.trim_end(), comments[0]);
+    assert!(
+        log.lines().all(|l| l.starts_with('(')),
+        "every log line a frame"
+    );
     let _ = std::fs::remove_dir_all(dir);
 }
 
