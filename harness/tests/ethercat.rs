@@ -262,3 +262,47 @@ fn a_terminal_that_cycles_on_telegrams_under_distributed_clocks_fails_pdx_005() 
         without_dc.failures.first()
     );
 }
+
+/// The refusal grid writes configuration after configuration to one
+/// terminal held in PREOP (a scan each would be four fifths of the grid's
+/// time). Each configuration gets the answer a fresh bring-up of it gets: on
+/// a clean terminal and on one that refuses what it should take.
+#[test]
+fn a_terminal_held_in_preop_answers_each_configuration_as_a_fresh_one() {
+    use canif_harness::device::refusals::grid;
+    use canif_harness::door::ethercat::{build, Configurer};
+    use canif_harness::door::iut::BuildError;
+    let answer = |result: Result<(), BuildError>| match result {
+        Ok(()) => "taken".to_string(),
+        Err(BuildError::Refused(_)) => "refused".to_string(),
+        Err(BuildError::Failed(e)) => format!("failed: {e}"),
+    };
+    let catalogue = Catalogue::embedded().unwrap();
+    for profile in terminals(&catalogue) {
+        let identity = profile.ethercat.unwrap();
+        let caps = profile.model_capabilities();
+        for faults in [vec![], vec![Fault::RefusesThirtyTwoSlots]] {
+            let link = EthercatLink::Emulated(Emulated {
+                faults: faults.clone(),
+                ..Emulated::default()
+            });
+            let sample: Vec<_> = grid().step_by(7).collect();
+            // Fresh bring-ups first: the held terminal keeps the link of this thread.
+            let fresh: Vec<String> = sample
+                .iter()
+                .map(|config| answer(build(&caps, config, &identity, &link).map(|_| ())))
+                .collect();
+            let mut held = Configurer::new(identity, link.clone());
+            for (config, fresh) in sample.iter().zip(&fresh) {
+                let offered = answer(held.offer(&caps, config));
+                assert_eq!(&offered, fresh, "{} {faults:?}: {config:?}", profile.name);
+            }
+            let count = |what: &str| fresh.iter().filter(|a| *a == what).count();
+            assert!(
+                count("taken") > 0 && count("refused") > 0,
+                "{}: the sample has both answers",
+                profile.name
+            );
+        }
+    }
+}

@@ -96,7 +96,7 @@ pub(super) const REFUSAL_IDS: &[ReqId] = req_ids![
 ];
 
 /// Every configuration of the grid, with its slot counts in the name.
-fn grid() -> impl Iterator<Item = InterfaceConfig> {
+pub fn grid() -> impl Iterator<Item = InterfaceConfig> {
     let filter_tables = || {
         [
             vec![],

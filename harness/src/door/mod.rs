@@ -273,10 +273,19 @@ impl Door {
                     offer(iut, caps, config, None)
                 })
             }
-            None => {
-                let door = self.clone();
-                Box::new(move |caps, config| door.device(caps, config, None).map(|_| ()))
-            }
+            None => match self {
+                Door::Ethercat {
+                    identity: Some(identity),
+                    link,
+                } => {
+                    let mut terminal = ethercat::Configurer::new(*identity, link.clone());
+                    Box::new(move |caps, config| terminal.offer(caps, config))
+                }
+                _ => {
+                    let door = self.clone();
+                    Box::new(move |caps, config| door.device(caps, config, None).map(|_| ()))
+                }
+            },
         }
     }
 

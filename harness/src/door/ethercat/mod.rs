@@ -14,6 +14,7 @@ mod link;
 pub mod objects;
 #[cfg(feature = "socketcan")]
 pub mod served;
+mod session;
 mod start_up;
 mod survey;
 #[cfg(feature = "socketcan")]
@@ -33,7 +34,7 @@ use canif_model::Nanos;
 use canif_softdevice::ethercat::{Terminal, TerminalIdentity};
 use canif_softdevice::{Choice, Fault, SoftDevice};
 use canif_spec::EthercatIdentity;
-use ethercrab::subdevice_group::Op;
+use ethercrab::subdevice_group::{Op, PreOp};
 use ethercrab::{DefaultLock, SubDeviceGroup};
 
 use crate::door::iut::{soft_controller, soft_settings, BuildError, Iut, Planned, Transmit};
@@ -41,6 +42,7 @@ use crate::error::{IutCause, IutError};
 use coe::Mailboxes;
 pub use link::LinkFault;
 use link::{lock, InterfaceMaster, MemoryMaster, Peer, SharedTerminal};
+pub use session::Configurer;
 use start_up::{configure, master_error, request_safe_op, Sync0Clock, SYNC0_CYCLE_NS};
 pub use survey::{survey, Pace, TerminalFacts};
 
@@ -258,13 +260,13 @@ pub fn emulated_terminal(
     subdevice
 }
 
-/// Brings up the terminal `link` names and configures it as `config`.
-pub fn build(
+/// Finds the terminal `link` names, scans the segment and checks the
+/// terminal's identity: it is left in PREOP.
+fn open(
     caps: &Capabilities,
-    config: &InterfaceConfig,
     identity: &EthercatIdentity,
     link: &EthercatLink,
-) -> Result<EthercatIut, BuildError> {
+) -> Result<Opened, BuildError> {
     // Each terminal starts its virtual clock at 0, where the first cycle
     // (and, with Distributed Clocks, the first SYNC0) is.
     link::set_now(0);
@@ -349,13 +351,66 @@ pub fn build(
         }
         (sub.configured_address(), facts)
     };
-    let clock = match &terminal {
-        Some(_) => Sync0Clock::Virtual {
-            now: link::now(),
-            first_sync0: 0,
-        },
-        None => Sync0Clock::Real,
-    };
+    Ok(Opened {
+        master,
+        terminal,
+        position,
+        #[cfg(feature = "socketcan")]
+        serving,
+        group,
+        station,
+        facts,
+    })
+}
+
+/// A terminal found on its link and checked, in PREOP: what a start-up
+/// list is written to.
+struct Opened {
+    master: Master,
+    /// In memory or on a veth pair: the emulated terminal.
+    terminal: Option<SharedTerminal>,
+    position: usize,
+    #[cfg(feature = "socketcan")]
+    serving: Option<veth::Serving>,
+    group: SubDeviceGroup<MAX_SUBDEVICES, MAX_PDI, DefaultLock, PreOp>,
+    station: u16,
+    facts: TerminalFacts,
+}
+
+impl Opened {
+    /// Where the first SYNC0 lies: at the harness's virtual time 0 for an
+    /// emulated terminal, ahead of the terminal's own time for a real one.
+    fn clock(&self) -> Sync0Clock {
+        match &self.terminal {
+            Some(_) => Sync0Clock::Virtual {
+                now: link::now(),
+                first_sync0: 0,
+            },
+            None => Sync0Clock::Real,
+        }
+    }
+}
+
+/// Brings up the terminal `link` names and configures it as `config`.
+pub fn build(
+    caps: &Capabilities,
+    config: &InterfaceConfig,
+    identity: &EthercatIdentity,
+    link: &EthercatLink,
+) -> Result<EthercatIut, BuildError> {
+    let opened = open(caps, identity, link)?;
+    let clock = opened.clock();
+    let Opened {
+        master,
+        terminal,
+        position,
+        #[cfg(feature = "socketcan")]
+        serving,
+        group,
+        station,
+        facts,
+    } = opened;
+    let md = master.maindevice();
     master.drive(configure(md, station, (caps, config), clock))?;
     let group = master
         .drive(group.into_pre_op_pdi(md))
