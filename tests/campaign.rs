@@ -245,6 +245,14 @@ fn shards_that_are_not_one_campaign_are_refused() {
         !again.join("shard.json").exists(),
         "a stale shard.json would merge a run that is gone"
     );
+    // The CANopen suite's node profile is made for its run: no shards.
+    let output = canif(&["run", "--suite", "canopen", "--shard", "1/2"]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(
+        stderr(&output).contains("run it whole"),
+        "{}",
+        stderr(&output)
+    );
     // A shard is K of N.
     let output = canif(&["run", "--shard", "4/3"]);
     assert_eq!(output.status.code(), Some(2));

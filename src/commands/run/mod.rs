@@ -109,6 +109,11 @@ pub(crate) fn command(catalogue: &Catalogue, args: RunArgs) -> Result<ExitCode, 
             ));
         }
     }
+    if suite == Suite::Canopen && selection.shard.is_some() {
+        return Err(stop!(
+            "--shard: the CANopen suite checks one node, whose profile is made for the run; run it whole"
+        ));
+    }
     if suite == Suite::Canopen {
         let target = canopen::target(&iut, &bus, node, coupler_fault.as_deref())?;
         let profile = canopen::node_profile(catalogue, &target)?;
