@@ -232,6 +232,16 @@ fn shards_that_are_not_one_campaign_are_refused() {
         &[garbage.to_str().unwrap()],
         "garbage.json: not a canif shard.json",
     );
+    // A part that says it is shard 0 of 3 is no shard.
+    let part = std::fs::read_to_string(Path::new(&one).join("shard.json")).unwrap();
+    let mut part: serde_json::Value = serde_json::from_str(&part).unwrap();
+    part["shard"]["index"] = 0.into();
+    let zero = dir.join("zero.json");
+    std::fs::write(&zero, part.to_string()).unwrap();
+    refused(
+        &[zero.to_str().unwrap()],
+        "shard 0/3: shards count from 1 to N",
+    );
     // A shard that runs again where a whole run was leaves no part behind.
     let again = dir.join("one");
     canif(&[

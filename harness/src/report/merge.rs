@@ -98,6 +98,12 @@ pub fn merge(
     let count = first.shard.count;
     let mut seen: Vec<Option<&PathBuf>> = vec![None; count as usize];
     for (file, part) in &parts {
+        if !(1..=count).contains(&part.shard.index) {
+            return Err(MergeError::Malformed {
+                file: file.clone(),
+                what: format!("shard {}: shards count from 1 to N", part.shard),
+            });
+        }
         let slot = &mut seen[(part.shard.index - 1) as usize];
         if let Some(earlier) = slot {
             return Err(MergeError::Twice {
