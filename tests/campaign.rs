@@ -225,6 +225,32 @@ fn shards_that_are_not_one_campaign_are_refused() {
     refused(&[&one, &three], "shard 2/3 is missing");
     refused(&[&one, &one, &three], "shard 1/3 is given twice");
     refused(&[&one, &two_other_seed, &three], "the seed is `1`");
+    // What the run's flags shape (here the generated cases) is one campaign's too.
+    let two_more_cases = shard("two-cases", &["--shard", "2/3", "--cases", "6"]);
+    refused(&[&one, &two_more_cases, &three], "the command line");
+    // Written in another order, and with reports and jobs of its own, it is the same.
+    let two = dir.join("two");
+    let output = canif(&[
+        "run",
+        "--jobs",
+        "2",
+        "--report",
+        two.to_str().unwrap(),
+        "--shard=2/3",
+        "--profile",
+        "el6751-mdp",
+    ]);
+    assert!(two.join("shard.json").is_file(), "{}", stderr(&output));
+    let output = canif(&[
+        "merge",
+        &one,
+        two.to_str().unwrap(),
+        &three,
+        "--report",
+        &merged,
+    ]);
+    assert_eq!(output.status.code(), Some(0), "{}", stderr(&output));
+    std::fs::remove_dir_all(&merged).unwrap();
     refused(&[&whole], "shard.json");
     let garbage = dir.join("garbage.json");
     std::fs::write(&garbage, "{\"format\": 1, \"shard\": 3}").unwrap();

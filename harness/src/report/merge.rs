@@ -267,7 +267,7 @@ pub fn merge(
 /// Every shard is of the same run: the same IUT, options, profiles and
 /// number of shards.
 fn same_run(parts: &[(PathBuf, ShardPart)]) -> Result<(), MergeError> {
-    let traits = |part: &ShardPart| -> [(&'static str, String); 12] {
+    let traits = |part: &ShardPart| -> [(&'static str, String); 13] {
         let m = &part.meta;
         [
             ("the part's format", part.format.to_string()),
@@ -284,6 +284,10 @@ fn same_run(parts: &[(PathBuf, ShardPart)]) -> Result<(), MergeError> {
             ("the seed", m.seed.to_string()),
             ("the master models", m.masters.join(", ")),
             ("the selection", part.selection.unsharded().flags()),
+            (
+                "the command line (but --shard, --report, --jobs, --trace)",
+                part.command.join(" "),
+            ),
             (
                 "the shards and profiles",
                 format!(

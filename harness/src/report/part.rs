@@ -22,6 +22,10 @@ pub struct ShardPart {
     pub meta: RunMeta,
     /// The selection the shard ran, its share included.
     pub selection: Selection,
+    /// The command line's arguments but those a shard may have of its own
+    /// (`--shard`, `--report`, `--jobs`, `--trace`), sorted: every shard of
+    /// a campaign runs the same plan.
+    pub command: Vec<String>,
     /// What the shard's run left out, line by line (its share among them).
     pub left_out: Vec<String>,
     pub interrupted: bool,

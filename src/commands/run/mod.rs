@@ -149,6 +149,8 @@ pub(crate) fn command(catalogue: &Catalogue, args: RunArgs) -> Result<ExitCode, 
         let mut plan = Plan::new(profiles, options, product.product())?;
         plan.jobs = jobs;
         plan.rerun = rerun;
+        plan.campaign = campaign_args(std::env::args().skip(1));
+        plan.campaign = campaign_args(std::env::args().skip(1));
         return plc::run(catalogue, &kind, &plan, &report);
     }
     if let Some(dir) = &trace {
@@ -192,7 +194,31 @@ pub(crate) fn command(catalogue: &Catalogue, args: RunArgs) -> Result<ExitCode, 
     let mut plan = Plan::new(profiles, options, product.product())?;
     plan.jobs = jobs;
     plan.rerun = rerun;
+    plan.campaign = campaign_args(std::env::args().skip(1));
     device::run(catalogue, &iut, &plan, pace, &report)
+}
+
+/// The run's arguments as a campaign's shards must share them: without
+/// what may differ between shards (`--shard`, where the reports and traces
+/// go, `--jobs`), and in sorted order, so that the order flags were written
+/// in does not matter.
+fn campaign_args(args: impl Iterator<Item = String>) -> Vec<String> {
+    const PER_SHARD: [&str; 5] = ["--shard", "--report", "--jobs", "--trace", "--trace-epoch"];
+    let mut kept = Vec::new();
+    let mut skip_value = false;
+    for arg in args {
+        if std::mem::take(&mut skip_value) {
+            continue;
+        }
+        let flag = arg.split('=').next().unwrap_or_default();
+        if PER_SHARD.contains(&flag) {
+            skip_value = !arg.contains('=');
+            continue;
+        }
+        kept.push(arg);
+    }
+    kept.sort();
+    kept
 }
 
 /// `canif list scenarios`: every check a run of these profiles can select.

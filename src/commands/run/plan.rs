@@ -26,6 +26,8 @@ pub(crate) struct Plan<'c, S> {
     pub jobs: usize,
     /// `--rerun-failed`: what failed before, to tell flaky checks.
     pub rerun: Option<Rerun>,
+    /// What the command line asked, as every shard of one campaign must ask it.
+    pub campaign: Vec<String>,
 }
 
 impl<'c, S: Side> Plan<'c, S> {
@@ -51,6 +53,7 @@ impl<'c, S: Side> Plan<'c, S> {
             gherkin,
             jobs: 1,
             rerun: None,
+            campaign: Vec::new(),
         })
     }
 
@@ -304,6 +307,7 @@ impl<'c, S: Side> Plan<'c, S> {
                 shard,
                 meta: meta.clone(),
                 selection: self.options.selection().clone(),
+                command: self.campaign.clone(),
                 left_out,
                 interrupted,
                 flaky: flaky.clone(),

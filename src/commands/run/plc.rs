@@ -105,6 +105,7 @@ pub(crate) fn execute(
         gherkin,
         jobs: plan.jobs,
         rerun: plan.rerun.clone(),
+        campaign: plan.campaign.clone(),
     };
     let mut lockstep = plan.run_profiles_on(catalogue, kind, Some("task cycles"), plan.jobs);
     for run in &mut lockstep {
