@@ -23,6 +23,14 @@ use pcap_file::pcapng::blocks::interface_description::{
 use pcap_file::pcapng::PcapNgWriter;
 use pcap_file::DataLink;
 
+/// Removes what an earlier run left at `path`, if anything.
+pub(crate) fn remove_stale(path: &Path) -> io::Result<()> {
+    match std::fs::remove_file(path) {
+        Err(e) if e.kind() != io::ErrorKind::NotFound => Err(e),
+        _ => Ok(()),
+    }
+}
+
 /// The interface name the traces give the simulated bus.
 pub(crate) const SIM_INTERFACE: &str = "canif-sim";
 
@@ -106,10 +114,7 @@ impl TraceWriter {
         let candump = BufWriter::new(File::create(dir.join(format!("{name}.log")))?);
         let failing = dir.join(format!("{name}.failing.txt"));
         // Marks of an earlier run of this scenario are not this run's.
-        match std::fs::remove_file(&failing) {
-            Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(e),
-            _ => {}
-        }
+        remove_stale(&failing)?;
         Ok(TraceWriter {
             epoch,
             interface: interface.to_string(),
@@ -122,7 +127,7 @@ impl TraceWriter {
 
     /// A frame that ended on the bus at `at`; `from_iut`: the IUT sent it.
     pub fn frame(&mut self, at: Nanos, frame: &Frame, from_iut: bool) -> io::Result<()> {
-        self.packet(at, frame, from_iut, None)
+        self.packet(at, frame, from_iut, None).map(drop)
     }
 
     /// The IUT's frame a failure is about, with the failure as its packet
@@ -131,13 +136,12 @@ impl TraceWriter {
     /// take every line for a frame, so the mark is `NAME.failing.txt`:
     /// `NAME.log:LINE: the line  <- the failure`.
     pub fn failing_frame(&mut self, at: Nanos, frame: &Frame, comment: &str) -> io::Result<()> {
-        self.packet(at, frame, true, Some(comment))?;
+        let line = self.packet(at, frame, true, Some(comment))?;
         let (path, log) = &self.failing;
         let mut marks = std::fs::OpenOptions::new()
             .create(true)
             .append(true)
             .open(path)?;
-        let line = candump_line(self.epoch.saturating_add(at), &self.interface, frame);
         writeln!(marks, "{log}:{}: {line}  <- {comment}", self.lines)
     }
 
@@ -147,9 +151,10 @@ impl TraceWriter {
         frame: &Frame,
         from_iut: bool,
         comment: Option<&str>,
-    ) -> io::Result<()> {
+    ) -> io::Result<String> {
         let at = self.epoch.saturating_add(at);
-        writeln!(self.candump, "{}", candump_line(at, &self.interface, frame))?;
+        let line = candump_line(at, &self.interface, frame);
+        writeln!(self.candump, "{line}")?;
         self.lines += 1;
         let packet = socketcan_packet(frame);
         let flags = if from_iut {
@@ -168,7 +173,7 @@ impl TraceWriter {
                     .collect(),
             })
             .map_err(pcap_error)?;
-        Ok(())
+        Ok(line)
     }
 
     pub fn finish(mut self) -> io::Result<()> {

@@ -29,6 +29,13 @@ impl Evidence {
     pub fn key(&self) -> String {
         self.to_string()
     }
+
+    /// The check's name as the plan and `--scenario` know it.
+    pub fn name(&self) -> &str {
+        match self {
+            Evidence::Scenario(name) | Evidence::Gherkin(name) | Evidence::NodeCheck(name) => name,
+        }
+    }
 }
 
 impl fmt::Display for Evidence {
@@ -224,6 +231,19 @@ pub enum NotRunReason {
     /// Its checks ended at a failure blamed on other requirements before
     /// they could judge it (the check that stopped).
     StoppedEarlier(Evidence),
+}
+
+impl NotRunReason {
+    /// Why a run left its unreached requirements out, when it left something
+    /// out: the stages it names (`left_out`, the selection first), or a
+    /// signal. `None`: nothing was left out but by the side's own reach.
+    pub fn of_run(left_out: &[String], interrupted: bool) -> Option<NotRunReason> {
+        match (left_out, interrupted) {
+            ([], false) => None,
+            ([], true) => Some(NotRunReason::LeftOut("interrupted".into())),
+            (lines, _) => Some(NotRunReason::LeftOut(lines.join("; "))),
+        }
+    }
 }
 
 /// What an implementation did not show, so that a requirement had nothing to judge.

@@ -105,6 +105,16 @@ impl std::fmt::Display for ChoiceEntry {
 pub use crate::door::ethercat::TerminalFacts as TerminalEntry;
 
 impl RunMeta {
+    /// What the run left out (its lines, the selection first) and whether
+    /// a signal stopped it: a run is complete only when neither.
+    pub fn left_out(self, lines: &[String], interrupted: bool) -> Self {
+        RunMeta {
+            complete: lines.is_empty() && !interrupted,
+            left_out: (!lines.is_empty()).then(|| lines.join("; ")),
+            ..self
+        }
+    }
+
     /// A complete run of the interface suite on the device side, started now,
     /// by this canif, with `catalogue`.
     pub fn new(iut: String, bus: String, seed: u64, catalogue: &Catalogue) -> Self {

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use canif_spec::Catalogue;
 
 use super::part::{ShardPart, PART_FORMAT};
-use super::{ProfileChecks, ProfileReport, RunReport};
+use super::{ProfileChecks, ProfileReport, RunMeta, RunReport};
 use crate::verdict::NotRunReason;
 
 /// Why shards cannot be merged.
@@ -94,6 +94,17 @@ pub fn merge(
             ours: catalogue.sha256.clone(),
         });
     }
+    for (file, part) in &parts {
+        if part.format != PART_FORMAT {
+            return Err(MergeError::Malformed {
+                file: file.clone(),
+                what: format!(
+                    "a shard.json of format {}; this canif reads {PART_FORMAT}",
+                    part.format
+                ),
+            });
+        }
+    }
     same_run(&parts)?;
     let count = first.shard.count;
     let mut seen: Vec<Option<&PathBuf>> = vec![None; count as usize];
@@ -131,20 +142,11 @@ pub fn merge(
     }
     for (_, part) in &parts {
         let share = part.selection.describe();
-        for line in part.left_out.iter().filter(|l| **l != share) {
-            if !left_out.contains(line) {
-                left_out.push(line.clone());
-            }
-        }
+        add_new(&mut left_out, part.left_out.iter().filter(|l| **l != share));
     }
     let interrupted = parts.iter().any(|(_, p)| p.interrupted);
-    let reason = if !left_out.is_empty() {
-        NotRunReason::LeftOut(left_out.join("; "))
-    } else if interrupted {
-        NotRunReason::LeftOut("interrupted".into())
-    } else {
-        unsharded.not_run()
-    };
+    let reason =
+        NotRunReason::of_run(&left_out, interrupted).unwrap_or_else(|| unsharded.not_run());
 
     let mut profiles = Vec::new();
     for (n, profile_part) in first.profiles.iter().enumerate() {
@@ -222,33 +224,22 @@ pub fn merge(
         profiles.push(ProfileReport::judged(catalogue, profile, checks));
     }
 
-    let mut meta = first.meta.clone();
-    meta.shard = None;
-    meta.complete = left_out.is_empty() && !interrupted;
-    meta.left_out = (!left_out.is_empty()).then(|| left_out.join("; "));
+    let mut meta = RunMeta {
+        shard: None,
+        ..first.meta.clone()
+    }
+    .left_out(&left_out, interrupted);
     meta.started_unix = parts
         .iter()
         .map(|(_, p)| p.meta.started_unix)
         .min()
         .unwrap_or(0);
     for (_, part) in &parts[1..] {
-        for choice in &part.meta.choices {
-            if !meta.choices.contains(choice) {
-                meta.choices.push(choice.clone());
-            }
-        }
-        for terminal in &part.meta.terminals {
-            if !meta.terminals.contains(terminal) {
-                meta.terminals.push(terminal.clone());
-            }
-        }
+        add_new(&mut meta.choices, &part.meta.choices);
+        add_new(&mut meta.terminals, &part.meta.terminals);
     }
     let mut flaky: Vec<String> = Vec::new();
-    for key in parts.iter().flat_map(|(_, p)| &p.flaky) {
-        if !flaky.contains(key) {
-            flaky.push(key.clone());
-        }
-    }
+    add_new(&mut flaky, parts.iter().flat_map(|(_, p)| &p.flaky));
     Ok(RunReport {
         meta,
         profiles,
@@ -264,13 +255,24 @@ pub fn merge(
     })
 }
 
+/// Appends each of `items` that `into` does not hold yet, in order.
+fn add_new<'a, T: PartialEq + Clone + 'a>(
+    into: &mut Vec<T>,
+    items: impl IntoIterator<Item = &'a T>,
+) {
+    for item in items {
+        if !into.contains(item) {
+            into.push(item.clone());
+        }
+    }
+}
+
 /// Every shard is of the same run: the same IUT, options, profiles and
 /// number of shards.
 fn same_run(parts: &[(PathBuf, ShardPart)]) -> Result<(), MergeError> {
-    let traits = |part: &ShardPart| -> [(&'static str, String); 13] {
+    let traits = |part: &ShardPart| -> [(&'static str, String); 12] {
         let m = &part.meta;
         [
-            ("the part's format", part.format.to_string()),
             ("the catalogue", m.catalogue_sha256.clone()),
             (
                 "canif's version",
@@ -303,15 +305,6 @@ fn same_run(parts: &[(PathBuf, ShardPart)]) -> Result<(), MergeError> {
         ]
     };
     let (first_file, first) = &parts[0];
-    if first.format != PART_FORMAT {
-        return Err(MergeError::Malformed {
-            file: first_file.clone(),
-            what: format!(
-                "a shard.json of format {}; this canif reads {PART_FORMAT}",
-                first.format
-            ),
-        });
-    }
     let expected = traits(first);
     for (file, part) in &parts[1..] {
         for ((what, ours), (_, theirs)) in expected.iter().zip(traits(part)) {

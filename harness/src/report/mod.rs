@@ -318,10 +318,7 @@ impl RunReport {
                 serde_json::to_string(part_of_run).map_err(std::io::Error::other)?,
             )?,
             // A shard.json left by an earlier run in this folder is not this run's.
-            None => match std::fs::remove_file(part) {
-                Err(e) if e.kind() != std::io::ErrorKind::NotFound => return Err(e),
-                _ => {}
-            },
+            None => crate::trace::remove_stale(&part)?,
         }
         Ok(())
     }

@@ -9,7 +9,6 @@ use serde::{Deserialize, Serialize};
 
 use super::{ProfileChecks, RunMeta};
 use crate::run::{Selection, Shard};
-use crate::verdict::Evidence;
 
 /// The shape of `shard.json` this canif writes and reads.
 pub const PART_FORMAT: u32 = 1;
@@ -39,45 +38,33 @@ pub struct ShardPart {
 pub struct ProfilePart {
     pub profile: String,
     /// For each check, its case's place among every case the profile's plan
-    /// has (lockstep cases first, then the Gherkin scenarios), on every shard
-    /// the same: the merged checks are put back in this order.
+    /// has (`canif list scenarios`' order: lockstep cases, then the Gherkin
+    /// scenarios), the same on every shard: the merged checks are put back
+    /// in this order.
     pub order: Vec<usize>,
     #[serde(flatten)]
     pub checks: ProfileChecks,
 }
 
 impl ProfilePart {
-    /// The part of `checks`, placed by the plan's case names: `lockstep`
-    /// (lockstep scenarios or node checks) and `gherkin` (the Gherkin
-    /// scenarios' ids), in the plan's order.
-    pub fn new(
-        profile: &str,
-        checks: ProfileChecks,
-        lockstep: &[String],
-        gherkin: &[String],
-    ) -> Self {
-        let place = |names: &[String], base: usize| {
-            names
-                .iter()
-                .enumerate()
-                .rev()
-                .map(|(n, name)| (name.clone(), base + n))
-                .collect::<BTreeMap<String, usize>>()
-        };
-        let lockstep_places = place(lockstep, 0);
-        let gherkin_places = place(gherkin, lockstep.len());
-        let unplaced = lockstep.len() + gherkin.len();
+    /// The part of `checks`, each placed by its name among `plan`, the
+    /// names of every case the profile's plan has, in order.
+    pub fn new(profile: &str, checks: ProfileChecks, plan: &[String]) -> Self {
+        // The first place of a name (its checks stay in their shard's order).
+        let mut places: BTreeMap<&str, usize> = BTreeMap::new();
+        for (place, name) in plan.iter().enumerate() {
+            places.entry(name).or_insert(place);
+        }
         let order = checks
             .checks
             .iter()
-            .map(|check| match &check.evidence {
-                Evidence::Scenario(name) | Evidence::NodeCheck(name) => {
-                    lockstep_places.get(name).copied()
-                }
-                Evidence::Gherkin(id) => gherkin_places.get(id).copied(),
-            })
             // A check the plan does not name keeps its own place after the plan's.
-            .map(|place| place.unwrap_or(unplaced))
+            .map(|check| {
+                places
+                    .get(check.evidence.name())
+                    .copied()
+                    .unwrap_or(plan.len())
+            })
             .collect();
         ProfilePart {
             profile: profile.to_string(),

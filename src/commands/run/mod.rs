@@ -53,6 +53,8 @@ pub(crate) fn command(catalogue: &Catalogue, args: RunArgs) -> Result<ExitCode, 
         shard,
     } = args;
     let jobs = usize::from(jobs);
+    // What every shard of a campaign must have asked alike, read once.
+    let campaign = campaign_args(std::env::args().skip(1));
     let bus = device::bus_choice(&bus, &real_time);
     let pace = device::pace(&real_time);
     let rerun = match &rerun_failed {
@@ -149,8 +151,7 @@ pub(crate) fn command(catalogue: &Catalogue, args: RunArgs) -> Result<ExitCode, 
         let mut plan = Plan::new(profiles, options, product.product())?;
         plan.jobs = jobs;
         plan.rerun = rerun;
-        plan.campaign = campaign_args(std::env::args().skip(1));
-        plan.campaign = campaign_args(std::env::args().skip(1));
+        plan.campaign = campaign;
         return plc::run(catalogue, &kind, &plan, &report);
     }
     if let Some(dir) = &trace {
@@ -194,7 +195,7 @@ pub(crate) fn command(catalogue: &Catalogue, args: RunArgs) -> Result<ExitCode, 
     let mut plan = Plan::new(profiles, options, product.product())?;
     plan.jobs = jobs;
     plan.rerun = rerun;
-    plan.campaign = campaign_args(std::env::args().skip(1));
+    plan.campaign = campaign;
     device::run(catalogue, &iut, &plan, pace, &report)
 }
 

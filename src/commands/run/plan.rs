@@ -273,10 +273,8 @@ impl<'c, S: Side> Plan<'c, S> {
                         .filter(|(p, _)| *p == profile.name)
                         .flat_map(|(_, s)| s.requirements.iter().cloned()),
                 );
-                if !left_out.is_empty() {
-                    reach.left_out = NotRunReason::LeftOut(left_out.join("; "));
-                } else if interrupted {
-                    reach.left_out = NotRunReason::LeftOut("interrupted".into());
+                if let Some(why) = NotRunReason::of_run(&left_out, interrupted) {
+                    reach.left_out = why;
                 }
                 let runs: Vec<GherkinRun> = gherkin
                     .iter()
@@ -294,14 +292,14 @@ impl<'c, S: Side> Plan<'c, S> {
             errln!("FLAKY {key}: it failed in the run before and passes now");
         }
         let meta = RunMeta {
-            complete: left_out.is_empty() && !interrupted,
             product: self.product.clone(),
-            left_out: (!left_out.is_empty()).then(|| left_out.join("; ")),
             shard: self.options.selection().shard,
             ..meta
-        };
+        }
+        .left_out(&left_out, interrupted);
         let wall_time_ms = started.elapsed().as_millis();
         let part = self.options.selection().shard.map(|shard| {
+            let candidates = self.candidates();
             Box::new(ShardPart {
                 format: PART_FORMAT,
                 shard,
@@ -312,7 +310,10 @@ impl<'c, S: Side> Plan<'c, S> {
                 interrupted,
                 flaky: flaky.clone(),
                 wall_time_ms: wall_time_ms as u64,
-                profiles: profiles.iter().map(|p| self.part_of(p)).collect(),
+                profiles: profiles
+                    .iter()
+                    .map(|p| Self::part_of(&candidates, p))
+                    .collect(),
             })
         });
         RunReport {
@@ -326,21 +327,16 @@ impl<'c, S: Side> Plan<'c, S> {
     }
 
     /// A profile's checks as a shard keeps them, each placed among the plan's cases.
-    fn part_of(&self, report: &ProfileReport) -> ProfilePart {
-        let lockstep: Vec<String> = self
-            .profiles
+    fn part_of(
+        candidates: &[(String, String, Vec<String>)],
+        report: &ProfileReport,
+    ) -> ProfilePart {
+        let plan: Vec<String> = candidates
             .iter()
-            .filter(|p| p.name == report.profile)
-            .flat_map(|p| self.options.cases(p))
-            .map(|case| S::name(&case))
+            .filter(|(profile, _, _)| *profile == report.profile)
+            .map(|(_, name, _)| name.clone())
             .collect();
-        let gherkin: Vec<String> = self
-            .gherkin
-            .iter()
-            .filter(|(p, _)| *p == report.profile)
-            .map(|(_, scenario)| scenario.id())
-            .collect();
-        ProfilePart::new(&report.profile, report.unjudged(), &lockstep, &gherkin)
+        ProfilePart::new(&report.profile, report.unjudged(), &plan)
     }
 
     /// The selection as the run's first left-out line, when it leaves anything out.

@@ -180,6 +180,14 @@ impl Master {
         }
     }
 
+    /// The in-memory link lets go of its terminal (one link per thread, the
+    /// next bring-up's).
+    fn let_go(&self) {
+        if let Master::Memory(master) = self {
+            *master.peer.borrow_mut() = None;
+        }
+    }
+
     fn drive<T>(&self, operation: impl std::future::Future<Output = T>) -> T {
         match self {
             Master::Memory(m) => m.drive(operation),
@@ -580,8 +588,6 @@ impl Iut for EthercatIut {
 
 impl Drop for EthercatIut {
     fn drop(&mut self) {
-        if let Master::Memory(master) = self.master {
-            *master.peer.borrow_mut() = None;
-        }
+        self.master.let_go();
     }
 }

@@ -14,7 +14,7 @@ use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_spec::EthercatIdentity;
 
 use super::start_up::configure;
-use super::{build, open, EthercatLink, Master, Opened};
+use super::{build, open, EthercatLink, Opened};
 use crate::door::iut::BuildError;
 
 /// Offers configurations to the terminal `link` names, one after another.
@@ -30,9 +30,7 @@ struct Held(Opened);
 
 impl Drop for Held {
     fn drop(&mut self) {
-        if let Master::Memory(master) = self.0.master {
-            *master.peer.borrow_mut() = None;
-        }
+        self.0.master.let_go();
     }
 }
 
