@@ -46,7 +46,7 @@ pub(crate) fn merge(catalogue: &Catalogue, args: MergeArgs<'_>) -> Result<ExitCo
         report
             .profiles
             .iter()
-            .map(|p| p.checks.len())
+            .map(|p| p.ran.checks.len())
             .sum::<usize>()
     );
     let code = finish(catalogue, &report, args.report)?;

@@ -295,6 +295,7 @@ impl ReportFile {
                 .iter()
                 .map(|p| ProfileEntry {
                     not_served: p
+                        .ran
                         .reach
                         .not_served
                         .iter()
@@ -303,8 +304,9 @@ impl ReportFile {
                             why: why.clone(),
                         })
                         .collect(),
-                    advisories: p.advisories,
+                    advisories: p.ran.advisories,
                     checks: p
+                        .ran
                         .checks
                         .iter()
                         .map(|c| CheckEntry {
@@ -319,9 +321,9 @@ impl ReportFile {
                             outcome: c.result.kind(),
                         })
                         .collect(),
-                    cycles: p.tally.cycles,
-                    failures: p.failures.iter().map(FailureEntry::from).collect(),
-                    frames_checked: p.tally.frames_checked,
+                    cycles: p.ran.tally.cycles,
+                    failures: p.ran.failures.iter().map(FailureEntry::from).collect(),
+                    frames_checked: p.ran.tally.frames_checked,
                     profile: p.profile.clone(),
                     verdicts: catalogue
                         .requirements()

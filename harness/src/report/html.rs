@@ -74,11 +74,11 @@ impl RunReport {
             let _ = writeln!(
                 profiles,
                 "<td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-                p.tally.scenarios,
-                p.tally.gherkin_scenarios,
-                p.checks.len(),
-                p.tally.cycles,
-                p.tally.frames_checked
+                p.ran.tally.scenarios,
+                p.ran.tally.gherkin_scenarios,
+                p.ran.checks.len(),
+                p.ran.tally.cycles,
+                p.ran.tally.frames_checked
             );
         }
         let problems: String = self
@@ -89,9 +89,9 @@ impl RunReport {
         let advisories: String = self
             .profiles
             .iter()
-            .filter(|p| !p.advisories.is_empty())
+            .filter(|p| !p.ran.advisories.is_empty())
             .map(|p| {
-                let line = p.advisories.line();
+                let line = p.ran.advisories.line();
                 format!("<li>{}: {}</li>\n", esc(&p.profile), esc(&line))
             })
             .collect();
@@ -115,7 +115,7 @@ impl RunReport {
         let mut failures = String::new();
         let mut checks = String::new();
         for p in &self.profiles {
-            for (i, check) in p.checks.iter().enumerate() {
+            for (i, check) in p.ran.checks.iter().enumerate() {
                 let label = check.result.kind().label();
                 let cause = check.result.cause().unwrap_or_default();
                 let _ = writeln!(
@@ -132,7 +132,7 @@ impl RunReport {
                 };
                 let diagram = finding
                     .failure
-                    .and_then(|n| p.failures.get(n))
+                    .and_then(|n| p.ran.failures.get(n))
                     .map(|f| {
                         format!(
                             "<p>expected <code>{}</code><br>actual <code>{}</code></p>\n{}",
@@ -275,6 +275,7 @@ impl RunReport {
             let mut counts: BTreeMap<VerdictKind, usize> = BTreeMap::new();
             for p in &self.profiles {
                 let index: BTreeMap<&Evidence, usize> = p
+                    .ran
                     .checks
                     .iter()
                     .enumerate()

@@ -18,6 +18,7 @@ impl RunReport {
         let properties = self.junit_properties();
         for profile in &self.profiles {
             let elapsed: BTreeMap<&Evidence, Duration> = profile
+                .ran
                 .checks
                 .iter()
                 .map(|c| (&c.evidence, c.elapsed))
@@ -78,7 +79,7 @@ impl RunReport {
             report.add_test_suite(verdicts);
             let mut checks = TestSuite::new(format!("{} checks", profile.profile));
             checks.add_properties(properties.clone());
-            for check in &profile.checks {
+            for check in &profile.ran.checks {
                 let status = match &check.result {
                     CheckResult::Pass => TestCaseStatus::success(),
                     CheckResult::Fail(finding) => {

@@ -40,16 +40,8 @@ use crate::verdict::{self, Check, CheckResult, Evidence, Finding, Reach, Verdict
 #[derive(Debug, Clone)]
 pub struct ProfileReport {
     pub profile: String,
-    pub tally: Tally,
-    /// What the documents allow but a client's author wants to know (never a verdict).
-    pub advisories: Advisories,
-    /// The lockstep scenarios' failures, each drawn and listed; a finding's
-    /// `failure` indexes this list.
-    pub failures: Vec<Failure>,
-    /// What the verdicts rest on besides the checks.
-    pub reach: Reach,
-    /// Every check: the lockstep scenarios, the Gherkin scenarios, the node checks.
-    pub checks: Vec<Check>,
+    /// The checks and what they rest on.
+    pub ran: ProfileChecks,
     /// One per requirement: [`verdict::judge`] over every check.
     pub verdicts: BTreeMap<String, Verdict>,
 }
@@ -104,16 +96,12 @@ impl ProfileReport {
         )
     }
 
-    /// The verdicts over `checks`, judged once.
-    pub fn judged(catalogue: &Catalogue, profile: &Profile, checks: ProfileChecks) -> Self {
-        let verdicts = verdict::judge(catalogue, profile, &checks.checks, &checks.reach);
+    /// The verdicts over `ran`, judged once.
+    pub fn judged(catalogue: &Catalogue, profile: &Profile, ran: ProfileChecks) -> Self {
+        let verdicts = verdict::judge(catalogue, profile, &ran.checks, &ran.reach);
         ProfileReport {
             profile: profile.name.clone(),
-            tally: checks.tally,
-            advisories: checks.advisories,
-            failures: checks.failures,
-            reach: checks.reach,
-            checks: checks.checks,
+            ran,
             verdicts,
         }
     }
@@ -121,27 +109,21 @@ impl ProfileReport {
     pub fn count(&self, kind: VerdictKind) -> usize {
         self.verdicts.values().filter(|v| v.kind() == kind).count()
     }
-
-    /// The checks and what they rest on, without the verdicts.
-    pub fn unjudged(&self) -> ProfileChecks {
-        ProfileChecks {
-            tally: self.tally,
-            advisories: self.advisories,
-            failures: self.failures.clone(),
-            reach: self.reach.clone(),
-            checks: self.checks.clone(),
-        }
-    }
 }
 
-/// A profile's checks before they are judged: what a shard keeps of its run
-/// for `merge`.
+/// A profile's checks before they are judged (what a shard keeps of its
+/// run for `merge`).
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct ProfileChecks {
     pub tally: Tally,
+    /// What the documents allow but a client's author wants to know (never a verdict).
     pub advisories: Advisories,
+    /// The lockstep scenarios' failures, each drawn and listed; a finding's
+    /// `failure` indexes this list.
     pub failures: Vec<Failure>,
+    /// What the verdicts rest on besides the checks.
     pub reach: Reach,
+    /// Every check: the lockstep scenarios, the Gherkin scenarios, the node checks.
     pub checks: Vec<Check>,
 }
 
@@ -230,7 +212,7 @@ impl RunReport {
         self.profiles
             .iter()
             .flat_map(|p| {
-                let served = &p.reach.not_served;
+                let served = &p.ran.reach.not_served;
                 served
                     .iter()
                     .map(move |(what, why)| format!("{}: {what} — {why}", p.profile))
@@ -242,7 +224,7 @@ impl RunReport {
     pub fn checks(&self) -> impl Iterator<Item = (&ProfileReport, &Check)> {
         self.profiles
             .iter()
-            .flat_map(|p| p.checks.iter().map(move |c| (p, c)))
+            .flat_map(|p| p.ran.checks.iter().map(move |c| (p, c)))
     }
 
     /// 130 when interrupted, 1 on any failure (what the implementation did

@@ -114,11 +114,11 @@ impl RunReport {
                 p.count(VerdictKind::NotApplicable),
                 p.count(VerdictKind::NotRun),
                 p.count(VerdictKind::NotTestable),
-                p.tally.scenarios,
-                p.tally.gherkin_scenarios,
-                p.checks.len(),
-                p.tally.cycles,
-                p.tally.frames_checked
+                p.ran.tally.scenarios,
+                p.ran.tally.gherkin_scenarios,
+                p.ran.checks.len(),
+                p.ran.tally.cycles,
+                p.ran.tally.frames_checked
             );
         }
         let not_served: Vec<String> = self
@@ -136,8 +136,8 @@ impl RunReport {
         let advised: Vec<String> = self
             .profiles
             .iter()
-            .filter(|p| !p.advisories.is_empty())
-            .map(|p| format!("- {}: {}", p.profile, p.advisories.line()))
+            .filter(|p| !p.ran.advisories.is_empty())
+            .map(|p| format!("- {}: {}", p.profile, p.ran.advisories.line()))
             .collect();
         if !advised.is_empty() {
             md.push_str("\n## Advisories (allowed, never a verdict)\n\n");
@@ -162,7 +162,7 @@ impl RunReport {
             }
         }
         for p in &self.profiles {
-            for check in &p.checks {
+            for check in &p.ran.checks {
                 let CheckResult::Fail(finding) = &check.result else {
                     continue;
                 };

@@ -292,7 +292,8 @@ pub(crate) fn finish(
     // The first failures whose input image differs, member by member: what
     // to look at first, without opening a report.
     let imaged = report.profiles.iter().flat_map(|p| {
-        p.failures
+        p.ran
+            .failures
             .iter()
             .filter_map(move |f| Some((p, f, f.images.as_ref()?)))
     });

@@ -336,7 +336,7 @@ impl<'c, S: Side> Plan<'c, S> {
             .filter(|(profile, _, _)| *profile == report.profile)
             .map(|(_, name, _)| name.clone())
             .collect();
-        ProfilePart::new(&report.profile, report.unjudged(), &plan)
+        ProfilePart::new(&report.profile, report.ran.clone(), &plan)
     }
 
     /// The selection as the run's first left-out line, when it leaves anything out.

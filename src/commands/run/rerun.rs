@@ -92,7 +92,7 @@ impl Rerun {
                 let now: Vec<&CheckResult> = profiles
                     .iter()
                     .filter(|p| p.profile == *profile)
-                    .flat_map(|p| &p.checks)
+                    .flat_map(|p| &p.ran.checks)
                     .filter(|c| c.evidence.key() == *key)
                     .map(|c| &c.result)
                     .collect();
