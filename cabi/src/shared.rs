@@ -90,6 +90,7 @@ impl SharedMap {
         self.fd.as_fd()
     }
 
+    #[inline]
     fn check(&self, at: usize, len: usize) {
         assert!(
             at.checked_add(len).is_some_and(|end| end <= self.len),
@@ -99,6 +100,7 @@ impl SharedMap {
     }
 
     /// Copies `into.len()` bytes from offset `at`. Panics outside the mapping.
+    #[inline]
     pub fn read(&self, at: usize, into: &mut [u8]) {
         self.check(at, into.len());
         // SAFETY: inside the mapping (checked); the protocol's turns keep the
@@ -108,6 +110,7 @@ impl SharedMap {
     }
 
     /// Copies `from` to offset `at`. Panics outside the mapping.
+    #[inline]
     pub fn write(&self, at: usize, from: &[u8]) {
         self.check(at, from.len());
         // SAFETY: as for `read`.
@@ -115,6 +118,7 @@ impl SharedMap {
     }
 
     /// The 32-bit word at `at` (4-aligned), as an atomic both processes see.
+    #[inline]
     pub fn word(&self, at: usize) -> &AtomicU32 {
         self.check(at, 4);
         assert_eq!(at % 4, 0, "a word at {at} is not aligned");

@@ -559,6 +559,14 @@ impl SoftDevice {
         }
     }
 
+    /// The frames waiting to be sent, in order (not the one on the wire), each
+    /// with the time it is released at (0: at once).
+    pub fn waiting(&self) -> impl Iterator<Item = (&CanFrame, u64)> {
+        self.send_fifo
+            .iter()
+            .map(|job| (&job.frame, job.release_at))
+    }
+
     /// Transmit-done interrupt: the frame on the wire was acknowledged.
     pub fn tx_done_interrupt(&mut self) {
         if let Some(job) = self.on_wire.take() {

@@ -6,6 +6,7 @@
 use super::Field;
 
 /// The little-endian number in `buf[field]` (at most 8 bytes).
+#[inline]
 pub const fn read(buf: &[u8], field: Field) -> u64 {
     assert!(field.end - field.start <= 8, "a field of at most 8 bytes");
     let (mut value, mut at) = (0u64, field.end);
@@ -18,6 +19,7 @@ pub const fn read(buf: &[u8], field: Field) -> u64 {
 
 /// Writes the low `field.len()` bytes of `value` into `buf[field]`, least
 /// significant first.
+#[inline]
 pub fn write(buf: &mut [u8], field: Field, mut value: u64) {
     assert!(field.len() <= 8, "a field of at most 8 bytes");
     for byte in &mut buf[field] {

@@ -167,8 +167,9 @@ impl ExecIut {
             events: std::mem::take(&mut self.events),
         };
         let (inputs, plan, more) = if self.version == 3 {
-            self.process
-                .exchange_record(&[], &request, Answer::STEPPED)?
+            let stepped = self.process.exchange_record(&[], &request, Answer::STEPPED);
+            self.reuse(request);
+            stepped?
         } else {
             let line = self.process.exchange_line(&request)?;
             match serde_json::from_str::<SteppedLine>(&line) {
@@ -186,15 +187,25 @@ impl ExecIut {
             now_ns: now,
             events: std::mem::take(&mut self.events),
         };
-        let (_, plan, more) = self
-            .process
-            .exchange_record(&[], &request, Answer::STEPPED)?;
+        let stepped = self.process.exchange_record(&[], &request, Answer::STEPPED);
+        self.reuse(request);
+        let (_, plan, more) = stepped?;
         self.take_plan(plan, more)
+    }
+
+    /// The events' room back from a request sent: a cycle's events then
+    /// cost no allocation.
+    fn reuse(&mut self, request: Request) {
+        if let Request::Step { mut events, .. } | Request::Plan { mut events, .. } = request {
+            events.clear();
+            self.events = events;
+        }
     }
 
     /// The plan an answer gave, checked frame by frame, in place of the old.
     fn take_plan(&mut self, plan: Vec<PlannedFrame>, more: bool) -> Result<(), IutError> {
-        let mut planned = VecDeque::with_capacity(plan.len());
+        let mut planned = std::mem::take(&mut self.plan);
+        planned.clear();
         for PlannedFrame {
             frame,
             invalid,

@@ -10,7 +10,7 @@ use canif_model::image::{ImageLayout, MessageRepr};
 
 use super::session::{self, Serves, Switch};
 use crate::door::adapter::protocol::{
-    Answer, Config, Hex, Request, SharedOffer, WireFrame, WireMessage,
+    Answer, Config, FrameData, Hex, Request, SharedOffer, WireFrame, WireMessage,
 };
 use crate::door::client::{Client, TaskIo};
 use crate::door::declaration::client::ClientDeclaration;
@@ -162,9 +162,9 @@ fn task(
                         esi: m.frame.esi != 0,
                         len: m.frame.len,
                         // A remote frame's length is what it asks for: it carries no data.
-                        data: Hex(match m.frame.rtr {
-                            0 => m.frame.data[..usize::from(m.frame.len).min(64)].to_vec(),
-                            _ => Vec::new(),
+                        data: FrameData::from(match m.frame.rtr {
+                            0 => &m.frame.data[..usize::from(m.frame.len).min(64)],
+                            _ => &[][..],
                         }),
                     },
                     transaction_number: m.transaction_number,

@@ -50,35 +50,76 @@ pub struct Hex(pub Vec<u8>);
 impl TryFrom<String> for Hex {
     type Error = String;
     fn try_from(text: String) -> Result<Self, String> {
-        if !text.len().is_multiple_of(2) || !text.bytes().all(|b| b.is_ascii_hexdigit()) {
-            return Err(format!(
-                "not a hex string of whole bytes: {:?}",
-                shorten(&text)
-            ));
-        }
-        let digit = |b: u8| match b {
-            b'0'..=b'9' => b - b'0',
-            b'a'..=b'f' => b - b'a' + 10,
-            _ => b - b'A' + 10, // checked above: a hex digit
-        };
-        Ok(Hex(text
-            .as_bytes()
-            .chunks_exact(2)
-            .map(|pair| (digit(pair[0]) << 4) | digit(pair[1]))
-            .collect()))
+        from_hex(&text).map(Hex)
     }
 }
 
 impl From<Hex> for String {
     fn from(hex: Hex) -> String {
-        const DIGITS: &[u8; 16] = b"0123456789abcdef";
-        let mut text = String::with_capacity(2 * hex.0.len());
-        for byte in &hex.0 {
-            text.push(char::from(DIGITS[usize::from(byte >> 4)]));
-            text.push(char::from(DIGITS[usize::from(byte & 0x0F)]));
-        }
-        text
+        to_hex(&hex.0)
     }
+}
+
+/// A frame's data: hex on the lines like [`Hex`], but held inline up to the
+/// 64 bytes of an FD frame, so that the frames of every cycle's records and
+/// plans cost no allocation. (A longer one, which only a broken message
+/// carries, still reads, so that [`WireFrame::check`] can say what is wrong.)
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(try_from = "String", into = "String")]
+pub struct FrameData(smallvec::SmallVec<[u8; 64]>);
+
+impl FrameData {
+    pub fn as_slice(&self) -> &[u8] {
+        &self.0
+    }
+}
+
+impl From<&[u8]> for FrameData {
+    fn from(bytes: &[u8]) -> Self {
+        FrameData(smallvec::SmallVec::from_slice(bytes))
+    }
+}
+
+impl TryFrom<String> for FrameData {
+    type Error = String;
+    fn try_from(text: String) -> Result<Self, String> {
+        from_hex(&text).map(FrameData)
+    }
+}
+
+impl From<FrameData> for String {
+    fn from(data: FrameData) -> String {
+        to_hex(&data.0)
+    }
+}
+
+fn from_hex<B: FromIterator<u8>>(text: &str) -> Result<B, String> {
+    if !text.len().is_multiple_of(2) || !text.bytes().all(|b| b.is_ascii_hexdigit()) {
+        return Err(format!(
+            "not a hex string of whole bytes: {:?}",
+            shorten(text)
+        ));
+    }
+    let digit = |b: u8| match b {
+        b'0'..=b'9' => b - b'0',
+        b'a'..=b'f' => b - b'a' + 10,
+        _ => b - b'A' + 10, // checked above: a hex digit
+    };
+    Ok(text
+        .as_bytes()
+        .chunks_exact(2)
+        .map(|pair| (digit(pair[0]) << 4) | digit(pair[1]))
+        .collect())
+}
+
+fn to_hex(bytes: &[u8]) -> String {
+    const DIGITS: &[u8; 16] = b"0123456789abcdef";
+    let mut text = String::with_capacity(2 * bytes.len());
+    for byte in bytes {
+        text.push(char::from(DIGITS[usize::from(byte >> 4)]));
+        text.push(char::from(DIGITS[usize::from(byte & 0x0F)]));
+    }
+    text
 }
 
 fn shorten(text: &str) -> String {
@@ -98,7 +139,7 @@ pub struct WireFrame {
     pub brs: bool,
     pub esi: bool,
     pub len: u8,
-    pub data: Hex,
+    pub data: FrameData,
 }
 
 impl From<&Frame> for WireFrame {
@@ -115,7 +156,7 @@ impl From<&Frame> for WireFrame {
             brs,
             esi,
             len: frame.len(),
-            data: Hex(frame.data().to_vec()),
+            data: FrameData::from(frame.data()),
         }
     }
 }
@@ -127,7 +168,7 @@ impl WireFrame {
     /// controller can send (an identifier beyond its format, BRS on a classic
     /// frame): that is the device's doing, [`WireFrame::to_frame`] says what.
     pub fn check(&self) -> Result<(), String> {
-        let data = self.data.0.len();
+        let data = self.data.as_slice().len();
         if self.rtr && data != 0 {
             return Err(format!(
                 "a remote frame carries no data, but \"data\" has {data} bytes"
@@ -159,11 +200,11 @@ impl WireFrame {
         })?;
         InvalidFrame::of_fd_bits(self.fd, self.rtr, self.brs, self.esi)?;
         let frame = if self.fd {
-            Frame::fd(id, self.brs, self.esi, &self.data.0)
+            Frame::fd(id, self.brs, self.esi, self.data.as_slice())
         } else if self.rtr {
             Frame::remote(id, self.len)
         } else {
-            Frame::classic(id, &self.data.0)
+            Frame::classic(id, self.data.as_slice())
         };
         frame.map_err(InvalidFrame::Parts)
     }

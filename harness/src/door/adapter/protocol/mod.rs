@@ -10,7 +10,7 @@ mod step;
 
 pub use client::WireMessage;
 pub use config::{Action, Caps, Config, Filter, Format, OwnedBus, Queue, SharedOffer, Status};
-pub use frame::{Hex, InvalidWireFrame, Transmitted, WireFrame};
+pub use frame::{FrameData, Hex, InvalidWireFrame, Transmitted, WireFrame};
 pub use step::{BusEvent, PlannedFrame, StepLine, StepTag, SteppedLine, SteppedTag};
 
 use canif_model::Nanos;

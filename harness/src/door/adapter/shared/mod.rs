@@ -169,7 +169,10 @@ pub(crate) struct HarnessEnd {
     wake_harness: Wake,
     seq: u32,
     spin: Duration,
+    /// The last answer read back, and the last request written: kept for
+    /// the next, so that a cycle's exchange allocates nothing for them.
     buffer: Vec<u8>,
+    record: Vec<u8>,
 }
 
 impl HarnessEnd {
@@ -183,6 +186,7 @@ impl HarnessEnd {
             seq: 0,
             spin: spin_time(),
             buffer: Vec::new(),
+            record: Vec::new(),
         })
     }
 
@@ -208,11 +212,13 @@ impl HarnessEnd {
     /// Writes `request`, after the bus events `events` of a polled device,
     /// and wakes the implementation.
     pub(crate) fn post(&mut self, events: &[BusEvent], request: &Request) -> Result<(), String> {
+        let buffer = std::mem::take(&mut self.record);
         let encoded = match events {
-            [] => record::encode_request(request)?,
-            events => record::encode_batch(events, request)?,
+            [] => record::encode_request(buffer, request)?,
+            events => record::encode_batch(buffer, events, request)?,
         };
         store(&self.map, layout::REQUEST_AT, &encoded)?;
+        self.record = encoded.record;
         self.seq = self.seq.wrapping_add(1);
         self.map.word(header::REQUEST_SEQ).store(self.seq, SeqCst);
         if self.map.word(header::IUT_ASLEEP).load(SeqCst) != 0 {
@@ -266,7 +272,10 @@ pub struct IutEnd {
     wake_harness: Wake,
     seen: u32,
     spin: Duration,
+    /// The last request read back and the last answer written (as
+    /// [`HarnessEnd`]'s).
     buffer: Vec<u8>,
+    record: Vec<u8>,
 }
 
 impl IutEnd {
@@ -292,6 +301,7 @@ impl IutEnd {
             seen,
             spin: spin_time(),
             buffer: Vec::new(),
+            record: Vec::new(),
         })
     }
 
@@ -329,13 +339,20 @@ impl IutEnd {
 
     /// Writes the answer to the request [`Self::next`] gave, and wakes the harness.
     pub fn answer(&mut self, answer: &Answer) {
-        let stored = record::encode_answer(answer)
-            .and_then(|encoded| store(&self.map, layout::ANSWER_AT, &encoded));
-        if let Err(why) = stored {
-            // An answer no record holds is answered as the error it is.
-            let error = Answer::error(why);
-            let encoded = record::encode_answer(&error).expect("an error answer encodes");
-            let _ = store(&self.map, layout::ANSWER_AT, &encoded);
+        let buffer = std::mem::take(&mut self.record);
+        let stored = record::encode_answer(buffer, answer).and_then(|encoded| {
+            store(&self.map, layout::ANSWER_AT, &encoded)?;
+            Ok(encoded.record)
+        });
+        match stored {
+            Ok(record) => self.record = record,
+            Err(why) => {
+                // An answer no record holds is answered as the error it is.
+                let error = Answer::error(why);
+                let encoded =
+                    record::encode_answer(Vec::new(), &error).expect("an error answer encodes");
+                let _ = store(&self.map, layout::ANSWER_AT, &encoded);
+            }
         }
         self.map.word(header::ANSWER_SEQ).store(self.seen, SeqCst);
         if self.map.word(header::HARNESS_ASLEEP).load(SeqCst) != 0 {

@@ -49,7 +49,7 @@ impl<'a> Decoded<'a> {
 
     /// The bus events a record carries, in order.
     fn events(&self) -> Result<Vec<BusEvent>, String> {
-        let mut events = Vec::new();
+        let mut events = Vec::with_capacity(self.entries.len() / entry::SIZE);
         for (tag, slot) in self.slots() {
             events.push(match tag {
                 tag::RECEIVED => BusEvent::Received {
@@ -170,7 +170,7 @@ impl<'a> Decoded<'a> {
                 }
             }
             kind::STEPPED => {
-                let mut plan = Vec::new();
+                let mut plan = Vec::with_capacity(self.entries.len() / entry::SIZE);
                 for (tag, slot) in self.slots() {
                     let not_before_ns = get(slot, entry::TIME);
                     plan.push(match tag {

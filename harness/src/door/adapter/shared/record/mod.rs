@@ -10,7 +10,7 @@ use canif_model::info_data::ControllerStatus;
 
 use super::layout::{entry, record, MAX_ENTRIES};
 use crate::door::adapter::protocol::{
-    Answer, BusEvent, Hex, Request, Transmitted, WireFrame, WireMessage,
+    Answer, BusEvent, FrameData, Request, Transmitted, WireFrame, WireMessage,
 };
 
 mod decode;
@@ -82,9 +82,11 @@ enum Image {
 }
 
 impl<'a> Builder<'a> {
-    fn new(kind: u32, time: u64) -> Builder<'a> {
-        // Room for a cycle's events at once: one allocation, not one per entry.
-        let mut record = Vec::with_capacity(record::ENTRIES + 32 * entry::SIZE);
+    /// A record written into `buffer` (what it held is dropped): an end that
+    /// hands back the last record's buffer writes every record without an
+    /// allocation.
+    fn new(mut record: Vec<u8>, kind: u32, time: u64) -> Builder<'a> {
+        record.clear();
         record.resize(record::ENTRIES, 0);
         put(&mut record, record::KIND, kind.into());
         put(&mut record, record::TIME, time);
@@ -161,7 +163,8 @@ fn put_frame(slot: &mut [u8], frame: &WireFrame) {
         .enumerate()
         .fold(0u8, |flags, (bit, on)| flags | (u8::from(*on) << bit));
     slot[entry::LEN] = frame.len;
-    let data = &frame.data.0[..frame.data.0.len().min(entry::DATA.len())];
+    let data = frame.data.as_slice();
+    let data = &data[..data.len().min(entry::DATA.len())];
     slot[entry::DATA.start..entry::DATA.start + data.len()].copy_from_slice(data);
     // The data's own length, where the frame's `len` (a DLC-rounded FD length,
     // or a remote frame's) does not say it.
@@ -180,7 +183,7 @@ fn get_frame(slot: &[u8]) -> WireFrame {
         brs: bit(3),
         esi: bit(4),
         len: slot[entry::LEN],
-        data: Hex(slot[entry::DATA.start..entry::DATA.start + data_len].to_vec()),
+        data: FrameData::from(&slot[entry::DATA.start..entry::DATA.start + data_len]),
     }
 }
 
@@ -268,12 +271,16 @@ fn get_text(slot: &[u8]) -> Result<String, String> {
 /// events since the last record: what version 1 would send as `receive`,
 /// `transmit_complete` and `controller_status` requests first, each of them
 /// answered `ok`, in one record.
-pub fn encode_batch<'a>(events: &[BusEvent], request: &'a Request) -> Result<Encoded<'a>, String> {
+pub fn encode_batch<'a>(
+    buffer: Vec<u8>,
+    events: &[BusEvent],
+    request: &'a Request,
+) -> Result<Encoded<'a>, String> {
     let mut record = match request {
         Request::Cycle { now_ns, outputs } => {
-            Builder::new(kind::CYCLE, *now_ns).image(Image::Outputs, &outputs.0)
+            Builder::new(buffer, kind::CYCLE, *now_ns).image(Image::Outputs, &outputs.0)
         }
-        Request::PollTransmit { now_ns } => Builder::new(kind::POLL_TRANSMIT, *now_ns),
+        Request::PollTransmit { now_ns } => Builder::new(buffer, kind::POLL_TRANSMIT, *now_ns),
         other => return Err(format!("`{}` takes no bus events before it", other.name())),
     };
     for event in events {
@@ -282,22 +289,22 @@ pub fn encode_batch<'a>(events: &[BusEvent], request: &'a Request) -> Result<Enc
     record.done()
 }
 
-/// A request of the hot path as a record; `configure`, `start` and `bye`
+/// A request of the hot path as a record (written into `buffer`); `configure`, `start` and `bye`
 /// stay on the line channel.
-pub fn encode_request(request: &Request) -> Result<Encoded<'_>, String> {
+pub fn encode_request(buffer: Vec<u8>, request: &Request) -> Result<Encoded<'_>, String> {
     let record = match request {
         Request::Cycle { now_ns, outputs } => {
-            Builder::new(kind::CYCLE, *now_ns).image(Image::Outputs, &outputs.0)
+            Builder::new(buffer, kind::CYCLE, *now_ns).image(Image::Outputs, &outputs.0)
         }
         Request::Receive { frame, end_ns } => {
-            let mut record = Builder::new(kind::RECEIVE, *end_ns);
+            let mut record = Builder::new(buffer, kind::RECEIVE, *end_ns);
             put_frame(record.entry(tag::RECEIVED), frame);
             record
         }
-        Request::PollTransmit { now_ns } => Builder::new(kind::POLL_TRANSMIT, *now_ns),
-        Request::TransmitComplete {} => Builder::new(kind::TRANSMIT_COMPLETE, 0),
+        Request::PollTransmit { now_ns } => Builder::new(buffer, kind::POLL_TRANSMIT, *now_ns),
+        Request::TransmitComplete {} => Builder::new(buffer, kind::TRANSMIT_COMPLETE, 0),
         Request::ControllerStatus { status } => {
-            let mut record = Builder::new(kind::CONTROLLER_STATUS, 0);
+            let mut record = Builder::new(buffer, kind::CONTROLLER_STATUS, 0);
             put_status(record.entry(tag::STATUS), &status.0);
             record
         }
@@ -306,7 +313,8 @@ pub fn encode_request(request: &Request) -> Result<Encoded<'_>, String> {
             outputs,
             events,
         } => {
-            let mut record = Builder::new(kind::STEP, *now_ns).image(Image::Outputs, &outputs.0);
+            let mut record =
+                Builder::new(buffer, kind::STEP, *now_ns).image(Image::Outputs, &outputs.0);
             for event in events {
                 match event {
                     BusEvent::Received { frame, end_ns } => {
@@ -326,7 +334,7 @@ pub fn encode_request(request: &Request) -> Result<Encoded<'_>, String> {
             record
         }
         Request::Plan { now_ns, events } => {
-            let mut record = Builder::new(kind::PLAN, *now_ns);
+            let mut record = Builder::new(buffer, kind::PLAN, *now_ns);
             for event in events {
                 record.event(event);
             }
@@ -337,7 +345,7 @@ pub fn encode_request(request: &Request) -> Result<Encoded<'_>, String> {
             outputs,
             requests,
         } => {
-            let mut record = Builder::new(kind::TASK, 0)
+            let mut record = Builder::new(buffer, kind::TASK, 0)
                 .image(Image::Inputs, &inputs.0)
                 .image(Image::Outputs, &outputs.0);
             for message in requests {
@@ -354,12 +362,12 @@ pub fn encode_request(request: &Request) -> Result<Encoded<'_>, String> {
 }
 
 /// An answer as a record.
-pub fn encode_answer(answer: &Answer) -> Result<Encoded<'_>, String> {
+pub fn encode_answer(buffer: Vec<u8>, answer: &Answer) -> Result<Encoded<'_>, String> {
     let record = match answer {
-        Answer::Ok => Builder::new(kind::OK, 0),
+        Answer::Ok => Builder::new(buffer, kind::OK, 0),
         Answer::Error { message } => {
             // The text where the entries go, its length as the count.
-            let mut record = Builder::new(kind::ERROR, 0);
+            let mut record = Builder::new(buffer, kind::ERROR, 0);
             record.encoded.record.extend_from_slice(message.as_bytes());
             put(
                 &mut record.encoded.record,
@@ -368,9 +376,11 @@ pub fn encode_answer(answer: &Answer) -> Result<Encoded<'_>, String> {
             );
             return Ok(record.encoded);
         }
-        Answer::Inputs { inputs } => Builder::new(kind::INPUTS, 0).image(Image::Inputs, &inputs.0),
+        Answer::Inputs { inputs } => {
+            Builder::new(buffer, kind::INPUTS, 0).image(Image::Inputs, &inputs.0)
+        }
         Answer::Transmit { frame, next_ns } => {
-            let mut record = Builder::new(kind::TRANSMIT, next_ns.unwrap_or(u64::MAX));
+            let mut record = Builder::new(buffer, kind::TRANSMIT, next_ns.unwrap_or(u64::MAX));
             match frame {
                 None => {}
                 Some(Transmitted::Frame(frame)) => put_frame(record.entry(tag::FRAME), frame),
@@ -381,8 +391,8 @@ pub fn encode_answer(answer: &Answer) -> Result<Encoded<'_>, String> {
             record
         }
         Answer::Stepped { inputs, plan, more } => {
-            let mut record =
-                Builder::new(kind::STEPPED, u64::from(*more)).image(Image::Inputs, &inputs.0);
+            let mut record = Builder::new(buffer, kind::STEPPED, u64::from(*more))
+                .image(Image::Inputs, &inputs.0);
             for planned in plan {
                 match (&planned.frame, &planned.invalid) {
                     (Some(frame), _) => {
@@ -405,7 +415,8 @@ pub fn encode_answer(answer: &Answer) -> Result<Encoded<'_>, String> {
             refused,
             sent,
         } => {
-            let mut record = Builder::new(kind::TASKED, 0).image(Image::Outputs, &outputs.0);
+            let mut record =
+                Builder::new(buffer, kind::TASKED, 0).image(Image::Outputs, &outputs.0);
             for message in delivered {
                 put_message(record.entry(tag::MESSAGE), message);
             }

@@ -1,7 +1,7 @@
 //! Every record read back as written, and broken ones refused.
 
 use super::*;
-use crate::door::adapter::protocol::{InvalidWireFrame, PlannedFrame, Status};
+use crate::door::adapter::protocol::{Hex, InvalidWireFrame, PlannedFrame, Status};
 
 fn frame(id: u32, data: &[u8]) -> WireFrame {
     WireFrame {
@@ -12,12 +12,12 @@ fn frame(id: u32, data: &[u8]) -> WireFrame {
         brs: data.len() > 8,
         esi: false,
         len: data.len() as u8,
-        data: Hex(data.to_vec()),
+        data: FrameData::from(data),
     }
 }
 
 fn round_request(request: Request) -> Request {
-    let encoded = encode_request(&request).unwrap();
+    let encoded = encode_request(Vec::new(), &request).unwrap();
     let outputs = encoded.outputs.unwrap_or_default().to_vec();
     let inputs = encoded.inputs.unwrap_or_default().to_vec();
     let (events, request) = Decoded::new(&encoded.record, outputs, inputs)
@@ -29,7 +29,7 @@ fn round_request(request: Request) -> Request {
 }
 
 fn round_answer(answer: Answer) -> Answer {
-    let encoded = encode_answer(&answer).unwrap();
+    let encoded = encode_answer(Vec::new(), &answer).unwrap();
     let outputs = encoded.outputs.unwrap_or_default().to_vec();
     let inputs = encoded.inputs.unwrap_or_default().to_vec();
     Decoded::new(&encoded.record, outputs, inputs)
@@ -157,15 +157,15 @@ fn a_polled_devices_cycle_carries_the_bus_events_before_it() {
         BusEvent::Completed,
     ];
     let request = Request::PollTransmit { now_ns: 20 };
-    let encoded = encode_batch(&events, &request).unwrap();
+    let encoded = encode_batch(Vec::new(), &events, &request).unwrap();
     let decoded = Decoded::new(&encoded.record, Vec::new(), Vec::new()).unwrap();
     assert_eq!(decoded.batch().unwrap(), (events, request));
-    assert!(encode_batch(&[], &Request::TransmitComplete {}).is_err());
+    assert!(encode_batch(Vec::new(), &[], &Request::TransmitComplete {}).is_err());
 }
 
 #[test]
 fn a_record_whose_count_overruns_its_area_is_an_error_not_a_panic() {
-    let mut encoded = encode_answer(&Answer::Ok).unwrap();
+    let mut encoded = encode_answer(Vec::new(), &Answer::Ok).unwrap();
     put(&mut encoded.record, record::KIND, kind::TASKED.into());
     put(&mut encoded.record, record::COUNT, u32::MAX.into());
     assert!(Decoded::new(&encoded.record, Vec::new(), Vec::new()).is_err());
