@@ -286,6 +286,10 @@ impl<B: Bus + ?Sized> Lockstep<B> {
             tx_before: before.1,
             tx_requested: written.tx_counter,
         };
+        // Told first: an IUT in another process then works while the model does.
+        if let Err(e) = self.pair.iut.announce_cycle(outputs, t) {
+            return Err(Outcome::Error(e.into()));
+        }
         if let Err(e) = self.pair.model.cycle(outputs, t) {
             return Err(Outcome::Error(RunError::Harness(HarnessError::Model(
                 e.to_string(),

@@ -57,6 +57,11 @@ impl Iut for Ordered {
         self.inner.cycle(outputs, now)
     }
 
+    fn announce_cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<(), IutError> {
+        // Held to the promises by `cycle`, which collects it.
+        self.inner.announce_cycle(outputs, now)
+    }
+
     fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) -> Result<(), IutError> {
         self.at("receive", end_of_reception)?;
         self.inner.receive(frame, end_of_reception)

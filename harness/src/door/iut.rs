@@ -30,6 +30,13 @@ pub trait Iut {
     fn cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError>;
     /// The controller received `frame`, whose last bit ended at `end_of_reception`.
     fn receive(&mut self, frame: &Frame, end_of_reception: Nanos) -> Result<(), IutError>;
+    /// The cycle the harness asks for next (`cycle` with these outputs at
+    /// `now`), told ahead so that an IUT in another process starts on it
+    /// while the harness works out what the model does.
+    fn announce_cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<(), IutError> {
+        let _ = (outputs, now);
+        Ok(())
+    }
     /// The next frame the controller starts sending at `now`, if any.
     fn poll_transmit(&mut self, now: Nanos) -> Result<Transmit, IutError>;
     /// When a held frame (Distributed Clocks) becomes due.

@@ -53,6 +53,9 @@ pub struct ExecIut {
     on_wire: bool,
     /// What it declared in its `configured` answer.
     declared: Declared,
+    /// Protocol 3: the step posted ahead by [`Iut::announce_cycle`], its
+    /// answer not yet read.
+    announced: Option<Request>,
 }
 
 impl ExecIut {
@@ -80,6 +83,7 @@ impl ExecIut {
             more: false,
             on_wire: false,
             declared: Declared::default(),
+            announced: None,
         })
     }
 
@@ -148,6 +152,7 @@ impl ExecIut {
         self.batched = protocol == 2 || (protocol == 3 && configured.steps != Some(false));
         self.events.clear();
         self.plan.clear();
+        self.announced = None;
         self.more = false;
         self.on_wire = false;
         self.input_size = layout.input_size();
@@ -161,16 +166,31 @@ impl ExecIut {
     /// Protocol 2: the cycle, with the bus events since the last one; the new
     /// plan replaces the old (frames not started are in it again).
     fn step(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError> {
-        let request = Request::Step {
-            now_ns: now,
-            outputs: Hex(outputs.to_vec()),
-            events: std::mem::take(&mut self.events),
-        };
         let (inputs, plan, more) = if self.version == 3 {
-            let stepped = self.process.exchange_record(&[], &request, Answer::STEPPED);
+            let request = match self.announced.take() {
+                Some(request) if matches!(request, Request::Step { now_ns, .. } if now_ns == now) => {
+                    request
+                }
+                Some(request) => {
+                    return Err(self.fail(
+                        IutCause::HarnessBug,
+                        format!(
+                            "harness bug: a cycle at {now} ns after a `{}` announced for another",
+                            request.name()
+                        ),
+                    ))
+                }
+                None => {
+                    let request = self.step_request(outputs, now);
+                    self.process.post_record(&[], &request)?;
+                    request
+                }
+            };
+            let stepped = self.process.collect_record(&request, Answer::STEPPED);
             self.reuse(request);
             stepped?
         } else {
+            let request = self.step_request(outputs, now);
             let line = self.process.exchange_line(&request)?;
             match serde_json::from_str::<SteppedLine>(&line) {
                 Ok(stepped) => (stepped.inputs, stepped.plan, false),
@@ -179,6 +199,15 @@ impl ExecIut {
         };
         self.take_plan(plan, more)?;
         Ok(inputs.0)
+    }
+
+    /// The cycle with the bus events since the last one.
+    fn step_request(&mut self, outputs: &[u8], now: Nanos) -> Request {
+        Request::Step {
+            now_ns: now,
+            outputs: Hex(outputs.to_vec()),
+            events: std::mem::take(&mut self.events),
+        }
     }
 
     /// Protocol 3: the rest of a plan cut short, after the bus events since.
@@ -241,6 +270,18 @@ impl ExecIut {
 impl Iut for ExecIut {
     fn declared(&self) -> Declared {
         self.declared
+    }
+
+    /// Protocol 3 in steps: the step is posted now, its answer read by
+    /// `cycle`.
+    fn announce_cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<(), IutError> {
+        if !(self.batched && self.version == 3) || self.announced.is_some() {
+            return Ok(());
+        }
+        let request = self.step_request(outputs, now);
+        let posted = self.process.post_record(&[], &request);
+        self.announced = Some(request);
+        posted
     }
 
     fn cycle(&mut self, outputs: &[u8], now: Nanos) -> Result<Vec<u8>, IutError> {

@@ -230,8 +230,32 @@ impl AdapterProcess {
         request: &Request,
         expected: Expected<T>,
     ) -> Result<T, IutError> {
+        self.post_record(events, request)?;
+        self.collect_record(request, expected)
+    }
+
+    /// [`Self::exchange_record`] in two halves, so that the harness can work
+    /// while the IUT answers: in the shared mapping the request is posted
+    /// here; on lines it is sent by [`Self::collect_record`].
+    pub(crate) fn post_record(
+        &mut self,
+        events: &[BusEvent],
+        request: &Request,
+    ) -> Result<(), IutError> {
         match self.shared_agreed {
-            true => self.exchange_shared(events, request, expected),
+            true => self.post_shared(events, request),
+            false => Ok(()),
+        }
+    }
+
+    /// The answer to `request`, posted by [`Self::post_record`].
+    pub(crate) fn collect_record<T>(
+        &mut self,
+        request: &Request,
+        expected: Expected<T>,
+    ) -> Result<T, IutError> {
+        match self.shared_agreed {
+            true => self.collect_shared(request.name(), expected),
             false => self.exchange(request, expected),
         }
     }

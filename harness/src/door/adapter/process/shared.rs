@@ -10,17 +10,12 @@ use crate::error::{IutCause, IutError};
 
 impl AdapterProcess {
     /// Protocol 3: posts `request` (after `events`, for a polled device) in
-    /// the shared mapping and waits there for
-    /// the answer `expected`, watching the line channel meanwhile as
-    /// [`Self::exchange_line`] watches it for an answer: a host's report of
-    /// an access past an image, a line nobody asked for, its end; and the
-    /// per-request limit.
-    pub(super) fn exchange_shared<T>(
+    /// the shared mapping; [`Self::collect_shared`] waits for its answer.
+    pub(super) fn post_shared(
         &mut self,
         events: &[BusEvent],
         request: &Request,
-        expected: Expected<T>,
-    ) -> Result<T, IutError> {
+    ) -> Result<(), IutError> {
         if let Some(failure) = &self.failed {
             return Err(failure.clone());
         }
@@ -31,8 +26,21 @@ impl AdapterProcess {
             Some(shared) => shared.post(events, request),
             None => Err("no shared mapping was handed to it".to_string()),
         };
-        if let Err(why) = posted {
-            return Err(self.fail(IutCause::HarnessBug, why));
+        posted.map_err(|why| self.fail(IutCause::HarnessBug, why))
+    }
+
+    /// Protocol 3: waits in the shared mapping for the answer `expected` to
+    /// the request `name` posted last, watching the line channel meanwhile
+    /// as [`Self::exchange_line`] watches it for an answer: a host's report
+    /// of an access past an image, a line nobody asked for, its end; and the
+    /// per-request limit.
+    pub(super) fn collect_shared<T>(
+        &mut self,
+        name: &str,
+        expected: Expected<T>,
+    ) -> Result<T, IutError> {
+        if let Some(failure) = &self.failed {
+            return Err(failure.clone());
         }
         let started = std::time::Instant::now();
         let limit = self.timeouts.request;
@@ -45,7 +53,6 @@ impl AdapterProcess {
                 break;
             }
             let line = self.lines.next(Duration::ZERO);
-            let name = request.name();
             let (cause, what) = match line {
                 Line::Silent if started.elapsed() < limit => continue,
                 Line::Silent => {
