@@ -1,8 +1,9 @@
 //! An external IUT must not be the bottleneck: the soak scenario (one virtual
 //! minute of a 1 Mbit/s bus at full load, 32 slots) checked frame by frame
 //! against the soft device in process, the C example device loaded over the C
-//! ABI (`lib:`) in process and in `canif lib-host` (protocol 3, a record per
-//! bus event), and the soft device behind the adapter protocol as its own
+//! ABI (`lib:`) in process and in `canif lib-host` (protocol 3: a record per
+//! cycle with its `canif_transmit_plan`, a record per bus event without it),
+//! and the soft device behind the adapter protocol as its own
 //! process (`canif device --stdio`): protocol 3 (a cycle's records in shared
 //! memory) on any CPU and on the harness's, protocol 2 (a line per cycle)
 //! and protocol 1 (a line per bus event). Plain main: prints figures and the
@@ -32,7 +33,9 @@ fn main() {
     let mut soak = scenario::generated(&config, 42, seconds * 1000, 100);
     soak.bit_rates = BitRates::classic(1_000_000);
     let device = env!("CARGO_BIN_EXE_canif");
-    let library = c_example();
+    let library = c_example(&[]);
+    // The same library without its plan: polled frame by frame.
+    let polled = c_example(&["-Dcanif_transmit_plan=example_transmit_plan"]);
     // `canif device --stdio` over protocol `version`, on the harness's CPU or any.
     let stdio = |version: u8, same_cpu: bool| {
         IutKind::Door(Door::Exec {
@@ -60,6 +63,16 @@ fn main() {
             "examples/c over lib:, canif lib-host",
             IutKind::Door(Door::Lib {
                 path: library.clone(),
+                host: Some(LibHost {
+                    canif: device.into(),
+                    timeouts: Timeouts::with_request(std::time::Duration::from_millis(10_000)),
+                }),
+            }),
+        ),
+        (
+            "the same without its plan (polled)",
+            IutKind::Door(Door::Lib {
+                path: polled,
                 host: Some(LibHost {
                     canif: device.into(),
                     timeouts: Timeouts::with_request(std::time::Duration::from_millis(10_000)),
@@ -109,12 +122,18 @@ fn main() {
     }
 }
 
-/// The C example device, built with the machine's C compiler.
-fn c_example() -> std::path::PathBuf {
+/// The C example device, built with the machine's C compiler and `flags`.
+fn c_example(flags: &[&str]) -> std::path::PathBuf {
     let root = env!("CARGO_MANIFEST_DIR");
-    let library = std::env::temp_dir().join(format!("canif-bench-{}.so", std::process::id()));
+    let library = std::env::temp_dir().join(format!(
+        "canif-bench-{}-{}.so",
+        std::process::id(),
+        flags.len()
+    ));
     let status = std::process::Command::new("cc")
-        .args(["-shared", "-fPIC", "-O2", "-I"])
+        .args(["-shared", "-fPIC", "-O2"])
+        .args(flags)
+        .arg("-I")
         .arg(format!("{root}/include"))
         .arg("-o")
         .arg(&library)

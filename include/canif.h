@@ -114,6 +114,21 @@ void canif_transmit_complete(void *device);
 
 void canif_controller_status(void *device, const canif_status *status);
 
+/* One frame of a transmit plan, and the earliest time it may start. */
+typedef struct canif_planned {
+    canif_frame frame;
+    uint64_t not_before_ns;
+} canif_planned;
+
+/* Optional. The frames the controller would start from `now_ns` on, in order,
+ * if the bus took each at once and nothing else happened (not the one on the
+ * wire), each with the earliest time it may start; at most `capacity` of them
+ * in `plan`. Returns how many it wrote. It changes nothing: canif_poll_transmit
+ * still hands out each frame, and must hand out the one planned first.
+ * With it, `canif lib-host` answers a cycle's requests in one exchange instead
+ * of one per frame (docs/adapter-protocol.md, "steps"). */
+int canif_transmit_plan(void *device, uint64_t now_ns, canif_planned *plan, size_t capacity);
+
 /* Optional. What the device declares where the documents leave a choice
  * (docs/choices.md): "name=value" lines separated by '\n', NUL-terminated,
  * valid while the device lives; NULL declares nothing. Asked once, after

@@ -233,6 +233,55 @@ fn a_library_declares_its_choices_through_canif_declares() {
     );
 }
 
+/// A hosted library that exports `canif_transmit_plan` is served a cycle at
+/// a time; one without it is polled frame by frame, and is judged the same.
+/// The plan is the library's word on what it sends: a wrong frame in it fails
+/// the requirement it breaks; a controller that then hands out something
+/// else is an error that says what each said.
+#[test]
+fn a_hosted_librarys_plan_is_held_to_what_it_hands_out() {
+    let variant = |name: &str, from: &str, to: &str| {
+        let text = std::fs::read_to_string(example()).unwrap();
+        assert!(text.contains(from), "the example has `{from}`");
+        let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi");
+        std::fs::create_dir_all(&dir).unwrap();
+        let source = dir.join(format!("{name}-source.c"));
+        std::fs::write(&source, text.replace(from, to)).unwrap();
+        let library = build(name, &source, "");
+        let report = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("c-abi-{name}"));
+        let _ = std::fs::remove_dir_all(&report);
+        let output = run_tx_batches(&library, &report, &[]);
+        let json = std::fs::read_to_string(report.join("report.json")).unwrap_or_default();
+        (output.status.code(), json)
+    };
+    let (code, json) = variant(
+        "polled",
+        "int canif_transmit_plan(",
+        "int example_transmit_plan(",
+    );
+    assert_eq!(code, Some(0), "{json}");
+    let (code, json) = variant(
+        "plans-another-id",
+        "plan[n].frame.id = m->id;",
+        "plan[n].frame.id = m->id ^ 1;",
+    );
+    assert_eq!(code, Some(1), "{json}");
+    assert!(
+        json.contains("LAY-11-004") && json.contains("391#"),
+        "{json}"
+    );
+    let (code, json) = variant(
+        "plans-and-sends-nothing",
+        "if (d->in_flight || !d->send.count) return 0;",
+        "if (1) return 0;",
+    );
+    assert_eq!(code, Some(2), "a broken exchange, not a failure: {json}");
+    assert!(
+        json.contains("its plan put 390#") && json.contains("it started nothing"),
+        "{json}"
+    );
+}
+
 #[test]
 fn a_library_of_another_version_or_without_a_function_is_an_error() {
     let source = std::fs::read_to_string(example()).unwrap().replace(

@@ -47,6 +47,14 @@ impl Default for CFrame {
     }
 }
 
+/// `canif_planned`: a frame of a transmit plan.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct CPlanned {
+    pub frame: CFrame,
+    pub not_before_ns: u64,
+}
+
 /// `canif_filter`.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -144,6 +152,7 @@ type Poll = unsafe extern "C" fn(*mut c_void, u64, *mut CFrame, *mut u64) -> c_i
 type Complete = unsafe extern "C" fn(*mut c_void);
 type Status = unsafe extern "C" fn(*mut c_void, *const CStatus);
 type Declares = unsafe extern "C" fn(*mut c_void) -> *const c_char;
+type Plan = unsafe extern "C" fn(*mut c_void, u64, *mut CPlanned, usize) -> c_int;
 
 /// The functions of one loaded library.
 #[derive(Clone, Copy)]
@@ -157,6 +166,8 @@ struct Functions {
     status: Status,
     /// Optional: a device that declares nothing leaves it out.
     declares: Option<Declares>,
+    /// Optional: a device polled frame by frame leaves it out.
+    plan: Option<Plan>,
 }
 
 /// Loads `path` and checks that it speaks this ABI version.
@@ -228,11 +239,17 @@ impl Library {
             complete: symbol(&library, "canif_transmit_complete")?,
             status: symbol(&library, "canif_controller_status")?,
             declares: symbol(&library, "canif_declares").ok(),
+            plan: symbol(&library, "canif_transmit_plan").ok(),
         };
         Ok(Library {
             functions,
             _library: std::sync::Arc::new(library),
         })
+    }
+
+    /// Whether its devices tell their transmit plan (`canif_transmit_plan`).
+    pub fn plans(&self) -> bool {
+        self.functions.plan.is_some()
     }
 
     /// A device for `config`; `Err` carries the device's reason for refusing it.
@@ -345,6 +362,24 @@ impl Device {
             (started == 1).then_some(frame),
             (next != u64::MAX).then_some(next),
         )
+    }
+
+    /// Its transmit plan from `now` on, at most `most` frames; `None`
+    /// without `canif_transmit_plan`, `Err` for a count no plan can have.
+    pub fn transmit_plan(&self, now: u64, most: usize) -> Option<Result<Vec<CPlanned>, String>> {
+        let plan = self.functions.plan?;
+        let mut planned = vec![CPlanned::default(); most];
+        // SAFETY: `planned` holds `most` writable entries; the handle is live.
+        let count = unsafe { plan(self.handle, now, planned.as_mut_ptr(), most) };
+        Some(match usize::try_from(count) {
+            Ok(count) if count <= most => {
+                planned.truncate(count);
+                Ok(planned)
+            }
+            _ => Err(format!(
+                "canif_transmit_plan returned {count} for room for {most}"
+            )),
+        })
     }
 
     pub fn transmit_complete(&mut self) {

@@ -188,6 +188,23 @@ int canif_poll_transmit(void *p, uint64_t now_ns, canif_frame *frame, uint64_t *
     return 1;
 }
 
+/* The send queue as canif_poll_transmit would hand it out: nothing is held
+ * (no Distributed Clocks), so each frame may start at once. */
+int canif_transmit_plan(void *p, uint64_t now_ns, canif_planned *plan, size_t capacity) {
+    const device *d = p;
+    size_t n = 0;
+    for (; n < d->send.count && n < capacity; n++) {
+        const message *m = &d->send.items[(d->send.head + n) % MAX_QUEUE];
+        memset(&plan[n], 0, sizeof plan[n]);
+        plan[n].frame.id = m->id;
+        plan[n].frame.rtr = m->rtr;
+        plan[n].frame.len = m->len;
+        if (!m->rtr) memcpy(plan[n].frame.data, m->data, m->len);
+        plan[n].not_before_ns = now_ns;
+    }
+    return (int)n;
+}
+
 void canif_transmit_complete(void *p) { ((device *)p)->in_flight = 0; }
 
 void canif_controller_status(void *p, const canif_status *status) {

@@ -14,7 +14,7 @@ use canif_model::Nanos;
 use crate::door::declaration::choices::Declared;
 use canif_cabi::guard::GuardedImage;
 
-use crate::door::iut::{BuildError, InvalidFrame, Iut, Transmit};
+use crate::door::iut::{BuildError, InvalidFrame, Iut, Planned, Transmit};
 use crate::error::{IutCause, IutError};
 
 pub(crate) mod client;
@@ -217,6 +217,20 @@ impl Iut for LibIut {
     }
     fn poll_timeout(&self) -> Option<Nanos> {
         self.next
+    }
+    /// A library that exports `canif_transmit_plan`; `None` for one that
+    /// does not, or that answered with a count no plan has.
+    fn transmit_plan(&self, now: Nanos, most: usize) -> Option<Vec<Planned>> {
+        let planned = self
+            .device
+            .transmit_plan(now, most.min(crate::door::iut::MOST_PLANNED))?
+            .ok()?;
+        Some(
+            planned
+                .iter()
+                .map(|p| (from_c(&p.frame), p.not_before_ns))
+                .collect(),
+        )
     }
     fn transmit_complete(&mut self) -> Result<(), IutError> {
         self.device.transmit_complete();

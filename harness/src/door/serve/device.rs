@@ -1,6 +1,7 @@
 //! The device's side of the adapter protocol: an in-process IUT served over
 //! stdin/stdout, what `canif device --stdio` runs.
 
+use std::collections::VecDeque;
 use std::io::{BufRead, Write};
 
 use super::session::{self, Serves, Switch};
@@ -33,10 +34,14 @@ pub struct Server<'a> {
     /// What the served device declares in its `configured` answer.
     declares: std::collections::BTreeMap<String, String>,
     /// It can tell its transmit plan (versions 2 and 3 in steps); a device
-    /// that can only be polled speaks 1, or 3 a record per bus event.
+    /// that can only be polled (a library without `canif_transmit_plan`)
+    /// speaks 1, or 3 a record per bus event.
     steps: bool,
     /// Where the requests after the last `configured` come from.
     switch: Option<Switch>,
+    /// The frames the last plan sent put first, in order: each frame the
+    /// harness starts must be the one the device hands out.
+    promised: VecDeque<Planned>,
 }
 
 impl<'a> Server<'a> {
@@ -50,10 +55,12 @@ impl<'a> Server<'a> {
             declares: Default::default(),
             steps: true,
             switch: None,
+            promised: VecDeque::new(),
         }
     }
 
-    /// A device that can only be polled (a library: the C ABI has no plan).
+    /// A device that can only be polled (a library without
+    /// `canif_transmit_plan`).
     pub fn polled(mut self) -> Self {
         self.steps = false;
         self
@@ -186,12 +193,29 @@ impl<'a> Server<'a> {
                 now_ns,
                 outputs,
                 events,
-            } => match step(iut.as_mut(), *now_ns, Some(&outputs.0), events, most) {
-                Ok(answer) => answer,
-                Err(error) => Answer::error(error.to_string()),
-            },
+            } => {
+                let promised = &mut self.promised;
+                match step(
+                    iut.as_mut(),
+                    promised,
+                    *now_ns,
+                    Some(&outputs.0),
+                    events,
+                    most,
+                ) {
+                    Ok(answer) => answer,
+                    Err(error) => Answer::error(error.to_string()),
+                }
+            }
             Request::Plan { now_ns, events } => {
-                match step(iut.as_mut(), *now_ns, None, events, most) {
+                match step(
+                    iut.as_mut(),
+                    &mut self.promised,
+                    *now_ns,
+                    None,
+                    events,
+                    most,
+                ) {
                     Ok(answer) => answer,
                     Err(error) => Answer::error(error.to_string()),
                 }
@@ -255,6 +279,7 @@ const PLAN_IN_RECORDS: usize = 16;
 /// plan: `outputs` is `None`), then at most `most` frames of the plan.
 fn step(
     iut: &mut dyn Iut,
+    promised: &mut VecDeque<Planned>,
     now: Nanos,
     outputs: Option<&[u8]>,
     events: &[BusEvent],
@@ -269,7 +294,27 @@ fn step(
                 iut.receive(&frame, *end_ns)?;
             }
             BusEvent::Started { at_ns } => {
-                if iut.poll_transmit(*at_ns)?.is_none() {
+                // The plan is the device's word on what it sends (the
+                // harness judges those frames); its controller must then
+                // hand out just that.
+                let started = iut.poll_transmit(*at_ns)?;
+                let broken = match (promised.pop_front(), &started) {
+                    (Some((planned, _)), Some(started)) if planned != *started => {
+                        Some(format!("it started {}", shown(started))).map(|what| (planned, what))
+                    }
+                    (Some((planned, _)), None) => Some((planned, "it started nothing".into())),
+                    _ => None,
+                };
+                if let Some((planned, what)) = broken {
+                    return Err(IutError::new(
+                        IutCause::Impossible,
+                        format!(
+                            "its plan put {} first, but at {at_ns} ns {what}",
+                            shown(&planned)
+                        ),
+                    ));
+                }
+                if started.is_none() {
                     return Err(IutError::new(
                         IutCause::HarnessBug,
                         format!(
@@ -295,11 +340,21 @@ fn step(
     })?;
     let more = plan.len() > most;
     plan.truncate(most);
+    promised.clear();
+    promised.extend(plan.iter().cloned());
     Ok(Answer::Stepped {
         inputs: Hex(inputs),
         plan: plan.into_iter().map(planned).collect(),
         more,
     })
+}
+
+/// A frame of a plan, or what is none, in words.
+fn shown(frame: &Result<canif_model::frame::Frame, crate::error::InvalidFrame>) -> String {
+    match frame {
+        Ok(frame) => frame.to_string(),
+        Err(invalid) => format!("no frame ({invalid})"),
+    }
 }
 
 fn planned((frame, not_before_ns): Planned) -> PlannedFrame {
@@ -364,7 +419,11 @@ pub fn serve_library(
             .guarded(output_size)
             .map(|iut| Box::new(iut) as Box<dyn Iut>)
     };
-    // A library cannot tell its transmit plan (the C ABI polls): version 1,
-    // or 3 a record per bus event.
-    serve(Server::new(&build, true).polled(), input, line_fd, output)
+    // A library that tells its transmit plan steps (a cycle's requests in
+    // one record); one that does not is polled: version 1, or 3 a record per
+    // bus event. (One that cannot be loaded is told so at `configure`.)
+    let server = Server::new(&build, true);
+    let plans = canif_cabi::Library::open(path).is_ok_and(|library| library.plans());
+    let server = if plans { server } else { server.polled() };
+    serve(server, input, line_fd, output)
 }
