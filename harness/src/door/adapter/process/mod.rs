@@ -17,7 +17,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use super::lines::{Line, LineReader};
-use super::protocol::{Answer, BusEvent, Expected, Request, SharedOffer};
+use super::protocol::{Answer, Expected, Request, SharedOffer};
 use super::shared::HarnessEnd;
 use super::CONTROL_FDS;
 
@@ -218,46 +218,6 @@ impl AdapterProcess {
     /// cycle go to the shared mapping ([`Self::exchange_record`]).
     pub(crate) fn agree_shared(&mut self, agreed: bool) {
         self.shared_agreed = agreed && self.shared.is_some();
-    }
-
-    /// A request of the cycle and its answer, where the agreed version
-    /// carries it: a record in the shared mapping (after `events`, a polled
-    /// device's bus events), or a line (`events` must then be empty: the
-    /// lines carry them as requests of their own).
-    pub(crate) fn exchange_record<T>(
-        &mut self,
-        events: &[BusEvent],
-        request: &Request,
-        expected: Expected<T>,
-    ) -> Result<T, IutError> {
-        self.post_record(events, request)?;
-        self.collect_record(request, expected)
-    }
-
-    /// [`Self::exchange_record`] in two halves, so that the harness can work
-    /// while the IUT answers: in the shared mapping the request is posted
-    /// here; on lines it is sent by [`Self::collect_record`].
-    pub(crate) fn post_record(
-        &mut self,
-        events: &[BusEvent],
-        request: &Request,
-    ) -> Result<(), IutError> {
-        match self.shared_agreed {
-            true => self.post_shared(events, request),
-            false => Ok(()),
-        }
-    }
-
-    /// The answer to `request`, posted by [`Self::post_record`].
-    pub(crate) fn collect_record<T>(
-        &mut self,
-        request: &Request,
-        expected: Expected<T>,
-    ) -> Result<T, IutError> {
-        match self.shared_agreed {
-            true => self.collect_shared(request.name(), expected),
-            false => self.exchange(request, expected),
-        }
     }
 
     /// What `configure` and `start` offer for protocol 3.

@@ -1,5 +1,6 @@
-//! Protocol 3's exchange: a record in the shared mapping, the answer
-//! waited for there, the line channel watched meanwhile.
+//! The exchanges of the cycle: where the agreed version carries them, and
+//! protocol 3's (a record in the shared mapping, the answer waited for
+//! there, the line channel watched meanwhile).
 
 use std::time::Duration;
 
@@ -9,6 +10,46 @@ use crate::door::adapter::protocol::{BusEvent, Expected, Request};
 use crate::error::{IutCause, IutError};
 
 impl AdapterProcess {
+    /// A request of the cycle and its answer, where the agreed version
+    /// carries it: a record in the shared mapping (after `events`, a polled
+    /// device's bus events), or a line (`events` must then be empty: the
+    /// lines carry them as requests of their own).
+    pub(crate) fn exchange_record<T>(
+        &mut self,
+        events: &[BusEvent],
+        request: &Request,
+        expected: Expected<T>,
+    ) -> Result<T, IutError> {
+        self.post_record(events, request)?;
+        self.collect_record(request, expected)
+    }
+
+    /// [`Self::exchange_record`] in two halves, so that the harness can work
+    /// while the IUT answers: in the shared mapping the request is posted
+    /// here; on lines it is sent by [`Self::collect_record`].
+    pub(crate) fn post_record(
+        &mut self,
+        events: &[BusEvent],
+        request: &Request,
+    ) -> Result<(), IutError> {
+        match self.shared_agreed {
+            true => self.post_shared(events, request),
+            false => Ok(()),
+        }
+    }
+
+    /// The answer to `request`, posted by [`Self::post_record`].
+    pub(crate) fn collect_record<T>(
+        &mut self,
+        request: &Request,
+        expected: Expected<T>,
+    ) -> Result<T, IutError> {
+        match self.shared_agreed {
+            true => self.collect_shared(request.name(), expected),
+            false => self.exchange(request, expected),
+        }
+    }
+
     /// Protocol 3: posts `request` (after `events`, for a polled device) in
     /// the shared mapping; [`Self::collect_shared`] waits for its answer.
     pub(super) fn post_shared(
