@@ -124,7 +124,9 @@ typedef struct canif_planned {
  * if the bus took each at once and nothing else happened (not the one on the
  * wire), each with the earliest time it may start; at most `capacity` of them
  * in `plan`. Returns how many it wrote. It changes nothing: canif_poll_transmit
- * still hands out each frame, and must hand out the one planned first.
+ * still hands out each frame, and must hand out the one planned first. The
+ * plan is the device's word: canif judges its frames as the ones the device
+ * sends, and a controller that then hands out another is an error.
  * With it, `canif lib-host` answers a cycle's requests in one exchange instead
  * of one per frame (docs/adapter-protocol.md, "steps"). */
 int canif_transmit_plan(void *device, uint64_t now_ns, canif_planned *plan, size_t capacity);

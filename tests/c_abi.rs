@@ -240,67 +240,63 @@ fn a_library_declares_its_choices_through_canif_declares() {
 /// else is an error that says what each said.
 #[test]
 fn a_hosted_librarys_plan_is_held_to_what_it_hands_out() {
-    let variant = |name: &str, from: &str, to: &str| {
-        let text = std::fs::read_to_string(example()).unwrap();
-        assert!(text.contains(from), "the example has `{from}`");
-        let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi");
-        std::fs::create_dir_all(&dir).unwrap();
-        let source = dir.join(format!("{name}-source.c"));
-        std::fs::write(&source, text.replace(from, to)).unwrap();
-        let library = build(name, &source, "");
+    let cases: [(&str, &str, &str, i32, &[&str]); 3] = [
+        (
+            "polled",
+            "int canif_transmit_plan(",
+            "int example_transmit_plan(",
+            0,
+            &[],
+        ),
+        (
+            "plans-another-id",
+            "plan[n].frame.id = m->id;",
+            "plan[n].frame.id = m->id ^ 1;",
+            1,
+            &["LAY-11-004", "391#"],
+        ),
+        // A broken exchange, not a failure.
+        (
+            "plans-and-sends-nothing",
+            "if (d->in_flight || !d->send.count) return 0;",
+            "if (1) return 0;",
+            2,
+            &["its plan put 390#", "it started nothing"],
+        ),
+    ];
+    for (name, from, to, code, words) in cases {
+        let library = build(name, &example_variant(name, from, to), "");
         let report = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("c-abi-{name}"));
         let _ = std::fs::remove_dir_all(&report);
         let output = run_tx_batches(&library, &report, &[]);
         let json = std::fs::read_to_string(report.join("report.json")).unwrap_or_default();
-        (output.status.code(), json)
-    };
-    let (code, json) = variant(
-        "polled",
-        "int canif_transmit_plan(",
-        "int example_transmit_plan(",
-    );
-    assert_eq!(code, Some(0), "{json}");
-    let (code, json) = variant(
-        "plans-another-id",
-        "plan[n].frame.id = m->id;",
-        "plan[n].frame.id = m->id ^ 1;",
-    );
-    assert_eq!(code, Some(1), "{json}");
-    assert!(
-        json.contains("LAY-11-004") && json.contains("391#"),
-        "{json}"
-    );
-    let (code, json) = variant(
-        "plans-and-sends-nothing",
-        "if (d->in_flight || !d->send.count) return 0;",
-        "if (1) return 0;",
-    );
-    assert_eq!(code, Some(2), "a broken exchange, not a failure: {json}");
-    assert!(
-        json.contains("its plan put 390#") && json.contains("it started nothing"),
-        "{json}"
-    );
+        assert_eq!(output.status.code(), Some(code), "{name}: {json}");
+        for word in words {
+            assert!(json.contains(word), "{name}: no `{word}` in {json}");
+        }
+    }
+}
+
+/// The C example with `from` replaced by `to`, as a source file named `name`.
+fn example_variant(name: &str, from: &str, to: &str) -> PathBuf {
+    let text = std::fs::read_to_string(example()).unwrap();
+    assert!(text.contains(from), "the example has `{from}`");
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi");
+    std::fs::create_dir_all(&dir).unwrap();
+    let source = dir.join(format!("{name}-source.c"));
+    std::fs::write(&source, text.replace(from, to)).unwrap();
+    source
 }
 
 #[test]
 fn a_library_of_another_version_or_without_a_function_is_an_error() {
-    let source = std::fs::read_to_string(example()).unwrap().replace(
+    let v2 = example_variant(
+        "v2",
         "uint32_t canif_abi_version(void) { return CANIF_ABI_VERSION; }",
         "uint32_t canif_abi_version(void) { return 2; }",
     );
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("c-abi");
-    std::fs::create_dir_all(&dir).unwrap();
-    let v2 = dir.join("v2.c");
-    std::fs::write(&v2, source).unwrap();
     let v2 = build("v2", &v2, "");
-    let no_destroy = dir.join("no-destroy.c");
-    std::fs::write(
-        &no_destroy,
-        std::fs::read_to_string(example())
-            .unwrap()
-            .replace("void canif_destroy(void *p) { free(p); }", ""),
-    )
-    .unwrap();
+    let no_destroy = example_variant("no-destroy", "void canif_destroy(void *p) { free(p); }", "");
     let no_destroy = build("no-destroy", &no_destroy, "");
     let caps = canif_model::config::Capabilities::everything();
     let config =

@@ -54,8 +54,20 @@ pub(crate) fn build(
     caps: &Capabilities,
     config: &InterfaceConfig,
 ) -> Result<LibIut, BuildError> {
-    let library = Library::open(path)
-        .map_err(|e| BuildError::Failed(IutError::new(IutCause::NotStarted, e)))?;
+    create(&open(path)?, caps, config)
+}
+
+/// Loads the library, checking its ABI version and functions.
+pub(crate) fn open(path: &Path) -> Result<Library, BuildError> {
+    Library::open(path).map_err(|e| BuildError::Failed(IutError::new(IutCause::NotStarted, e)))
+}
+
+/// The loaded library's device for a configuration.
+pub(crate) fn create(
+    library: &Library,
+    caps: &Capabilities,
+    config: &InterfaceConfig,
+) -> Result<LibIut, BuildError> {
     let c_config = c_config(caps, config);
     let c_caps = CCapabilities {
         base11: u8::from(caps.base11),

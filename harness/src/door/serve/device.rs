@@ -298,29 +298,24 @@ fn step(
                 // harness judges those frames); its controller must then
                 // hand out just that.
                 let started = iut.poll_transmit(*at_ns)?;
-                let broken = match (promised.pop_front(), &started) {
-                    (Some((planned, _)), Some(started)) if planned != *started => {
-                        Some(format!("it started {}", shown(started))).map(|what| (planned, what))
+                match (promised.pop_front(), started) {
+                    (Some((planned, _)), started) if Some(&planned) != started.as_ref() => {
+                        return Err(IutError::new(
+                            IutCause::Impossible,
+                            format!(
+                                "its plan put {} first, but at {at_ns} ns it started {}",
+                                shown(&planned),
+                                started.as_ref().map_or("nothing".into(), shown)
+                            ),
+                        ));
                     }
-                    (Some((planned, _)), None) => Some((planned, "it started nothing".into())),
-                    _ => None,
-                };
-                if let Some((planned, what)) = broken {
-                    return Err(IutError::new(
-                        IutCause::Impossible,
-                        format!(
-                            "its plan put {} first, but at {at_ns} ns {what}",
-                            shown(&planned)
-                        ),
-                    ));
-                }
-                if started.is_none() {
-                    return Err(IutError::new(
+                    (None, None) => return Err(IutError::new(
                         IutCause::HarnessBug,
                         format!(
                             "the harness started a frame at {at_ns} ns that the plan did not hold"
                         ),
-                    ));
+                    )),
+                    _ => {}
                 }
             }
             BusEvent::Completed => iut.transmit_complete()?,
@@ -340,13 +335,13 @@ fn step(
     })?;
     let more = plan.len() > most;
     plan.truncate(most);
-    promised.clear();
-    promised.extend(plan.iter().cloned());
-    Ok(Answer::Stepped {
+    let answer = Answer::Stepped {
         inputs: Hex(inputs),
-        plan: plan.into_iter().map(planned).collect(),
+        plan: plan.iter().map(planned).collect(),
         more,
-    })
+    };
+    *promised = plan.into();
+    Ok(answer)
 }
 
 /// A frame of a plan, or what is none, in words.
@@ -357,15 +352,15 @@ fn shown(frame: &Result<canif_model::frame::Frame, crate::error::InvalidFrame>) 
     }
 }
 
-fn planned((frame, not_before_ns): Planned) -> PlannedFrame {
+fn planned((frame, not_before_ns): &Planned) -> PlannedFrame {
     let (frame, invalid) = match frame {
-        Ok(frame) => (Some(WireFrame::from(&frame)), None),
+        Ok(frame) => (Some(WireFrame::from(frame)), None),
         Err(invalid) => (None, Some(invalid.to_string())),
     };
     PlannedFrame {
         frame,
         invalid,
-        not_before_ns,
+        not_before_ns: *not_before_ns,
     }
 }
 
@@ -412,18 +407,23 @@ pub fn serve_library(
     line_fd: i32,
     output: impl Write,
 ) -> std::io::Result<()> {
+    // Loaded once: whether it tells its plan decides how it is served, and
+    // its load-time code runs once. (One that cannot be loaded is told so at
+    // `configure`.)
+    let library = crate::door::lib::open(path);
     let build = |caps: &Capabilities, config: &InterfaceConfig| {
         let output_size =
             canif_model::image::ImageLayout::new(config, caps.info_data).output_size();
-        crate::door::lib::build(path, caps, config)?
+        let library = library.as_ref().map_err(Clone::clone)?;
+        crate::door::lib::create(library, caps, config)?
             .guarded(output_size)
             .map(|iut| Box::new(iut) as Box<dyn Iut>)
     };
     // A library that tells its transmit plan steps (a cycle's requests in
     // one record); one that does not is polled: version 1, or 3 a record per
-    // bus event. (One that cannot be loaded is told so at `configure`.)
+    // bus event.
     let server = Server::new(&build, true);
-    let plans = canif_cabi::Library::open(path).is_ok_and(|library| library.plans());
+    let plans = library.as_ref().is_ok_and(|library| library.plans());
     let server = if plans { server } else { server.polled() };
     serve(server, input, line_fd, output)
 }

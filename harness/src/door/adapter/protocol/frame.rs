@@ -42,54 +42,44 @@ pub struct InvalidWireFrame {
     pub invalid: String,
 }
 
-/// Bytes as a lower-case hex string.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(try_from = "String", into = "String")]
-pub struct Hex(pub Vec<u8>);
+/// Bytes as a lower-case hex string, held in `B`: a `Vec` for an image, a
+/// [`FrameData`] for a frame's data.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(
+    try_from = "String",
+    into = "String",
+    bound = "B: FromIterator<u8> + AsRef<[u8]> + Clone"
+)]
+pub struct Hex<B = Vec<u8>>(pub B);
 
-impl TryFrom<String> for Hex {
+/// A frame's data, held inline up to the 64 bytes of an FD frame, so that
+/// the frames of every cycle's records and plans cost no allocation. (A
+/// longer one, which only a broken message carries, still reads, so that
+/// [`WireFrame::check`] can say what is wrong.)
+pub type FrameData = Hex<smallvec::SmallVec<[u8; 64]>>;
+
+impl<B: FromIterator<u8>> TryFrom<String> for Hex<B> {
     type Error = String;
     fn try_from(text: String) -> Result<Self, String> {
         from_hex(&text).map(Hex)
     }
 }
 
-impl From<Hex> for String {
-    fn from(hex: Hex) -> String {
-        to_hex(&hex.0)
-    }
-}
-
-/// A frame's data: hex on the lines like [`Hex`], but held inline up to the
-/// 64 bytes of an FD frame, so that the frames of every cycle's records and
-/// plans cost no allocation. (A longer one, which only a broken message
-/// carries, still reads, so that [`WireFrame::check`] can say what is wrong.)
-#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(try_from = "String", into = "String")]
-pub struct FrameData(smallvec::SmallVec<[u8; 64]>);
-
-impl FrameData {
-    pub fn as_slice(&self) -> &[u8] {
-        &self.0
+impl<B: AsRef<[u8]>> From<Hex<B>> for String {
+    fn from(hex: Hex<B>) -> String {
+        to_hex(hex.0.as_ref())
     }
 }
 
 impl From<&[u8]> for FrameData {
     fn from(bytes: &[u8]) -> Self {
-        FrameData(smallvec::SmallVec::from_slice(bytes))
+        Hex(smallvec::SmallVec::from_slice(bytes))
     }
 }
 
-impl TryFrom<String> for FrameData {
-    type Error = String;
-    fn try_from(text: String) -> Result<Self, String> {
-        from_hex(&text).map(FrameData)
-    }
-}
-
-impl From<FrameData> for String {
-    fn from(data: FrameData) -> String {
-        to_hex(&data.0)
+impl FrameData {
+    pub fn as_slice(&self) -> &[u8] {
+        &self.0
     }
 }
 
