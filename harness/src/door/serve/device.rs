@@ -309,12 +309,11 @@ fn step(
                             ),
                         ));
                     }
-                    (None, None) => return Err(IutError::new(
-                        IutCause::HarnessBug,
-                        format!(
-                            "the harness started a frame at {at_ns} ns that the plan did not hold"
-                        ),
-                    )),
+                    (None, None) => {
+                        let what =
+                            format!("the harness started at {at_ns} ns a frame no plan held");
+                        return Err(IutError::new(IutCause::HarnessBug, what));
+                    }
                     _ => {}
                 }
             }
