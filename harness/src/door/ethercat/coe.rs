@@ -130,7 +130,7 @@ impl Mailboxes {
             if began.elapsed() > ANSWER_TIMEOUT {
                 return Err(CoeError::Timeout(ANSWER_TIMEOUT));
             }
-            async_io::Timer::after(Duration::from_micros(200)).await;
+            embassy_time::Timer::after_micros(200).await;
         }
         let answer = Command::fprd(self.station, self.input.start)
             .receive_slice(maindevice, self.input.length)

@@ -189,11 +189,7 @@ impl MemoryMaster {
             }
             Poll::<T>::Pending
         });
-        // Parked between polls, not driving async-io's reactor: every PDU
-        // arms a timeout timer, and async-io's own block_on answered each
-        // with an epoll round and a wake-up of its thread (a third of the
-        // in-memory run's time, measured with perf).
-        futures_lite::future::block_on(futures_lite::future::or(operation, pump))
+        super::timer::block_on(futures_lite::future::or(operation, pump))
     }
 }
 
@@ -205,6 +201,9 @@ pub(super) struct InterfaceMaster {
     pub(super) maindevice: MainDevice<'static>,
     #[cfg(feature = "socketcan")]
     wire: Mutex<Wire>,
+    /// No master on an interface is built without a packet socket.
+    #[cfg(not(feature = "socketcan"))]
+    none: std::convert::Infallible,
 }
 
 /// The socket under a master, and the frames it waits answers for.
@@ -272,12 +271,15 @@ impl Wire {
     }
 }
 
+#[cfg(feature = "socketcan")]
 type Masters = std::sync::Mutex<std::collections::HashMap<String, &'static InterfaceMaster>>;
 
+#[cfg(feature = "socketcan")]
 static INTERFACE_MASTERS: std::sync::OnceLock<Masters> = std::sync::OnceLock::new();
 
 impl InterfaceMaster {
     /// The master on `interface`, started on first use (needs CAP_NET_RAW).
+    #[cfg(feature = "socketcan")]
     pub(super) fn on(interface: &str) -> Result<&'static InterfaceMaster, std::io::Error> {
         let masters = INTERFACE_MASTERS.get_or_init(Default::default);
         let mut masters = masters.lock().unwrap_or_else(|e| e.into_inner());
@@ -287,35 +289,33 @@ impl InterfaceMaster {
         let storage: &'static PduStorage<MAX_FRAMES, MAX_PDU_DATA> =
             Box::leak(Box::new(PduStorage::new()));
         let (tx, rx, pdu_loop) = storage.try_split().expect("a fresh storage splits");
-        let maindevice = MainDevice::new(pdu_loop, real_timeouts(), config());
-        #[cfg(feature = "socketcan")]
-        let master = {
-            let socket =
-                canif_kernel::PacketSocket::open(interface, canif_ethercat::wire::ETHERTYPE)
-                    .map_err(|e| std::io::Error::other(e.to_string()))?;
-            InterfaceMaster {
-                maindevice,
-                wire: Mutex::new(Wire {
-                    tx,
-                    rx,
-                    socket,
-                    buffer: vec![0; 2048],
-                    in_flight: 0,
-                    silent_since: None,
-                }),
-            }
-        };
-        #[cfg(not(feature = "socketcan"))]
-        let master = {
-            let task = ethercrab::std::tx_rx_task(interface, tx, rx)?;
-            std::thread::Builder::new()
-                .name(format!("ethercat-{interface}"))
-                .spawn(move || async_io::block_on(task))?;
-            InterfaceMaster { maindevice }
-        };
-        let master: &'static InterfaceMaster = Box::leak(Box::new(master));
+        let socket = canif_kernel::PacketSocket::open(interface, canif_ethercat::wire::ETHERTYPE)
+            .map_err(|e| std::io::Error::other(e.to_string()))?;
+        let master: &'static InterfaceMaster = Box::leak(Box::new(InterfaceMaster {
+            maindevice: MainDevice::new(pdu_loop, real_timeouts(), config()),
+            wire: Mutex::new(Wire {
+                tx,
+                rx,
+                socket,
+                buffer: vec![0; 2048],
+                in_flight: 0,
+                silent_since: None,
+            }),
+        }));
         masters.insert(interface.to_string(), master);
         Ok(master)
+    }
+
+    /// Without SocketCAN's crate there is no packet socket to carry frames.
+    #[cfg(not(feature = "socketcan"))]
+    pub(super) fn on(interface: &str) -> Result<&'static InterfaceMaster, std::io::Error> {
+        Err(std::io::Error::new(
+            std::io::ErrorKind::Unsupported,
+            format!(
+                "{interface}: this canif was built without SocketCAN (cargo feature `socketcan`), \
+                 whose packet sockets carry canif's EtherCAT frames"
+            ),
+        ))
     }
 
     #[cfg(feature = "socketcan")]
@@ -324,18 +324,19 @@ impl InterfaceMaster {
             self.wire.lock().unwrap_or_else(|e| e.into_inner()).pump(cx);
             Poll::<T>::Pending
         });
-        async_io::block_on(futures_lite::future::or(operation, pump))
+        super::timer::block_on(futures_lite::future::or(operation, pump))
     }
 
     #[cfg(not(feature = "socketcan"))]
-    pub(super) fn drive<T>(&self, operation: impl Future<Output = T>) -> T {
-        async_io::block_on(operation)
+    pub(super) fn drive<T>(&self, _: impl Future<Output = T>) -> T {
+        match self.none {}
     }
 }
 
 /// Timeouts of a master that waits for a terminal across a wire: generous,
 /// since a loaded machine may not run the other end for a while (a refused
 /// SAFEOP does not wait them out: canif watches that transition itself).
+#[cfg(feature = "socketcan")]
 fn real_timeouts() -> Timeouts {
     Timeouts {
         state_transition: Duration::from_secs(5),

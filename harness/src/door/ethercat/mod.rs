@@ -17,6 +17,7 @@ pub mod served;
 mod session;
 mod start_up;
 mod survey;
+mod timer;
 #[cfg(feature = "socketcan")]
 mod veth;
 

@@ -104,7 +104,7 @@ pub(super) async fn request_safe_op(
                 format!("PREOP → SAFEOP: AL status still {status:#06x} after {SAFE_OP_TIMEOUT:?}"),
             )));
         }
-        async_io::Timer::after(std::time::Duration::from_micros(200)).await;
+        embassy_time::Timer::after_micros(200).await;
     }
 }
 
