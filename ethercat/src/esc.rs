@@ -140,6 +140,21 @@ impl Esc {
         system.wrapping_sub(self.get64(register::DC_SYSTEM_TIME_OFFSET))
     }
 
+    /// Writes what a master may change of `bytes` at `start`: process RAM
+    /// whole (a copy, not a look per byte: mailboxes and process data are
+    /// most of what a master writes), registers byte by byte.
+    fn write(&mut self, start: usize, bytes: &[u8]) {
+        if start >= usize::from(register::PROCESS_RAM) {
+            self.memory[start..start + bytes.len()].copy_from_slice(bytes);
+            return;
+        }
+        for (i, value) in bytes.iter().enumerate() {
+            if Esc::writable(start + i) {
+                self.memory[start + i] = *value;
+            }
+        }
+    }
+
     /// Whether a master may change this byte (read-only registers and the
     /// SyncManagers' status bytes are the ESC's own).
     fn writable(address: usize) -> bool {
@@ -180,11 +195,7 @@ impl Esc {
             count += 1;
         }
         if command.writes() {
-            for (i, value) in datagram.data[..range.len()].iter().enumerate() {
-                if Esc::writable(start + i) {
-                    self.memory[start + i] = *value;
-                }
-            }
+            self.write(start, &datagram.data[..range.len()]);
             if range.contains(&usize::from(register::DC_RECEIVE_TIME_PORT0)) {
                 // A write to the port-0 receive time latches the local time
                 // the frame passed, there and in the processing unit's
@@ -230,12 +241,7 @@ impl Esc {
         let mut count = 0;
         if command.writes() {
             for (_, in_datagram, physical) in windows.iter().filter(|w| w.0.writes()) {
-                let bytes = &datagram.data[in_datagram.clone()];
-                for (i, value) in bytes.iter().enumerate() {
-                    if Esc::writable(physical.start + i) {
-                        self.memory[physical.start + i] = *value;
-                    }
-                }
+                self.write(physical.start, &datagram.data[in_datagram.clone()]);
                 touched.written.push(physical.clone());
                 count |= 2;
             }
