@@ -5,16 +5,19 @@
 
 use std::cell::{Cell, RefCell};
 use std::future::Future;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
-use std::task::Poll;
+use std::task::{Context, Poll, Wake, Waker};
 use std::time::Duration;
 
 use canif_ethercat::SubDevice;
 use canif_softdevice::ethercat::Terminal;
 use ethercrab::{MainDevice, MainDeviceConfig, PduRx, PduStorage, PduTx, Timeouts};
 
-/// Frames in flight at once, and the largest frame's data.
-const MAX_FRAMES: usize = 16;
+/// Frames in flight at once, and the largest frame's data. A group's
+/// largest process image (4 KiB) takes four frames; ethercrab looks through
+/// every slot for each frame it sends, so there are no more than twice that.
+const MAX_FRAMES: usize = 8;
 const MAX_PDU_DATA: usize = PduStorage::element_size(1100);
 
 /// What the link does to the terminal's answers: the faults a SubDevice or a
@@ -170,9 +173,12 @@ impl MemoryMaster {
 
     /// Runs `operation` to its end, carrying its frames to the peer.
     pub(super) fn drive<T>(&self, operation: impl Future<Output = T>) -> T {
+        let mut sendable = None;
         let pump = std::future::poll_fn(|cx| {
             let mut tx = self.tx.borrow_mut();
-            tx.replace_waker(cx.waker());
+            if !Sendable::look(&mut sendable, &tx, cx) {
+                return Poll::Pending;
+            }
             while let Some(frame) = tx.next_sendable_frame() {
                 let mut answer = None;
                 let sent = frame.send_blocking(|bytes| {
@@ -190,6 +196,47 @@ impl MemoryMaster {
             Poll::<T>::Pending
         });
         super::timer::block_on(futures_lite::future::or(operation, pump))
+    }
+}
+
+/// Whether ethercrab marked a frame sendable since a drive's pump last
+/// looked (ethercrab wakes the sender after each frame it marks). Looking
+/// claims each of the storage's frames in turn with an atomic exchange, and
+/// the pump is polled whenever anything wakes the drive: an eighth of the
+/// in-memory run went to looks that found nothing (perf).
+struct Sendable {
+    marked: AtomicBool,
+    drive: Waker,
+}
+
+impl Wake for Sendable {
+    fn wake(self: Arc<Self>) {
+        self.wake_by_ref();
+    }
+
+    fn wake_by_ref(self: &Arc<Self>) {
+        self.marked.store(true, Ordering::Release);
+        self.drive.wake_by_ref();
+    }
+}
+
+impl Sendable {
+    /// Whether to look for frames to send now (the first poll of a drive
+    /// always looks). A wake-up takes the sender's waker out of ethercrab's
+    /// storage, so it is put back before each look: a frame marked during
+    /// or after the look wakes the drive again.
+    fn look(sendable: &mut Option<Arc<Sendable>>, tx: &PduTx<'_>, cx: &Context<'_>) -> bool {
+        let sendable = sendable.get_or_insert_with(|| {
+            Arc::new(Sendable {
+                marked: AtomicBool::new(true),
+                drive: cx.waker().clone(),
+            })
+        });
+        let marked = sendable.marked.swap(false, Ordering::AcqRel);
+        if marked {
+            tx.replace_waker(&Waker::from(Arc::clone(sendable)));
+        }
+        marked
     }
 }
 
@@ -224,13 +271,12 @@ impl Wire {
     /// to a slice) only while answers are due, so a timer the master waits
     /// on still fires; answers overdue past the master's own timeouts are
     /// given up.
-    fn pump(&mut self, cx: &mut std::task::Context<'_>) {
+    fn pump(&mut self, cx: &mut std::task::Context<'_>, look: bool) {
         const SLICE: Duration = Duration::from_millis(1);
         // An answer usually comes within tens of microseconds: looked for
         // awake, it is not delayed by a sleeping thread's wake-up.
         const SPIN: Duration = Duration::from_micros(200);
-        self.tx.replace_waker(cx.waker());
-        while let Some(frame) = self.tx.next_sendable_frame() {
+        while let Some(frame) = look.then(|| self.tx.next_sendable_frame()).flatten() {
             let socket = &self.socket;
             let sent = frame.send_blocking(|bytes| {
                 socket
@@ -320,8 +366,11 @@ impl InterfaceMaster {
 
     #[cfg(feature = "socketcan")]
     pub(super) fn drive<T>(&self, operation: impl Future<Output = T>) -> T {
+        let mut sendable = None;
         let pump = std::future::poll_fn(|cx| {
-            self.wire.lock().unwrap_or_else(|e| e.into_inner()).pump(cx);
+            let mut wire = self.wire.lock().unwrap_or_else(|e| e.into_inner());
+            let look = Sendable::look(&mut sendable, &wire.tx, cx);
+            wire.pump(cx, look);
             Poll::<T>::Pending
         });
         super::timer::block_on(futures_lite::future::or(operation, pump))
