@@ -140,6 +140,30 @@ impl Esc {
         system.wrapping_sub(self.get64(register::DC_SYSTEM_TIME_OFFSET))
     }
 
+    /// Whether `range` lies in the buffer of a mailbox the master reads
+    /// that the ESC's firmware has not filled: the SyncManager denies the
+    /// read, and the working counter does not count it (ESC technology,
+    /// section I §2.4: the addressed memory must be accessible, "e.g.,
+    /// protected SyncManager buffer"). A master may read the mailbox at
+    /// once and poll its status only when told it is empty.
+    ///
+    /// Only the mailbox SyncManagers (0 and 1, ETG.2000's MBoxOut and
+    /// MBoxIn): a real ESC guards a 1-buffer process-data SyncManager the
+    /// same way, but the emulated firmware does not mark its inputs full,
+    /// so those are read whatever their state (docs/ethercat.md).
+    fn denies_read(&self, range: &std::ops::Range<usize>) -> bool {
+        range.start >= usize::from(register::PROCESS_RAM)
+            && (0..2).map(|n| self.sync_manager(n)).any(|sm| {
+                let buffer = sm.range();
+                sm.enabled()
+                    && sm.mailbox()
+                    && !sm.written_by_master()
+                    && sm.status & SyncManager::STATUS_MAILBOX_FULL == 0
+                    && buffer.start <= range.start
+                    && range.end <= buffer.end
+            })
+    }
+
     /// Writes what a master may change of `bytes` at `start`: process RAM
     /// whole (a copy, not a look per byte: mailboxes and process data are
     /// most of what a master writes), registers byte by byte.
@@ -182,7 +206,7 @@ impl Esc {
         }
         let mut count = 0;
         let command = datagram.command;
-        if command.reads() {
+        if command.reads() && !self.denies_read(&range) {
             let bytes = &self.memory[range.clone()];
             if matches!(command, Command::Brd | Command::Brw) {
                 for (d, m) in datagram.data.iter_mut().zip(bytes) {
@@ -468,6 +492,31 @@ mod tests {
             ),
         );
         assert_eq!(esc.process_data_watchdog(), None);
+    }
+
+    #[test]
+    fn an_empty_mailbox_is_not_read_and_not_counted() {
+        let mut esc = Esc::new();
+        esc.set16(register::STATION_ADDRESS, 0x1001);
+        // SM1: the terminal's mailbox at 0x1400, 1024 bytes, read by the master.
+        let sm1 = usize::from(register::SYNC_MANAGER_BASE + 8);
+        esc.memory[sm1..sm1 + 8].copy_from_slice(&[0x00, 0x14, 0x00, 0x04, 0x02, 0, 1, 0]);
+        esc.memory[0x1400] = 0xAB;
+        let read = |esc: &mut Esc, len: usize| {
+            run(
+                esc,
+                Datagram::physical(Command::Fprd, 0x1001, 0x1400, vec![0; len]),
+            )
+        };
+        let empty = read(&mut esc, 1024);
+        assert_eq!((empty.working_counter, empty.data[0]), (0, 0));
+        // Filled by the firmware: read and counted.
+        esc.set_sync_manager_status(1, SyncManager::STATUS_MAILBOX_FULL);
+        let full = read(&mut esc, 1024);
+        assert_eq!((full.working_counter, full.data[0]), (1, 0xAB));
+        // A read reaching past the buffer is no read of the mailbox alone.
+        esc.set_sync_manager_status(1, 0);
+        assert_eq!(read(&mut esc, 1025).working_counter, 1);
     }
 
     /// An FMMU record: logical start, length, physical start, 1 read / 2 write, active.

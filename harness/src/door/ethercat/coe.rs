@@ -117,6 +117,27 @@ impl Mailboxes {
             .send(maindevice, bytes.as_slice())
             .await
             .map_err(master)?;
+        // The answer read at once: an ESC denies the read of a mailbox its
+        // firmware has not filled (working counter 0), and only then is its
+        // status polled. An emulated terminal has answered by now: two
+        // frames an exchange instead of three.
+        let mailbox = Command::fprd(self.station, self.input.start);
+        let answer = match mailbox.receive_slice(maindevice, self.input.length).await {
+            Ok(answer) => answer,
+            Err(ethercrab::error::Error::WorkingCounter { .. }) => {
+                self.await_answer(maindevice).await?;
+                mailbox
+                    .receive_slice(maindevice, self.input.length)
+                    .await
+                    .map_err(master)?
+            }
+            Err(e) => return Err(master(e)),
+        };
+        SdoResponse::parse(&answer).map_err(|e: MailboxError| CoeError::Answer(e.to_string()))
+    }
+
+    /// Polls the terminal's mailbox status until its answer is there.
+    async fn await_answer(&self, maindevice: &MainDevice<'_>) -> Result<(), CoeError> {
         let status = register::SYNC_MANAGER_BASE + 8 + 5;
         let began = Instant::now();
         loop {
@@ -125,18 +146,13 @@ impl Mailboxes {
                 .await
                 .map_err(master)?;
             if full & SyncManager::STATUS_MAILBOX_FULL != 0 {
-                break;
+                return Ok(());
             }
             if began.elapsed() > ANSWER_TIMEOUT {
                 return Err(CoeError::Timeout(ANSWER_TIMEOUT));
             }
             embassy_time::Timer::after_micros(200).await;
         }
-        let answer = Command::fprd(self.station, self.input.start)
-            .receive_slice(maindevice, self.input.length)
-            .await
-            .map_err(master)?;
-        SdoResponse::parse(&answer).map_err(|e: MailboxError| CoeError::Answer(e.to_string()))
     }
 
     /// Downloads `data` to `index` from sub-index 0 with complete access,
