@@ -7,6 +7,7 @@
 //! of the cycle before — 003's confirmation two task cycles later — and are
 //! checked to be exactly those.
 
+mod bring_up;
 mod coe;
 pub mod esi;
 mod exchange;
@@ -21,30 +22,28 @@ mod timer;
 #[cfg(feature = "socketcan")]
 mod veth;
 
-use std::cell::Cell;
-use std::sync::{Arc, Mutex};
-
 use canif_ethercat::sii::Layout;
 use canif_ethercat::{Identity, SubDevice};
 use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_model::exchange::ExchangeMode;
 use canif_model::frame::Frame;
-use canif_model::image::ImageLayout;
 use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 use canif_softdevice::ethercat::{Terminal, TerminalIdentity};
 use canif_softdevice::{Choice, Fault, SoftDevice};
 use canif_spec::EthercatIdentity;
-use ethercrab::subdevice_group::{Op, PreOp};
+use ethercrab::subdevice_group::Op;
 use ethercrab::{DefaultLock, SubDeviceGroup};
 
-use crate::door::iut::{soft_controller, soft_settings, BuildError, Iut, Planned, Transmit};
+use crate::door::iut::{soft_controller, soft_settings, Iut, Planned, Transmit};
 use crate::error::{IutCause, IutError};
+pub use bring_up::build;
+use bring_up::{bring_up, open, Opened};
 use coe::Mailboxes;
 pub use link::LinkFault;
-use link::{lock, InterfaceMaster, MemoryMaster, Peer, SharedTerminal};
+use link::{lock, InterfaceMaster, MemoryMaster, SharedTerminal};
 pub use session::Configurer;
-use start_up::{configure, master_error, request_safe_op, Sync0Clock, SYNC0_CYCLE_NS};
+use start_up::SYNC0_CYCLE_NS;
 pub use survey::{survey, Pace, TerminalFacts};
 
 const MAX_SUBDEVICES: usize = 16;
@@ -267,205 +266,6 @@ pub fn emulated_terminal(
     );
     subdevice.cycles_on_frames = emulated.link_fault == Some(LinkFault::CyclesOnFrames);
     subdevice
-}
-
-/// Finds the terminal `link` names, scans the segment and checks the
-/// terminal's identity: it is left in PREOP.
-fn open(
-    caps: &Capabilities,
-    identity: &EthercatIdentity,
-    link: &EthercatLink,
-) -> Result<Opened, BuildError> {
-    // Each terminal starts its virtual clock at 0, where the first cycle
-    // (and, with Distributed Clocks, the first SYNC0) is.
-    link::set_now(0);
-    #[cfg(feature = "socketcan")]
-    let mut serving = None;
-    let (master, terminal, position) = match link {
-        EthercatLink::Emulated(emulated) => {
-            let master = MemoryMaster::of_this_thread();
-            let terminal = Arc::new(Mutex::new(emulated_terminal(caps, identity, emulated)));
-            *master.peer.borrow_mut() = Some(Peer {
-                terminal: Arc::clone(&terminal),
-                fault: emulated.link_fault,
-                frames: Cell::new(0),
-            });
-            (Master::Memory(master), Some(terminal), 0)
-        }
-        EthercatLink::Interface { name, position } => {
-            let master = InterfaceMaster::on(name).map_err(|e| {
-                BuildError::Failed(IutError::new(
-                    IutCause::NotStarted,
-                    format!("EtherCAT master on {name}: {e} (a raw socket needs CAP_NET_RAW)"),
-                ))
-            })?;
-            (Master::Interface(master), None, *position)
-        }
-        #[cfg(feature = "socketcan")]
-        EthercatLink::Veth {
-            master: master_side,
-            terminal: terminal_side,
-            emulated,
-        } => {
-            let terminal = Arc::new(Mutex::new(emulated_terminal(caps, identity, emulated)));
-            let not_started =
-                |what: String| BuildError::Failed(IutError::new(IutCause::NotStarted, what));
-            serving = Some(
-                veth::Serving::start(terminal_side, &terminal)
-                    .map_err(|e| not_started(format!("the terminal on {terminal_side}: {e}")))?,
-            );
-            let master = InterfaceMaster::on(master_side).map_err(|e| {
-                not_started(format!(
-                    "EtherCAT master on {master_side}: {e} (a raw socket needs CAP_NET_RAW)"
-                ))
-            })?;
-            (Master::Interface(master), Some(terminal), 0)
-        }
-        #[cfg(not(feature = "socketcan"))]
-        EthercatLink::Veth { .. } => {
-            return Err(BuildError::Failed(IutError::new(
-                IutCause::NotStarted,
-                "a veth pair needs Linux sockets (cargo feature `socketcan`)",
-            )))
-        }
-    };
-    let md = master.maindevice();
-    let group = master
-        .drive(md.init_single_group::<MAX_SUBDEVICES, MAX_PDI>(link::now))
-        .map_err(|e| BuildError::Failed(master_error(e, "scanning the segment")))?;
-    let (station, facts) = {
-        let sub = group
-            .subdevice(md, position)
-            .map_err(|e| BuildError::Failed(master_error(e, "finding the terminal")))?;
-        let seen = sub.identity();
-        let facts = TerminalFacts {
-            name: sub.name().to_string(),
-            vendor_id: seen.vendor_id,
-            product_code: seen.product_id,
-            revision: seen.revision,
-            serial: seen.serial,
-            ..TerminalFacts::default()
-        };
-        if (seen.vendor_id, seen.product_id, seen.revision)
-            != (identity.vendor_id, identity.product_code, identity.revision)
-        {
-            return Err(BuildError::Failed(IutError::new(
-                IutCause::Impossible,
-                format!(
-                    "the terminal at position {position} is vendor {:#010x} product {:#010x} revision {:#010x}; the profile's is {:#010x}/{:#010x}/{:#010x}",
-                    seen.vendor_id, seen.product_id, seen.revision,
-                    identity.vendor_id, identity.product_code, identity.revision
-                ),
-            )));
-        }
-        (sub.configured_address(), facts)
-    };
-    Ok(Opened {
-        master,
-        terminal,
-        position,
-        #[cfg(feature = "socketcan")]
-        serving,
-        group,
-        station,
-        facts,
-    })
-}
-
-/// A terminal found on its link and checked, in PREOP: what a start-up
-/// list is written to.
-struct Opened {
-    master: Master,
-    /// In memory or on a veth pair: the emulated terminal.
-    terminal: Option<SharedTerminal>,
-    position: usize,
-    #[cfg(feature = "socketcan")]
-    serving: Option<veth::Serving>,
-    group: SubDeviceGroup<MAX_SUBDEVICES, MAX_PDI, DefaultLock, PreOp>,
-    station: u16,
-    facts: TerminalFacts,
-}
-
-impl Opened {
-    /// Where the first SYNC0 lies: at the harness's virtual time 0 for an
-    /// emulated terminal, ahead of the terminal's own time for a real one.
-    fn clock(&self) -> Sync0Clock {
-        match &self.terminal {
-            Some(_) => Sync0Clock::Virtual {
-                now: link::now(),
-                first_sync0: 0,
-            },
-            None => Sync0Clock::Real,
-        }
-    }
-}
-
-/// Brings up the terminal `link` names and configures it as `config`.
-pub fn build(
-    caps: &Capabilities,
-    config: &InterfaceConfig,
-    identity: &EthercatIdentity,
-    link: &EthercatLink,
-) -> Result<EthercatIut, BuildError> {
-    let opened = open(caps, identity, link)?;
-    let clock = opened.clock();
-    let Opened {
-        master,
-        terminal,
-        position,
-        #[cfg(feature = "socketcan")]
-        serving,
-        group,
-        station,
-        facts,
-    } = opened;
-    let md = master.maindevice();
-    master.drive(configure(md, station, (caps, config), clock))?;
-    let group = master
-        .drive(group.into_pre_op_pdi(md))
-        .map_err(|e| BuildError::Failed(master_error(e, "configuring SyncManagers and FMMUs")))?;
-    master.drive(request_safe_op(md, station))?;
-    let group = master
-        .drive(group.into_op(md))
-        .map_err(|e| BuildError::Failed(master_error(e, "SAFEOP → OP")))?;
-    let interface_inputs = ImageLayout::new(config, caps.info_data).input_size();
-    let mut facts = facts;
-    facts.sync_managers = master.drive(start_up::sync_managers(md, station));
-    if let Ok(sub) = group.subdevice(md, position) {
-        facts.output_bytes = sub.outputs_raw().len();
-        facts.input_bytes = sub.inputs_raw().len();
-    }
-    facts.status_bytes = facts.input_bytes.saturating_sub(interface_inputs);
-    if facts.input_bytes < interface_inputs {
-        return Err(BuildError::Failed(IutError::new(
-            IutCause::Impossible,
-            format!(
-                "the terminal mapped {} input bytes; the configuration's image has {interface_inputs}",
-                facts.input_bytes
-            ),
-        )));
-    }
-    Ok(EthercatIut {
-        interface_inputs,
-        master,
-        group,
-        position,
-        station,
-        terminal,
-        #[cfg(feature = "socketcan")]
-        serving,
-        previous_inputs: None,
-        telegrams: ExchangeMode::Lrw,
-        deviation: None,
-        windows: None,
-        input_sync_manager: None,
-        dc: matches!(
-            config.synchronization,
-            canif_model::config::Synchronization::DistributedClocks { .. }
-        )
-        .then(exchange::DcMaster::default),
-        facts,
-    })
 }
 
 impl EthercatIut {

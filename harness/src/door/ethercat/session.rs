@@ -5,16 +5,16 @@
 //! over the in-memory link, measured). A real terminal keeps what it was
 //! written between configurations in either case; so does this one.
 //!
-//! A start-up list the terminal takes is then brought up as a run brings
-//! one up (SyncManagers, FMMUs, SAFEOP, OP) on a fresh scan, since
-//! ethercrab's group does not return from there to a PREOP it can
-//! configure again.
+//! A start-up list the terminal takes is then brought up from there as a
+//! run brings one up (SyncManagers, FMMUs, SAFEOP, OP), and the next list
+//! goes to a fresh scan, since ethercrab's group does not return from OP
+//! to a PREOP it can configure again.
 
 use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_spec::EthercatIdentity;
 
 use super::start_up::configure;
-use super::{build, open, EthercatLink, Opened};
+use super::{bring_up, open, EthercatLink, Opened};
 use crate::door::iut::BuildError;
 
 /// Offers configurations to the terminal `link` names, one after another.
@@ -25,12 +25,15 @@ pub struct Configurer {
     held: Option<(Capabilities, Held)>,
 }
 
-/// An opened terminal; the in-memory link lets go of it when it goes.
-struct Held(Opened);
+/// An opened terminal; the in-memory link lets go of it when it goes,
+/// unless it was brought up (`None`: the running terminal lets go then).
+struct Held(Option<Opened>);
 
 impl Drop for Held {
     fn drop(&mut self) {
-        self.0.master.let_go();
+        if let Some(opened) = &self.0 {
+            opened.master.let_go();
+        }
     }
 }
 
@@ -61,13 +64,14 @@ impl Configurer {
             Some((_, held)) => held,
             None => {
                 let opened = open(caps, &self.identity, &self.link)?;
-                &mut self.held.insert((caps.clone(), Held(opened))).1
+                &mut self.held.insert((caps.clone(), Held(Some(opened)))).1
             }
         };
+        let opened = held.0.as_ref().expect("a held terminal is opened");
         let Opened {
             master, station, ..
-        } = &held.0;
-        let clock = held.0.clock();
+        } = opened;
+        let clock = opened.clock();
         match master.drive(configure(
             master.maindevice(),
             *station,
@@ -81,9 +85,9 @@ impl Configurer {
                 Err(failed)
             }
             Ok(()) => {
-                // The link is the run's again before the bring-up takes it.
+                let opened = held.0.take().expect("a held terminal is opened");
                 self.held = None;
-                build(caps, config, &self.identity, &self.link).map(|_| ())
+                bring_up(opened, caps, config).map(|_| ())
             }
         }
     }
