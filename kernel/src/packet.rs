@@ -108,7 +108,7 @@ impl PacketSocket {
         let began = std::time::Instant::now();
         let mut looks = 0u32;
         while began.elapsed() < spin {
-            if let Some(n) = self.receive(buffer, libc::MSG_DONTWAIT)? {
+            if let Some(n) = self.receive(buffer)? {
                 return Ok(Some(n));
             }
             looks += 1;
@@ -143,12 +143,12 @@ impl PacketSocket {
         if ready == 0 {
             return Ok(None);
         }
-        self.receive(buffer, libc::MSG_DONTWAIT)
+        self.receive(buffer)
     }
 
-    /// One recvfrom(2) with `flags`: the frame, or `None` when none was
-    /// queued or it was one this machine sent.
-    fn receive(&self, buffer: &mut [u8], flags: libc::c_int) -> io::Result<Option<usize>> {
+    /// One recvfrom(2) that does not wait: the frame, or `None` when none
+    /// was queued or it was one this machine sent.
+    fn receive(&self, buffer: &mut [u8]) -> io::Result<Option<usize>> {
         // SAFETY: sockaddr_ll is plain data.
         let mut from: libc::sockaddr_ll = unsafe { std::mem::zeroed() };
         let mut from_len = std::mem::size_of::<libc::sockaddr_ll>() as libc::socklen_t;
@@ -158,7 +158,7 @@ impl PacketSocket {
                 self.fd.as_raw_fd(),
                 buffer.as_mut_ptr().cast(),
                 buffer.len(),
-                flags,
+                libc::MSG_DONTWAIT,
                 std::ptr::addr_of_mut!(from).cast(),
                 &mut from_len,
             )

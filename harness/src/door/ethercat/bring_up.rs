@@ -152,6 +152,17 @@ impl Opened {
             None => Sync0Clock::Real,
         }
     }
+
+    /// Writes the start-up list of `config` (and the DC registers) in PREOP.
+    pub(super) fn configure(
+        &self,
+        caps: &Capabilities,
+        config: &InterfaceConfig,
+    ) -> Result<(), BuildError> {
+        let md = self.master.maindevice();
+        self.master
+            .drive(configure(md, self.station, (caps, config), self.clock()))
+    }
 }
 
 /// Brings up the terminal `link` names and configures it as `config`.
@@ -162,11 +173,7 @@ pub fn build(
     link: &EthercatLink,
 ) -> Result<EthercatIut, BuildError> {
     let opened = open(caps, identity, link)?;
-    let clock = opened.clock();
-    let md = opened.master.maindevice();
-    opened
-        .master
-        .drive(configure(md, opened.station, (caps, config), clock))?;
+    opened.configure(caps, config)?;
     bring_up(opened, caps, config)
 }
 

@@ -267,16 +267,9 @@ struct Wire {
 
 #[cfg(feature = "socketcan")]
 impl Wire {
-    /// Sends what the master queued, then takes what came back: waits (up
-    /// to a slice) only while answers are due, so a timer the master waits
-    /// on still fires; answers overdue past the master's own timeouts are
-    /// given up.
-    fn pump(&mut self, cx: &mut std::task::Context<'_>, look: bool) {
-        const SLICE: Duration = Duration::from_millis(1);
-        // An answer usually comes within tens of microseconds: looked for
-        // awake, it is not delayed by a sleeping thread's wake-up.
-        const SPIN: Duration = Duration::from_micros(200);
-        while let Some(frame) = look.then(|| self.tx.next_sendable_frame()).flatten() {
+    /// Sends the frames ethercrab marked sendable.
+    fn send_queued(&mut self) {
+        while let Some(frame) = self.tx.next_sendable_frame() {
             let socket = &self.socket;
             let sent = frame.send_blocking(|bytes| {
                 socket
@@ -287,6 +280,20 @@ impl Wire {
             if sent.is_ok() {
                 self.in_flight += 1;
             }
+        }
+    }
+
+    /// Sends what the master queued, then takes what came back: waits (up
+    /// to a slice) only while answers are due, so a timer the master waits
+    /// on still fires; answers overdue past the master's own timeouts are
+    /// given up.
+    fn pump(&mut self, cx: &mut std::task::Context<'_>, look: bool) {
+        const SLICE: Duration = Duration::from_millis(1);
+        // An answer usually comes within tens of microseconds: looked for
+        // awake, it is not delayed by a sleeping thread's wake-up.
+        const SPIN: Duration = Duration::from_micros(200);
+        if look {
+            self.send_queued();
         }
         let mut wait = if self.in_flight > 0 {
             SLICE

@@ -13,7 +13,6 @@
 use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_spec::EthercatIdentity;
 
-use super::start_up::configure;
 use super::{bring_up, open, EthercatLink, Opened};
 use crate::door::iut::BuildError;
 
@@ -68,16 +67,7 @@ impl Configurer {
             }
         };
         let opened = held.0.as_ref().expect("a held terminal is opened");
-        let Opened {
-            master, station, ..
-        } = opened;
-        let clock = opened.clock();
-        match master.drive(configure(
-            master.maindevice(),
-            *station,
-            (caps, config),
-            clock,
-        )) {
+        match opened.configure(caps, config) {
             // Still in PREOP: the next list is written over this one.
             Err(BuildError::Refused(why)) => Err(BuildError::Refused(why)),
             Err(failed) => {

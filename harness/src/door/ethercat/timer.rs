@@ -123,7 +123,7 @@ pub(super) fn block_on<F: Future>(future: F) -> F::Output {
             continue;
         }
         let sleep = next.map_or(LONGEST_SLEEP, |at| {
-            Duration::from_micros(at.saturating_sub(since_start().as_micros() as u64))
+            Duration::from_micros(at.saturating_sub(embassy_time_driver::Driver::now(&TIMERS)))
         });
         thread::park_timeout(sleep.min(LONGEST_SLEEP));
     }
