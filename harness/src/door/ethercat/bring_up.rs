@@ -12,6 +12,7 @@ use canif_spec::EthercatIdentity;
 use ethercrab::subdevice_group::PreOp;
 use ethercrab::{DefaultLock, SubDeviceGroup};
 
+use super::coe::Mailboxes;
 use super::link::{self, InterfaceMaster, MemoryMaster, Peer, SharedTerminal};
 use super::start_up::{self, configure, master_error, request_safe_op, Sync0Clock};
 #[cfg(feature = "socketcan")]
@@ -123,6 +124,7 @@ pub(super) fn open(
         group,
         station,
         facts,
+        mailboxes: None,
     })
 }
 
@@ -138,6 +140,8 @@ pub(super) struct Opened {
     pub(super) group: SubDeviceGroup<MAX_SUBDEVICES, MAX_PDI, DefaultLock, PreOp>,
     pub(super) station: u16,
     pub(super) facts: TerminalFacts,
+    /// Its mailbox SyncManagers, once a start-up list has read them.
+    pub(super) mailboxes: Option<Mailboxes>,
 }
 
 impl Opened {
@@ -155,13 +159,19 @@ impl Opened {
 
     /// Writes the start-up list of `config` (and the DC registers) in PREOP.
     pub(super) fn configure(
-        &self,
+        &mut self,
         caps: &Capabilities,
         config: &InterfaceConfig,
     ) -> Result<(), BuildError> {
         let md = self.master.maindevice();
-        self.master
-            .drive(configure(md, self.station, (caps, config), self.clock()))
+        let clock = self.clock();
+        self.master.drive(configure(
+            md,
+            self.station,
+            &mut self.mailboxes,
+            (caps, config),
+            clock,
+        ))
     }
 }
 
@@ -172,7 +182,7 @@ pub fn build(
     identity: &EthercatIdentity,
     link: &EthercatLink,
 ) -> Result<EthercatIut, BuildError> {
-    let opened = open(caps, identity, link)?;
+    let mut opened = open(caps, identity, link)?;
     opened.configure(caps, config)?;
     bring_up(opened, caps, config)
 }
@@ -193,6 +203,7 @@ pub(super) fn bring_up(
         group,
         station,
         facts,
+        mailboxes: _,
     } = opened;
     let md = master.maindevice();
     let group = master

@@ -66,7 +66,7 @@ impl Configurer {
                 &mut self.held.insert((caps.clone(), Held(Some(opened)))).1
             }
         };
-        let opened = held.0.as_ref().expect("a held terminal is opened");
+        let opened = held.0.as_mut().expect("a held terminal is opened");
         match opened.configure(caps, config) {
             // Still in PREOP: the next list is written over this one.
             Err(BuildError::Refused(why)) => Err(BuildError::Refused(why)),

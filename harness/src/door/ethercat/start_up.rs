@@ -130,15 +130,23 @@ const SAFE_OP_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(5);
 
 /// The PREOP start-up: the interface's downloads, Distributed Clocks where
 /// the configuration asks for them, and the local cycle-time measurement.
+/// `mailboxes` are read from the terminal the first time and kept: PREOP
+/// does not move them, and the refusal grid writes thousands of lists.
 pub(super) async fn configure(
     md: &ethercrab::MainDevice<'_>,
     station: u16,
+    mailboxes: &mut Option<Mailboxes>,
     (caps, config): (&Capabilities, &InterfaceConfig),
     clock: Sync0Clock,
 ) -> Result<(), BuildError> {
-    let mut mailboxes = Mailboxes::of(md, station)
-        .await
-        .map_err(|e| coe_error(e, "mailbox"))?;
+    let mailboxes = match mailboxes {
+        Some(known) => known,
+        None => mailboxes.insert(
+            Mailboxes::of(md, station)
+                .await
+                .map_err(|e| coe_error(e, "mailbox"))?,
+        ),
+    };
     for download in objects::downloads(caps, config) {
         mailboxes
             .download_complete(md, download.index, &download.data)
