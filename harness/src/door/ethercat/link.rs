@@ -225,16 +225,22 @@ impl Sendable {
     /// always looks). A wake-up takes the sender's waker out of ethercrab's
     /// storage, so it is put back before each look: a frame marked during
     /// or after the look wakes the drive again.
-    fn look(sendable: &mut Option<Arc<Sendable>>, tx: &PduTx<'_>, cx: &Context<'_>) -> bool {
-        let sendable = sendable.get_or_insert_with(|| {
-            Arc::new(Sendable {
+    fn look(
+        sendable: &mut Option<(Arc<Sendable>, Waker)>,
+        tx: &PduTx<'_>,
+        cx: &Context<'_>,
+    ) -> bool {
+        let (sendable, waker) = sendable.get_or_insert_with(|| {
+            let sendable = Arc::new(Sendable {
                 marked: AtomicBool::new(true),
                 drive: cx.waker().clone(),
-            })
+            });
+            let waker = Waker::from(Arc::clone(&sendable));
+            (sendable, waker)
         });
         let marked = sendable.marked.swap(false, Ordering::AcqRel);
         if marked {
-            tx.replace_waker(&Waker::from(Arc::clone(sendable)));
+            tx.replace_waker(waker);
         }
         marked
     }
