@@ -165,8 +165,9 @@ impl EthercatLink {
     }
 }
 
-/// The master, on either link.
-#[derive(Clone, Copy)]
+/// The master, on either link, holding one terminal: dropped, it lets the
+/// in-memory link's terminal go (one link per thread, the next bring-up's).
+/// It moves from a terminal opened in PREOP to the one brought up.
 enum Master {
     Memory(&'static MemoryMaster),
     Interface(&'static InterfaceMaster),
@@ -180,18 +181,18 @@ impl Master {
         }
     }
 
-    /// The in-memory link lets go of its terminal (one link per thread, the
-    /// next bring-up's).
-    fn let_go(&self) {
-        if let Master::Memory(master) = self {
-            *master.peer.borrow_mut() = None;
-        }
-    }
-
     fn drive<T>(&self, operation: impl std::future::Future<Output = T>) -> T {
         match self {
             Master::Memory(m) => m.drive(operation),
             Master::Interface(m) => m.drive(operation),
+        }
+    }
+}
+
+impl Drop for Master {
+    fn drop(&mut self) {
+        if let Master::Memory(master) = self {
+            *master.peer.borrow_mut() = None;
         }
     }
 }
@@ -384,11 +385,5 @@ impl Iut for EthercatIut {
 
     fn take_deviation(&mut self) -> Option<crate::door::iut::Deviation> {
         self.deviation.take()
-    }
-}
-
-impl Drop for EthercatIut {
-    fn drop(&mut self) {
-        self.master.let_go();
     }
 }

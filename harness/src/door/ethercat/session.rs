@@ -7,8 +7,10 @@
 //!
 //! A start-up list the terminal takes is then brought up from there as a
 //! run brings one up (SyncManagers, FMMUs, SAFEOP, OP), and the next list
-//! goes to a fresh scan, since ethercrab's group does not return from OP
-//! to a PREOP it can configure again.
+//! goes to a fresh scan: taken back to PREOP instead, the emulated terminal
+//! judges the next list against the settings the last one left, where a
+//! fresh bring-up starts from its defaults (the test that compares the two
+//! said so).
 
 use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_spec::EthercatIdentity;
@@ -21,19 +23,7 @@ pub struct Configurer {
     identity: EthercatIdentity,
     link: EthercatLink,
     /// The terminal in PREOP, for the capabilities it was opened with.
-    held: Option<(Capabilities, Held)>,
-}
-
-/// An opened terminal; the in-memory link lets go of it when it goes,
-/// unless it was brought up (`None`: the running terminal lets go then).
-struct Held(Option<Opened>);
-
-impl Drop for Held {
-    fn drop(&mut self) {
-        if let Some(opened) = &self.0 {
-            opened.master.let_go();
-        }
-    }
+    held: Option<(Capabilities, Opened)>,
 }
 
 impl Configurer {
@@ -59,26 +49,19 @@ impl Configurer {
         {
             self.held = None;
         }
-        let held = match &mut self.held {
-            Some((_, held)) => held,
-            None => {
-                let opened = open(caps, &self.identity, &self.link)?;
-                &mut self.held.insert((caps.clone(), Held(Some(opened)))).1
-            }
+        let mut opened = match self.held.take() {
+            Some((_, opened)) => opened,
+            // The held terminal, if any, is gone before a scan takes its link.
+            None => open(caps, &self.identity, &self.link)?,
         };
-        let opened = held.0.as_mut().expect("a held terminal is opened");
         match opened.configure(caps, config) {
             // Still in PREOP: the next list is written over this one.
-            Err(BuildError::Refused(why)) => Err(BuildError::Refused(why)),
-            Err(failed) => {
-                self.held = None;
-                Err(failed)
+            Err(BuildError::Refused(why)) => {
+                self.held = Some((caps.clone(), opened));
+                Err(BuildError::Refused(why))
             }
-            Ok(()) => {
-                let opened = held.0.take().expect("a held terminal is opened");
-                self.held = None;
-                bring_up(opened, caps, config).map(|_| ())
-            }
+            Err(failed) => Err(failed),
+            Ok(()) => bring_up(opened, caps, config).map(|_| ()),
         }
     }
 }
