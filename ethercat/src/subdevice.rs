@@ -108,6 +108,10 @@ pub struct SubDevice<A> {
     /// A firmware fault for canif's own tests: the cycle runs on the
     /// SyncManager 2 event also with Distributed Clocks (PDX-005 broken).
     pub cycles_on_frames: bool,
+    /// The frame being answered and the answer's bytes: kept from frame to
+    /// frame, so that answering allocates nothing once they have grown.
+    frame: Frame,
+    answer: Vec<u8>,
 }
 
 /// Counts of the logical commands a SubDevice processed.
@@ -162,6 +166,8 @@ impl<A: Application> SubDevice<A> {
             sync0: None,
             outputs_buffer: Vec::new(),
             cycles_on_frames: false,
+            frame: Frame::EMPTY,
+            answer: Vec::new(),
         };
         device.set_status(AlState::Init, None);
         device
@@ -183,8 +189,16 @@ impl<A: Application> SubDevice<A> {
 
     /// Answers one Ethernet frame at local time `now` (ns); `None` for what is
     /// no EtherCAT frame (an ESC drops it).
-    pub fn process(&mut self, bytes: &[u8], now: u64) -> Option<Vec<u8>> {
-        let mut frame = Frame::parse(bytes).ok()?;
+    pub fn process(&mut self, bytes: &[u8], now: u64) -> Option<&[u8]> {
+        let mut frame = std::mem::replace(&mut self.frame, Frame::EMPTY);
+        // A frame that is none goes with its buffers: they grow again.
+        frame.parse_from(bytes).ok()?;
+        self.answer_frame(&mut frame, now);
+        self.frame = frame;
+        Some(&self.answer)
+    }
+
+    fn answer_frame(&mut self, frame: &mut Frame, now: u64) {
         // A SYNC0 event before the frame runs first; one at its very time
         // comes just after it (the master sends its frame ahead of SYNC0).
         self.run_sync0(now, false);
@@ -203,7 +217,7 @@ impl<A: Application> SubDevice<A> {
         self.after(&touched, now);
         // The frame returns through port 0 with the locally administered bit set.
         frame.source[0] |= 0x02;
-        Some(frame.emit())
+        frame.emit_into(&mut self.answer);
     }
 
     /// With Distributed Clocks, when the next SYNC0 event comes (local time),

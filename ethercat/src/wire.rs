@@ -185,8 +185,32 @@ fn read16(bytes: &[u8], at: usize) -> u16 {
 }
 
 impl Frame {
+    /// No addresses, no datagrams: what [`Frame::parse_from`] fills.
+    pub const EMPTY: Frame = Frame {
+        destination: [0; 6],
+        source: [0; 6],
+        datagrams: Vec::new(),
+    };
+
     /// Parses one Ethernet frame; padding after the datagrams is allowed.
     pub fn parse(bytes: &[u8]) -> Result<Frame, WireError> {
+        let mut frame = Frame::EMPTY;
+        frame.parse_from(bytes)?;
+        Ok(frame)
+    }
+
+    /// As [`Frame::parse`], into this frame: its datagrams' buffers are
+    /// reused (a terminal answers frame after frame without allocating).
+    /// On an error the frame holds no datagrams.
+    pub fn parse_from(&mut self, bytes: &[u8]) -> Result<(), WireError> {
+        let parsed = self.parse_datagrams(bytes);
+        if parsed.is_err() {
+            self.datagrams.clear();
+        }
+        parsed
+    }
+
+    fn parse_datagrams(&mut self, bytes: &[u8]) -> Result<(), WireError> {
         let need = |needed: usize| {
             if bytes.len() < needed {
                 Err(WireError::Truncated {
@@ -211,7 +235,7 @@ impl Frame {
         }
         let declared = usize::from(header & LENGTH_MASK);
         need(field::DATAGRAMS + declared)?;
-        let mut datagrams = Vec::new();
+        let mut count = 0;
         let mut at = field::DATAGRAMS;
         loop {
             need(at + field::OVERHEAD)?;
@@ -220,14 +244,22 @@ impl Frame {
             need(at + field::OVERHEAD + len)?;
             let code = bytes[at + field::COMMAND];
             let address = &bytes[at + field::ADDRESS.start..at + field::ADDRESS.end];
-            datagrams.push(Datagram {
-                command: Command::from_code(code).ok_or(WireError::UnknownCommand(code))?,
-                index: bytes[at + field::INDEX],
-                address: u32::from_le_bytes([address[0], address[1], address[2], address[3]]),
-                irq: read16(bytes, at + field::IRQ.start),
-                data: bytes[at + field::DATA..at + field::DATA + len].to_vec(),
-                working_counter: read16(bytes, at + field::DATA + len),
-            });
+            let command = Command::from_code(code).ok_or(WireError::UnknownCommand(code))?;
+            if count == self.datagrams.len() {
+                self.datagrams
+                    .push(Datagram::physical(command, 0, 0, Vec::new()));
+            }
+            let datagram = &mut self.datagrams[count];
+            datagram.command = command;
+            datagram.index = bytes[at + field::INDEX];
+            datagram.address = u32::from_le_bytes([address[0], address[1], address[2], address[3]]);
+            datagram.irq = read16(bytes, at + field::IRQ.start);
+            datagram.data.clear();
+            datagram
+                .data
+                .extend_from_slice(&bytes[at + field::DATA..at + field::DATA + len]);
+            datagram.working_counter = read16(bytes, at + field::DATA + len);
+            count += 1;
             at += field::OVERHEAD + len;
             if length_word & MORE_FOLLOWS == 0 {
                 break;
@@ -239,19 +271,21 @@ impl Frame {
                 datagrams: at - field::DATAGRAMS,
             });
         }
-        let mut destination = [0; 6];
-        destination.copy_from_slice(&bytes[field::DESTINATION]);
-        let mut source = [0; 6];
-        source.copy_from_slice(&bytes[field::SOURCE]);
-        Ok(Frame {
-            destination,
-            source,
-            datagrams,
-        })
+        self.datagrams.truncate(count);
+        self.destination.copy_from_slice(&bytes[field::DESTINATION]);
+        self.source.copy_from_slice(&bytes[field::SOURCE]);
+        Ok(())
     }
 
     /// The frame's bytes, padded to Ethernet's 60-byte minimum.
     pub fn emit(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        self.emit_into(&mut out);
+        out
+    }
+
+    /// As [`Frame::emit`], into `out` (cleared first, its capacity kept).
+    pub fn emit_into(&self, out: &mut Vec<u8>) {
         let length: usize = self
             .datagrams
             .iter()
@@ -259,7 +293,8 @@ impl Frame {
             .sum();
         // Sized once: a mailbox frame grown byte by byte was reallocated
         // several times (a twentieth of the in-memory link's run, perf).
-        let mut out = Vec::with_capacity((14 + 2 + length).max(60));
+        out.clear();
+        out.reserve((field::DATAGRAMS + length).max(60));
         out.extend_from_slice(&self.destination);
         out.extend_from_slice(&self.source);
         out.extend_from_slice(&ETHERTYPE.to_be_bytes());
@@ -281,7 +316,6 @@ impl Frame {
             out.extend_from_slice(&d.working_counter.to_le_bytes());
         }
         out.resize(out.len().max(60), 0);
-        out
     }
 }
 
@@ -352,6 +386,26 @@ mod tests {
                 datagrams: 14
             })
         );
+    }
+
+    #[test]
+    fn a_frame_parsed_into_another_keeps_nothing_of_it() {
+        let mut two = Frame::parse(&BRD_TYPE).unwrap();
+        two.datagrams.push(Datagram::physical(
+            Command::Fpwr,
+            0x1000,
+            0x1000,
+            vec![7; 128],
+        ));
+        let mut reused = Frame::parse(&two.emit()).unwrap();
+        reused.parse_from(&BRD_TYPE).unwrap();
+        assert_eq!(reused, Frame::parse(&BRD_TYPE).unwrap());
+        let mut out = two.emit();
+        reused.emit_into(&mut out);
+        assert_eq!(out, BRD_TYPE);
+        // A frame that is none leaves no datagrams from the one before.
+        assert!(reused.parse_from(&BRD_TYPE[..20]).is_err());
+        assert!(reused.datagrams.is_empty());
     }
 
     #[test]

@@ -76,47 +76,44 @@ pub(super) struct Peer {
 }
 
 impl Peer {
-    fn answer(&self, frame: &[u8]) -> Option<Vec<u8>> {
+    /// The terminal's answer to `frame` in `answer`, as the link's fault
+    /// leaves it; `false` for no answer.
+    fn answer(&self, frame: &[u8], answer: &mut Vec<u8>) -> bool {
+        use canif_ethercat::wire::{Command, Datagram, Frame};
         let n = self.frames.get() + 1;
         self.frames.set(n);
-        let mut answer = lock(&self.terminal).process(frame, now())?;
-        match self.fault {
-            None | Some(LinkFault::AlError(_) | LinkFault::CyclesOnFrames) => {}
-            Some(LinkFault::SilentAfter(after)) if n > after => return None,
-            Some(LinkFault::SilentAfter(_)) => {}
-            Some(LinkFault::Truncated) => answer.truncate(20),
-            Some(LinkFault::Oversized) => {
-                let mut parsed = canif_ethercat::wire::Frame::parse(&answer).ok()?;
-                for d in &mut parsed.datagrams {
-                    d.data.extend_from_slice(&[0xEE, 0xEE]);
-                }
-                answer = parsed.emit();
-            }
-            Some(LinkFault::LrwReadsZeros) => {
-                let mut parsed = canif_ethercat::wire::Frame::parse(&answer).ok()?;
-                for d in &mut parsed.datagrams {
-                    if d.command == canif_ethercat::wire::Command::Lrw {
-                        d.data.fill(0);
-                    }
-                }
-                answer = parsed.emit();
-            }
-            Some(LinkFault::WorkingCounter) => {
-                let mut parsed = canif_ethercat::wire::Frame::parse(&answer).ok()?;
-                for d in &mut parsed.datagrams {
-                    if matches!(
-                        d.command,
-                        canif_ethercat::wire::Command::Lrw
-                            | canif_ethercat::wire::Command::Lrd
-                            | canif_ethercat::wire::Command::Lwr
-                    ) {
-                        d.working_counter = 0;
-                    }
-                }
-                answer = parsed.emit();
-            }
+        answer.clear();
+        match lock(&self.terminal).process(frame, now()) {
+            Some(bytes) => answer.extend_from_slice(bytes),
+            None => return false,
         }
-        Some(answer)
+        let mut rewrite = |change: fn(&mut Datagram)| match Frame::parse(answer) {
+            Ok(mut parsed) => {
+                parsed.datagrams.iter_mut().for_each(change);
+                parsed.emit_into(answer);
+                true
+            }
+            Err(_) => false,
+        };
+        match self.fault {
+            None | Some(LinkFault::AlError(_) | LinkFault::CyclesOnFrames) => true,
+            Some(LinkFault::SilentAfter(after)) => n <= after,
+            Some(LinkFault::Truncated) => {
+                answer.truncate(20);
+                true
+            }
+            Some(LinkFault::Oversized) => rewrite(|d| d.data.extend_from_slice(&[0xEE, 0xEE])),
+            Some(LinkFault::LrwReadsZeros) => rewrite(|d| {
+                if d.command == Command::Lrw {
+                    d.data.fill(0);
+                }
+            }),
+            Some(LinkFault::WorkingCounter) => rewrite(|d| {
+                if matches!(d.command, Command::Lrw | Command::Lrd | Command::Lwr) {
+                    d.working_counter = 0;
+                }
+            }),
+        }
     }
 }
 
@@ -126,6 +123,8 @@ pub(super) struct MemoryMaster {
     tx: RefCell<PduTx<'static>>,
     rx: RefCell<PduRx<'static>>,
     pub(super) peer: RefCell<Option<Peer>>,
+    /// The peer's last answer (its buffer kept from frame to frame).
+    answer: RefCell<Vec<u8>>,
 }
 
 /// Timeouts of a master that waits for an emulated terminal: its answers
@@ -162,6 +161,7 @@ thread_local! {
             tx: RefCell::new(tx),
             rx: RefCell::new(rx),
             peer: RefCell::new(None),
+            answer: RefCell::new(Vec::new()),
         }))
     };
 }
@@ -179,16 +179,15 @@ impl MemoryMaster {
             if !Sendable::look(&mut sendable, &tx, cx) {
                 return Poll::Pending;
             }
+            let mut answer = self.answer.borrow_mut();
             while let Some(frame) = tx.next_sendable_frame() {
-                let mut answer = None;
+                let mut answered = false;
                 let sent = frame.send_blocking(|bytes| {
-                    answer = self.peer.borrow().as_ref().and_then(|p| p.answer(bytes));
+                    let peer = self.peer.borrow();
+                    answered = peer.as_ref().is_some_and(|p| p.answer(bytes, &mut answer));
                     Ok(bytes.len())
                 });
-                if sent.is_err() {
-                    continue;
-                }
-                if let Some(answer) = answer {
+                if sent.is_ok() && answered {
                     // What the master cannot match is its own timeout to find.
                     let _ = self.rx.borrow_mut().receive_frame(&answer);
                 }

@@ -138,7 +138,12 @@ pub fn serve(
     let mut served = answer_frames(
         interface,
         &socket,
-        &mut |frame| terminal.borrow_mut().process(frame, now()),
+        &mut |frame| {
+            terminal
+                .borrow_mut()
+                .process(frame, now())
+                .map(<[u8]>::to_vec)
+        },
         &mut || {
             let mut terminal = terminal.borrow_mut();
             terminal.handle_timeout(now());

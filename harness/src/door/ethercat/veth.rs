@@ -87,7 +87,8 @@ fn serve(interface: &str) -> Result<Wire, KernelError> {
                     .unwrap_or_else(|e| e.into_inner())
                     .clone();
                 let now = served.clock.load(Ordering::SeqCst);
-                terminal.and_then(|terminal| lock(&terminal).process(frame, now))
+                terminal
+                    .and_then(|terminal| lock(&terminal).process(frame, now).map(<[u8]>::to_vec))
             };
             let ended = answer_frames(&name, &socket, answer, &mut || {}, (POLL, &|| false));
             served.alive.store(false, Ordering::SeqCst);
