@@ -98,7 +98,7 @@ fn main() {
         }),
     );
     println!(
-        "in process runs {:.0}x the checked frames/s of the in-memory EtherCAT run",
+        "in process runs {:.1}x the checked frames/s of the in-memory EtherCAT run",
         in_process.1 / memory.1
     );
     match veth() {
@@ -115,7 +115,7 @@ fn main() {
                 }),
             );
             println!(
-                "the in-memory EtherCAT run checks {:.0}x the frames/s of the veth run",
+                "the in-memory EtherCAT run checks {:.1}x the frames/s of the veth run",
                 memory.1 / over_veth.1
             );
             let _ = Command::new("ip").args(["link", "del", &master]).output();

@@ -179,8 +179,12 @@ impl MemoryMaster {
             if !Sendable::look(&mut sendable, &tx, cx) {
                 return Poll::Pending;
             }
-            let mut answer = self.answer.borrow_mut();
-            while let Some(frame) = tx.next_sendable_frame() {
+            // One frame a look: a look that finds none still claims every
+            // slot in turn, so the look after the last frame is left to the
+            // next poll, which the operation usually wakes for a frame of
+            // its own (and this wake makes sure of).
+            if let Some(frame) = tx.next_sendable_frame() {
+                let mut answer = self.answer.borrow_mut();
                 let mut answered = false;
                 let sent = frame.send_blocking(|bytes| {
                     let peer = self.peer.borrow();
@@ -191,6 +195,7 @@ impl MemoryMaster {
                     // What the master cannot match is its own timeout to find.
                     let _ = self.rx.borrow_mut().receive_frame(&answer);
                 }
+                Sendable::look_again(&sendable, cx);
             }
             Poll::<T>::Pending
         });
@@ -242,6 +247,14 @@ impl Sendable {
             tx.replace_waker(waker);
         }
         marked
+    }
+
+    /// The next poll looks again, and comes.
+    fn look_again(sendable: &Option<(Arc<Sendable>, Waker)>, cx: &Context<'_>) {
+        if let Some((sendable, _)) = sendable {
+            sendable.marked.store(true, Ordering::Release);
+        }
+        cx.waker().wake_by_ref();
     }
 }
 
