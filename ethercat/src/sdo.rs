@@ -59,6 +59,18 @@ pub trait ObjectDictionary {
     /// written: an array lists all the entries it can hold.
     fn object(&self, index: u16) -> Option<Vec<Entry>>;
 
+    /// Sub-index `sub` of `index`, as [`ObjectDictionary::object`] lists it
+    /// (or the abort for no such object or entry). A dictionary that builds
+    /// its objects may find one entry without building the rest: a master
+    /// uploads a PDO mapping entry by entry.
+    fn entry(&self, index: u16, sub: u8) -> Result<Entry, u32> {
+        let entries = self.object(index).ok_or(abort::NO_OBJECT)?;
+        entries
+            .into_iter()
+            .find(|e| e.sub == sub)
+            .ok_or(abort::NO_SUBINDEX)
+    }
+
     /// Writes these entries of `index` together (one download), or refuses
     /// with an abort code; nothing is written when it refuses.
     fn write(&mut self, index: u16, values: &[(u8, Vec<u8>)]) -> Result<(), u32>;
@@ -265,32 +277,28 @@ fn fetch(
     sub: u8,
     complete_access: bool,
 ) -> Result<Vec<u8>, u32> {
-    let entries = dictionary.object(index).ok_or(abort::NO_OBJECT)?;
-    if complete_access {
-        if sub > 1 {
-            return Err(abort::UNSUPPORTED_ACCESS);
-        }
-        let count = entries
-            .first()
-            .and_then(|e| e.value.first().copied())
-            .unwrap_or(0);
-        let mut out = Vec::new();
-        if sub == 0 {
-            out.extend_from_slice(&[count, 0]);
-        }
-        for entry in entries
-            .iter()
-            .filter(|e| e.sub >= 1 && e.sub <= count.max(sub))
-        {
-            out.extend_from_slice(&entry.value);
-        }
-        return Ok(out);
+    if !complete_access {
+        return dictionary.entry(index, sub).map(|e| e.value);
     }
-    entries
-        .into_iter()
-        .find(|e| e.sub == sub)
-        .map(|e| e.value)
-        .ok_or(abort::NO_SUBINDEX)
+    let entries = dictionary.object(index).ok_or(abort::NO_OBJECT)?;
+    if sub > 1 {
+        return Err(abort::UNSUPPORTED_ACCESS);
+    }
+    let count = entries
+        .first()
+        .and_then(|e| e.value.first().copied())
+        .unwrap_or(0);
+    let mut out = Vec::new();
+    if sub == 0 {
+        out.extend_from_slice(&[count, 0]);
+    }
+    for entry in entries
+        .iter()
+        .filter(|e| e.sub >= 1 && e.sub <= count.max(sub))
+    {
+        out.extend_from_slice(&entry.value);
+    }
+    Ok(out)
 }
 
 /// A single entry's download at the entry's width. A number may come in
@@ -322,18 +330,15 @@ fn store(
     complete_access: bool,
     data: &[u8],
 ) -> Result<(), u32> {
-    let entries = dictionary.object(index).ok_or(abort::NO_OBJECT)?;
     if !complete_access {
-        let entry = entries
-            .iter()
-            .find(|e| e.sub == sub)
-            .ok_or(abort::NO_SUBINDEX)?;
+        let entry = dictionary.entry(index, sub)?;
         if !entry.writable {
             return Err(abort::READ_ONLY);
         }
-        let value = fitted(entry, data)?;
+        let value = fitted(&entry, data)?;
         return dictionary.write(index, &[(sub, value)]);
     }
+    let entries = dictionary.object(index).ok_or(abort::NO_OBJECT)?;
     if sub > 1 {
         return Err(abort::UNSUPPORTED_ACCESS);
     }

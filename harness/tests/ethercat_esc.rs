@@ -97,6 +97,71 @@ fn the_real_el6751_layout_is_taken() {
     );
 }
 
+/// An upload of one entry gets what the whole object lists for it, with
+/// every profile's capabilities and at the slot counts and frame formats
+/// that change the PDO mappings (built entry by entry there, not whole;
+/// InfoData's 512 bits map with gaps).
+#[test]
+fn an_entry_is_what_its_object_lists() {
+    use canif_ethercat::mailbox::abort;
+    use canif_ethercat::ObjectDictionary;
+    use canif_softdevice::ethercat::objects::{flags, interface, object};
+    let catalogue = Catalogue::embedded().unwrap();
+    let mut gaps = false;
+    let el6751 = catalogue.profile("el6751-mdp").unwrap();
+    let identity = el6751.ethercat.as_ref().unwrap();
+    for profile in &catalogue.profiles {
+        let caps = profile.model_capabilities();
+        for (format, slots) in [
+            (0, 1u16),
+            (flags::EXT29_TRANSACTION_NUMBER, 10),
+            (flags::EXT29, 32),
+        ] {
+            let mut terminal = emulated_terminal(&caps, identity, &Emulated::default()).application;
+            let settings = [
+                (interface::FLAGS, format.to_le_bytes().to_vec()),
+                (interface::TX_SLOTS, slots.to_le_bytes().to_vec()),
+                (interface::RX_SLOTS, slots.to_le_bytes().to_vec()),
+            ];
+            if terminal.write(object::INTERFACE, &settings).is_err() {
+                continue; // a format this profile does not offer
+            }
+            for index in terminal.indices() {
+                let entries = terminal.object(index).unwrap();
+                for listed in &entries {
+                    assert_eq!(terminal.entry(index, listed.sub).as_ref(), Ok(listed));
+                    // A mapped word of index 0: the rest of an entry wider than 248 bits.
+                    gaps |= matches!(index, object::RX_PDO_MAP | object::TX_PDO_MAP)
+                        && listed.sub > 0
+                        && listed.value[2..] == [0, 0];
+                }
+                let past = entries
+                    .iter()
+                    .map(|e| e.sub)
+                    .max()
+                    .unwrap_or(0)
+                    .wrapping_add(1);
+                if past != 0 {
+                    assert_eq!(
+                        terminal.entry(index, past).map(|e| e.sub),
+                        Err(abort::NO_SUBINDEX),
+                        "{} {index:#06x}:{past}",
+                        profile.name
+                    );
+                }
+            }
+            assert_eq!(
+                terminal.entry(0x5FFF, 0).map(|e| e.sub),
+                Err(abort::NO_OBJECT)
+            );
+        }
+    }
+    assert!(
+        gaps,
+        "a mapping with gaps (InfoData's 512 bits) was checked"
+    );
+}
+
 /// One datagram at local time `now`.
 fn one_at(terminal: &mut SubDevice<Terminal>, now: u64, command: u8, offset: u16, data: Vec<u8>) {
     terminal

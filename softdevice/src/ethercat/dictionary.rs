@@ -343,6 +343,19 @@ impl Terminal {
 }
 
 impl ObjectDictionary for Terminal {
+    fn entry(&self, index: u16, sub: u8) -> Result<Entry, u32> {
+        let mapped = match index {
+            object::RX_PDO_MAP => self.outputs_mapped(),
+            object::TX_PDO_MAP => self.inputs_mapped(),
+            _ => {
+                let entries = self.object(index).ok_or(abort::NO_OBJECT)?;
+                let entry = entries.into_iter().find(|e| e.sub == sub);
+                return entry.ok_or(abort::NO_SUBINDEX);
+            }
+        };
+        Terminal::mapping_entry(&mapped, sub).ok_or(abort::NO_SUBINDEX)
+    }
+
     fn object(&self, index: u16) -> Option<Vec<Entry>> {
         let text = |value: &str| vec![ro(0, value.as_bytes().to_vec()).text()];
         let configurable = self.device.is_none();
@@ -373,8 +386,8 @@ impl ObjectDictionary for Terminal {
             }
             object::RX_PDO_ASSIGN => Terminal::assignment(&self.rx_assign, configurable),
             object::TX_PDO_ASSIGN => Terminal::assignment(&self.tx_assign, configurable),
-            object::RX_PDO_MAP => self.outputs_mapping(),
-            object::TX_PDO_MAP => self.inputs_mapping(),
+            object::RX_PDO_MAP => Terminal::mapping(&self.outputs_mapped()),
+            object::TX_PDO_MAP => Terminal::mapping(&self.inputs_mapped()),
             object::STATUS_PDO_MAP => Terminal::status_mapping(),
             object::SYNC_OUTPUTS => self.sync_parameters(false, configurable),
             object::SYNC_INPUTS => self.sync_parameters(true, configurable),

@@ -151,40 +151,56 @@ impl Terminal {
     /// A PDO mapping: sub 0 the count, then (index, sub, bits) per entry; a
     /// slot wider than a mapping entry's 255 bits is mapped as gaps after it.
     fn mapping(entries: &[(u16, u8, usize)]) -> Vec<Entry> {
-        let mut mapped = Vec::new();
-        for &(index, sub, bits) in entries {
-            let mut left = bits;
-            let mut first = true;
-            while left > 0 {
-                let now = left.min(248);
-                let (i, s) = if first { (index, sub) } else { (0, 0) };
-                let word = (u32::from(i) << 16) | (u32::from(s) << 8) | now as u32;
-                mapped.push(word.to_le_bytes().to_vec());
-                left -= now;
-                first = false;
-            }
-        }
+        let mapped: Vec<u32> = Terminal::mapping_words(entries).collect();
         let mut out = vec![Entry::new(0, vec![mapped.len() as u8], false)];
         out.extend(
             mapped
                 .into_iter()
                 .enumerate()
-                .map(|(i, v)| Entry::new(i as u8 + 1, v, false)),
+                .map(|(i, word)| Entry::new(i as u8 + 1, word.to_le_bytes().to_vec(), false)),
         );
         out
     }
 
-    fn outputs_mapping(&self) -> Vec<Entry> {
+    /// One entry of a mapping, as [`Terminal::mapping`] lists it, without
+    /// building the others: a master uploads a mapping entry by entry.
+    fn mapping_entry(entries: &[(u16, u8, usize)], sub: u8) -> Option<Entry> {
+        let mut words = Terminal::mapping_words(entries);
+        match sub {
+            0 => Some(Entry::new(0, vec![words.count() as u8], false)),
+            _ => words
+                .nth(usize::from(sub) - 1)
+                .map(|word| Entry::new(sub, word.to_le_bytes().to_vec(), false)),
+        }
+    }
+
+    /// The mapping's words: (index << 16) | (sub << 8) | bits, a slot wider
+    /// than 248 bits followed by gaps (index 0) for the rest.
+    fn mapping_words(entries: &[(u16, u8, usize)]) -> impl Iterator<Item = u32> + '_ {
+        entries.iter().flat_map(|&(index, sub, bits)| {
+            (0..bits.div_ceil(248)).map(move |n| {
+                let now = (bits - n * 248).min(248);
+                let (i, s) = if n == 0 { (index, sub) } else { (0, 0) };
+                (u32::from(i) << 16) | (u32::from(s) << 8) | now as u32
+            })
+        })
+    }
+
+    /// What the outputs' mapping (0x1600) lists: the header words, then a
+    /// slot per Tx slot.
+    fn outputs_mapped(&self) -> Vec<(u16, u8, usize)> {
         let (tx, _) = self.geometries();
         let (object, _) = self.image_objects();
         let mut entries = vec![(object, 1, 16), (object, 2, 16), (object, 3, 16)];
         for n in 0..self.draft.tx_slots {
             entries.push((object, 4 + n, tx.size * 8));
         }
-        Terminal::mapping(&entries)
+        entries
     }
 
-    fn inputs_mapping(&self) -> Vec<Entry> {
+    /// What the inputs' mapping (0x1A00) lists: the header words, the
+    /// transaction number where there is one, a slot per Rx slot, InfoData.
+    fn inputs_mapped(&self) -> Vec<(u16, u8, usize)> {
         let (_, rx) = self.geometries();
         let (_, object) = self.image_objects();
         let mut entries = vec![(object, 1, 16), (object, 2, 16), (object, 3, 16)];
@@ -197,7 +213,7 @@ impl Terminal {
         if self.draft.offer.info_data {
             entries.push((object::INFO_DATA, 1, info::WORDS * 32));
         }
-        Terminal::mapping(&entries)
+        entries
     }
 
     fn status_mapping() -> Vec<Entry> {
