@@ -114,10 +114,12 @@ impl PacketSocket {
         // is a read of memory, far cheaper than the clock.
         const LOOKS: u32 = 16;
         // Awake, but not in the way: on a busy machine another thread (the
-        // other end, a test beside it) runs before the spin goes on. Not at
-        // every look: sched_yield(2) is a system call, and a frame that
-        // lands during one waits for it to return.
-        const YIELD_EVERY: Duration = Duration::from_micros(20);
+        // other end, a test beside it) runs before the spin goes on. Often:
+        // a thread this one's frame woke from poll(2) tends to be queued on
+        // this core, and waits for the yield (every 20 µs took a 1 ms-paced
+        // veth cycle from 40 to 105 µs; every 2 µs, 30 µs). Not at every
+        // look: sched_yield(2) is a system call.
+        const YIELD_EVERY: Duration = Duration::from_micros(2);
         let began = std::time::Instant::now();
         let mut yielded = began;
         loop {

@@ -204,10 +204,11 @@ impl MemoryMaster {
 }
 
 /// Whether ethercrab marked a frame sendable since a drive's pump last
-/// looked (ethercrab wakes the sender after each frame it marks). Looking
-/// claims each of the storage's frames in turn with an atomic exchange, and
-/// the pump is polled whenever anything wakes the drive: an eighth of the
-/// in-memory run went to looks that found nothing (perf).
+/// looked (ethercrab wakes the sender after each frame it marks), or the
+/// pump left a look for its next poll (`look_again`). Looking claims each
+/// of the storage's frames in turn with an atomic exchange, and the pump is
+/// polled whenever anything wakes the drive: an eighth of the in-memory run
+/// went to looks that found nothing (perf).
 struct Sendable {
     marked: AtomicBool,
     drive: Waker,
