@@ -131,13 +131,7 @@ fn skip(test: &str, why: &str) {
 /// of concurrent tests apart), or `None` where none can be made (skipped).
 fn terminal_on_veth(test: &str, tag: u32) -> Option<(canif_kernel::VethPair, std::process::Child)> {
     let pair =
-        match canif_kernel::VethPair::create(&format!("{}", std::process::id() % 10_000 + tag)) {
-            Ok(pair) => pair,
-            Err(why) => {
-                skip(test, &format!("no veth pair here ({why})"));
-                return None;
-            }
-        };
+        canif_kernel::VethPair::for_test(&format!("{}", std::process::id() % 10_000 + tag), test)?;
     let terminal = Command::new(env!("CARGO_BIN_EXE_canif"))
         .args(["device", "--ethercat", &pair.terminal])
         .stdout(std::process::Stdio::piped())
@@ -152,18 +146,11 @@ fn terminal_on_veth(test: &str, tag: u32) -> Option<(canif_kernel::VethPair, std
 /// root and must not skip it: CANIF_VETH=required).
 #[test]
 fn the_terminal_is_certified_across_a_veth_pair() {
-    let pair = match canif_kernel::VethPair::create(&format!("{}", std::process::id() % 10_000)) {
-        Ok(pair) => pair,
-        Err(why) => {
-            assert!(
-                std::env::var("CANIF_VETH").as_deref() != Ok("required"),
-                "CANIF_VETH=required, but no veth pair: {why}"
-            );
-            eprintln!(
-                "SKIP the_terminal_is_certified_across_a_veth_pair: no veth pair here ({why})"
-            );
-            return;
-        }
+    let tag = format!("{}", std::process::id() % 10_000);
+    let Some(pair) =
+        canif_kernel::VethPair::for_test(&tag, "the_terminal_is_certified_across_a_veth_pair")
+    else {
+        return;
     };
     let iut = format!("ethercat:emulated@{},{}", pair.master, pair.terminal);
     let dir = report_dir("veth");

@@ -64,11 +64,7 @@ pub trait ObjectDictionary {
     /// its objects may find one entry without building the rest: a master
     /// uploads a PDO mapping entry by entry.
     fn entry(&self, index: u16, sub: u8) -> Result<Entry, u32> {
-        let entries = self.object(index).ok_or(abort::NO_OBJECT)?;
-        entries
-            .into_iter()
-            .find(|e| e.sub == sub)
-            .ok_or(abort::NO_SUBINDEX)
+        entry_of(self.object(index), sub)
     }
 
     /// Writes these entries of `index` together (one download), or refuses
@@ -84,6 +80,16 @@ pub trait ObjectDictionary {
     fn name(&self, index: u16) -> String {
         format!("Object {index:04X}")
     }
+}
+
+/// Sub-index `sub` of an object as [`ObjectDictionary::object`] gave it, or
+/// the abort for no such object or entry.
+pub fn entry_of(object: Option<Vec<Entry>>, sub: u8) -> Result<Entry, u32> {
+    let entries = object.ok_or(abort::NO_OBJECT)?;
+    entries
+        .into_iter()
+        .find(|e| e.sub == sub)
+        .ok_or(abort::NO_SUBINDEX)
 }
 
 /// A transfer split over several mailbox messages.

@@ -191,11 +191,12 @@ impl<A: Application> SubDevice<A> {
     /// no EtherCAT frame (an ESC drops it).
     pub fn process(&mut self, bytes: &[u8], now: u64) -> Option<&[u8]> {
         let mut frame = std::mem::replace(&mut self.frame, Frame::EMPTY);
-        // A frame that is none goes with its buffers: they grow again.
-        frame.parse_from(bytes).ok()?;
-        self.answer_frame(&mut frame, now);
+        let ethercat = frame.parse_from(bytes).is_ok();
+        if ethercat {
+            self.answer_frame(&mut frame, now);
+        }
         self.frame = frame;
-        Some(&self.answer)
+        ethercat.then_some(self.answer.as_slice())
     }
 
     fn answer_frame(&mut self, frame: &mut Frame, now: u64) {

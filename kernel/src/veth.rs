@@ -26,6 +26,23 @@ impl VethPair {
         ip(&["link", "set", &pair.terminal, "up"])?;
         Ok(pair)
     }
+
+    /// The pair for `test`, or `None` after saying on stderr why the test
+    /// is skipped; where CI requires veth pairs (`CANIF_VETH=required`, as
+    /// root) a missing one fails the test instead of skipping it.
+    pub fn for_test(tag: &str, test: &str) -> Option<VethPair> {
+        match VethPair::create(tag) {
+            Ok(pair) => Some(pair),
+            Err(why) => {
+                assert!(
+                    std::env::var("CANIF_VETH").as_deref() != Ok("required"),
+                    "CANIF_VETH=required, but no veth pair for {test}: {why}"
+                );
+                eprintln!("SKIP {test}: no veth pair here ({why})");
+                None
+            }
+        }
+    }
 }
 
 impl Drop for VethPair {

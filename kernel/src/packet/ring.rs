@@ -10,6 +10,8 @@ use std::os::fd::{AsRawFd, OwnedFd};
 use std::ptr::NonNull;
 use std::sync::atomic::{AtomicU32, Ordering};
 
+use super::option;
+
 /// One slot: room for the largest Ethernet frame behind the kernel's header.
 const SLOT: usize = 2048;
 /// The kernel's unit of allocation: two slots.
@@ -33,38 +35,15 @@ impl Ring {
     /// to the plain queue instead); `None` where the kernel refuses it, and
     /// the socket keeps reading with recvfrom(2).
     pub(super) fn attach(fd: &OwnedFd) -> Option<Ring> {
-        let set = |option: libc::c_int, value: *const libc::c_void, len: usize| {
-            // SAFETY: `value` points to `len` readable bytes for the call.
-            unsafe {
-                libc::setsockopt(
-                    fd.as_raw_fd(),
-                    libc::SOL_PACKET,
-                    option,
-                    value,
-                    len as libc::socklen_t,
-                )
-            }
-        };
         let version = libc::tpacket_versions::TPACKET_V2 as libc::c_int;
-        if set(
-            libc::PACKET_VERSION,
-            std::ptr::addr_of!(version).cast(),
-            std::mem::size_of::<libc::c_int>(),
-        ) < 0
-        {
-            return None;
-        }
         let request = libc::tpacket_req {
             tp_block_size: BLOCK as libc::c_uint,
             tp_block_nr: (SLOTS * SLOT / BLOCK) as libc::c_uint,
             tp_frame_size: SLOT as libc::c_uint,
             tp_frame_nr: SLOTS as libc::c_uint,
         };
-        if set(
-            libc::PACKET_RX_RING,
-            std::ptr::addr_of!(request).cast(),
-            std::mem::size_of::<libc::tpacket_req>(),
-        ) < 0
+        if !(option::set(fd, libc::PACKET_VERSION, &version)
+            && option::set(fd, libc::PACKET_RX_RING, &request))
         {
             return None;
         }

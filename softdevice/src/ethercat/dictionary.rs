@@ -372,11 +372,7 @@ impl ObjectDictionary for Terminal {
         let mapped = match index {
             object::RX_PDO_MAP => self.outputs_mapped(),
             object::TX_PDO_MAP => self.inputs_mapped(),
-            _ => {
-                let entries = self.object(index).ok_or(abort::NO_OBJECT)?;
-                let entry = entries.into_iter().find(|e| e.sub == sub);
-                return entry.ok_or(abort::NO_SUBINDEX);
-            }
+            _ => return canif_ethercat::sdo::entry_of(self.object(index), sub),
         };
         Terminal::mapping_entry(&mapped, sub).ok_or(abort::NO_SUBINDEX)
     }

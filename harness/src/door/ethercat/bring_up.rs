@@ -194,27 +194,17 @@ pub(super) fn bring_up(
     caps: &Capabilities,
     config: &InterfaceConfig,
 ) -> Result<EthercatIut, BuildError> {
-    let Opened {
-        master,
-        terminal,
-        position,
-        #[cfg(feature = "socketcan")]
-        serving,
-        group,
-        station,
-        facts,
-        mailboxes: _,
-    } = opened;
+    let (master, station, position) = (&opened.master, opened.station, opened.position);
     let md = master.maindevice();
     let group = master
-        .drive(group.into_pre_op_pdi(md))
+        .drive(opened.group.into_pre_op_pdi(md))
         .map_err(|e| BuildError::Failed(master_error(e, "configuring SyncManagers and FMMUs")))?;
     master.drive(request_safe_op(md, station))?;
     let group = master
         .drive(group.into_op(md))
         .map_err(|e| BuildError::Failed(master_error(e, "SAFEOP → OP")))?;
     let interface_inputs = ImageLayout::new(config, caps.info_data).input_size();
-    let mut facts = facts;
+    let mut facts = opened.facts;
     facts.sync_managers = master.drive(start_up::sync_managers(md, station));
     if let Ok(sub) = group.subdevice(md, position) {
         facts.output_bytes = sub.outputs_raw().len();
@@ -232,13 +222,13 @@ pub(super) fn bring_up(
     }
     Ok(EthercatIut {
         interface_inputs,
-        master,
+        master: opened.master,
         group,
         position,
         station,
-        terminal,
+        terminal: opened.terminal,
         #[cfg(feature = "socketcan")]
-        serving,
+        serving: opened.serving,
         previous_inputs: None,
         telegrams: ExchangeMode::Lrw,
         deviation: None,
