@@ -1,5 +1,5 @@
 //! The PLC side's default run must cost no more than the device side's: both
-//! README commands (`canif run` and `canif run --side plc`), three times each,
+//! README commands (`canif run` and `canif run plc`), three times each,
 //! in one run; prints the medians and their ratio. Plain main: asserts nothing.
 
 use std::process::Command;
@@ -28,9 +28,9 @@ fn median_of_three(args: &[&str]) -> Duration {
 
 fn main() {
     let device = median_of_three(&["run"]);
-    let plc = median_of_three(&["run", "--side", "plc"]);
+    let plc = median_of_three(&["run", "plc"]);
     println!("canif run (device side, soft device):  {device:?}");
-    println!("canif run --side plc (reference client): {plc:?}");
+    println!("canif run plc (reference client): {plc:?}");
     println!(
         "ratio PLC side / device side: {:.2}",
         plc.as_secs_f64() / device.as_secs_f64()

@@ -48,7 +48,6 @@ use std::io::Write as _;
 use std::process::ExitCode;
 
 use canif_spec::Catalogue;
-use clap::Parser;
 
 use cli::{Cli, Command, ListCommand, SideArg};
 use commands::run;
@@ -56,7 +55,7 @@ use commands::{certify, device, merge, plc_types, spec, tools};
 use stop::Stop;
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = Cli::from_env();
     // SIGINT, SIGTERM: the run stops at the next cycle and still writes its
     // reports; a second signal ends canif at once.
     let _ = ctrlc::set_handler(|| {

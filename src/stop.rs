@@ -58,3 +58,9 @@ impl Stop {
         }
     }
 }
+
+impl From<canif_runner::PlanError> for Stop {
+    fn from(error: canif_runner::PlanError) -> Self {
+        Stop::Said(error.to_string())
+    }
+}

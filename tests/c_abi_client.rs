@@ -40,7 +40,7 @@ fn options() -> ClientOptions {
     }
 }
 
-/// `canif run --side plc --profile PROFILE [--master lrw] --iut lib:LIBRARY`
+/// `canif run plc --profile PROFILE [--master lrw] --iut lib:LIBRARY`
 /// as a new user runs it, reports into a fresh folder named `name`: the exit
 /// code (with stderr for a message) and report.json.
 fn canif_run(
@@ -52,7 +52,7 @@ fn canif_run(
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("c-abi-client-{name}"));
     let _ = std::fs::remove_dir_all(&dir);
     let mut command = Command::new(env!("CARGO_BIN_EXE_canif"));
-    command.args(["run", "--side", "plc", "--profile", profile]);
+    command.args(["run", "plc", "--profile", profile]);
     if lrw_only {
         command.args(["--master", "lrw"]);
     }
@@ -164,7 +164,7 @@ fn zero_transaction_numbers_are_a_fault_only_of_a_client_that_tells_what_was_sen
     );
 }
 
-/// The same, as a new user meets it: `canif run --side plc --iut lib:…`
+/// The same, as a new user meets it: `canif run plc --iut lib:…`
 /// writes the reason into report.json (it said "not selected" while the
 /// command line judged the profile a second time without it).
 #[test]

@@ -37,7 +37,6 @@ fn run(side: &str, fault: &str, jobs: &str, name: &str) -> (Option<i32>, serde_j
     let report = dir(name);
     let output = canif(&[
         "run",
-        "--side",
         side,
         "--fault",
         fault,

@@ -171,7 +171,6 @@ fn a_declaration_that_cannot_be_read_is_a_usage_error_naming_it() {
     }
     let out = canif(&[
         "run",
-        "--side",
         "plc",
         "--declare",
         "tx-queue-accounting=wire-in-queue",

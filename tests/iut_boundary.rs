@@ -157,7 +157,7 @@ fn a_mistyped_iut_path_is_one_line() {
         ("device", "lib:./no-such-library.so"),
     ] {
         let output = Command::new(CANIF)
-            .args(["run", "--side", side, "--iut", iut, "--report"])
+            .args(["run", side, "--iut", iut, "--report"])
             .arg(scratch("typo-other").join("report"))
             .output()
             .unwrap();

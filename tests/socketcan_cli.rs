@@ -52,7 +52,7 @@ fn the_device_the_coupler_and_the_canopen_checks_say_why_they_cannot_start() {
     for args in [
         &["device", "--stdio", "--bus", MISSING][..],
         &["coupler", "--bus", MISSING, "--node", "5"][..],
-        &["run", "--suite", "canopen", "--bus", MISSING, "--node", "5"][..],
+        &["run", "canopen", "--bus", MISSING, "--node", "5"][..],
     ] {
         let (code, stderr) = canif(args);
         assert_eq!(code, Some(2), "{args:?}: {stderr}");

@@ -190,7 +190,6 @@ fn client_side_over(interface: &str) -> Result<(), Failed> {
         let dir = report_dir(name);
         let mut args = vec![
             "run",
-            "--side",
             "plc",
             "--bus",
             &bus,
@@ -524,7 +523,7 @@ impl Drop for Background {
     }
 }
 
-/// `canif run --suite canopen` checks a node on the interface: the coupler
+/// `canif run canopen` checks a node on the interface: the coupler
 /// passes, each faulty variant fails on the requirement it breaks.
 fn canopen_checks_over(interface: &str) -> Result<(), Failed> {
     let bus = format!("socketcan:{interface}");
@@ -533,7 +532,7 @@ fn canopen_checks_over(interface: &str) -> Result<(), Failed> {
     let check = |fault: Option<&str>| -> Result<Output, Failed> {
         let _coupler = coupler_process(interface, fault)?;
         Ok(canif(&[
-            "run", "--suite", "canopen", "--bus", &bus, "--node", "5", "--report", &report,
+            "run", "canopen", "--bus", &bus, "--node", "5", "--report", &report,
         ]))
     };
     let output = check(None)?;

@@ -4,7 +4,7 @@
  * "Image offsets" and the 001 sample code:
  *
  *   cc -shared -fPIC -O2 -Iinclude -o libminimal_client.so examples/c/minimal_client.c
- *   cargo run --release -- run --side plc --iut lib:./libminimal_client.so
+ *   cargo run --release -- run plc --iut lib:./libminimal_client.so
  *
  * Once per task it reads NoOfRxMessages messages (never more than the slots)
  * when Inputs.RxCounter differs from the Outputs.RxCounter it wrote, and

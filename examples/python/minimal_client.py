@@ -16,7 +16,7 @@ its own output image, so it does not care what buffer the master hands it.
 With transaction numbers it tells which messages were sent: every message
 up to the one Inputs.TransactionNumber names (`sent`).
 
-    cargo run --release -- run --side plc --iut "exec:python3 examples/python/minimal_client.py"
+    cargo run --release -- run plc --iut "exec:python3 examples/python/minimal_client.py"
 """
 import json
 import mmap

@@ -10,7 +10,10 @@ mod plc;
 mod run;
 mod spec;
 pub(crate) use plc::{CheckLayoutArgs, ExportArgs, FrameArg, InterfaceArgs, LanguageArg};
-pub(crate) use run::{side_conflicts, RealTimeOptions, RunArgs, SideArg, Suite};
+pub(crate) use run::{
+    CampaignArgs, CanopenRunArgs, DeviceRunArgs, PlcRunArgs, RealTimeOptions, RunCommand,
+    RunCommon, RunSide, SideArg,
+};
 pub(crate) use spec::SpecCommand;
 
 #[derive(Parser)]
@@ -27,14 +30,26 @@ pub(crate) struct Cli {
     pub command: Command,
 }
 
+impl Cli {
+    /// The command line of this process, old spellings rewritten (each
+    /// said on stderr once), parsed; clap ends the process on a mistake.
+    pub(crate) fn from_env() -> Self {
+        let (args, said) = run::deprecated_spellings(std::env::args().collect());
+        for line in said {
+            errln!("{line}");
+        }
+        Cli::parse_from(args)
+    }
+}
+
 /// The implementation under test, as the command line names it.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) enum IutArg {
     SoftDevice,
     Model,
-    /// The reference client of 001 §6 (`--side plc`).
+    /// The reference client of 001 §6 (`canif run plc`).
     Reference,
-    /// The independent soft client, with `--fault` its client faults (`--side plc`).
+    /// The independent soft client, with `--fault` its client faults (`canif run plc`).
     SoftClient,
     /// `exec:COMMAND`: a process speaking the adapter protocol.
     Exec(String),
@@ -65,7 +80,7 @@ fn iut_arg(text: &str) -> Result<IutArg, String> {
             (_, Some(_)) => Err("lib: needs a path, e.g. lib:./libdevice.so".into()),
             _ => Err(
                 "use softdevice, model, exec:'COMMAND', lib:PATH or ethercat:emulated (device side), \
-                 reference or softclient (--side plc)"
+                 reference or softclient (canif run plc)"
                     .into(),
             ),
         },
@@ -133,12 +148,12 @@ pub(crate) struct IutOptions {
     /// image then ends the run with it.
     #[arg(long)]
     pub lib_in_process: bool,
-    /// Switch on a soft-device fault, or with --side plc a soft-client fault
+    /// Switch on a soft-device fault, or with `canif run plc` a soft-client fault
     /// (repeatable; see `canif faults`).
     #[arg(long)]
     pub fault: Vec<String>,
     /// Let the soft device take a freedom the documents leave (repeatable; see
-    /// `canif faults`): it must still conform. With --side plc: the soft
+    /// `canif faults`): it must still conform. With `canif run plc`: the soft
     /// client takes one way of working and declares it.
     #[arg(long)]
     pub choice: Vec<String>,
@@ -182,8 +197,9 @@ pub(crate) enum LibRole {
 #[derive(Subcommand)]
 pub(crate) enum Command {
     /// Certify an implementation against the model, per profile, on the
-    /// simulated bus or a SocketCAN interface.
-    Run(RunArgs),
+    /// simulated bus or a SocketCAN interface: `canif run` (the device),
+    /// `canif run plc` (a PLC-side client), `canif run canopen` (a CANopen node).
+    Run(RunCommand),
     /// Certify profiles: a certificate (canonical JSON + HTML) of every
     /// requirement's verdict, signed with an OpenSSH Ed25519 key.
     Certify {
@@ -459,5 +475,90 @@ mod tests {
             assert!(Cli::try_parse_from(args).is_err(), "{args:?} was accepted");
         }
         assert!(Cli::try_parse_from(["canif", "run", "--iut", "exec:./my-iut"]).is_ok());
+    }
+
+    /// Each side has its own flags: clap, not a table, refuses the others.
+    #[test]
+    fn each_side_of_canif_run_takes_its_own_flags_only() {
+        let side = |args: &[&str]| match Cli::try_parse_from(args).map(|cli| cli.command) {
+            Ok(Command::Run(run)) => Ok(match run.side() {
+                RunSide::Device(_) => "device",
+                RunSide::Plc(_) => "plc",
+                RunSide::Canopen(_) => "canopen",
+            }),
+            Ok(_) => panic!("{args:?} is no run"),
+            Err(error) => Err(error.kind()),
+        };
+        assert_eq!(side(&["canif", "run", "--cases", "2"]), Ok("device"));
+        assert_eq!(
+            side(&["canif", "run", "device", "--trace", "t"]),
+            Ok("device")
+        );
+        assert_eq!(side(&["canif", "run", "plc", "--master", "lrw"]), Ok("plc"));
+        assert_eq!(
+            side(&["canif", "run", "canopen", "--node", "3"]),
+            Ok("canopen")
+        );
+        let unknown = Err(clap::error::ErrorKind::UnknownArgument);
+        assert_eq!(side(&["canif", "run", "plc", "--cases", "2"]), unknown);
+        assert_eq!(side(&["canif", "run", "plc", "--no-fail-fast"]), unknown);
+        assert_eq!(
+            side(&["canif", "run", "canopen", "--iut", "model"]),
+            unknown
+        );
+        assert_eq!(
+            side(&["canif", "run", "canopen", "--shard", "1/2"]),
+            unknown
+        );
+        assert_eq!(
+            side(&["canif", "run", "device", "--master", "lrw"]),
+            unknown
+        );
+        // Flags before the side's name belong to no side.
+        assert!(side(&["canif", "run", "--cases", "2", "plc"]).is_err());
+    }
+
+    /// The spellings before each side had its arguments still work for one
+    /// release, each said to be deprecated.
+    #[test]
+    fn old_spellings_of_the_side_are_rewritten_and_said() {
+        let rewrite = |args: &[&str]| {
+            let (args, said) =
+                run::deprecated_spellings(args.iter().map(|a| a.to_string()).collect());
+            (args.join(" "), said.len())
+        };
+        assert_eq!(
+            rewrite(&["canif", "run", "--side", "plc", "--profile", "fc510x"]),
+            ("canif run plc --profile fc510x".into(), 1)
+        );
+        assert_eq!(
+            rewrite(&[
+                "canif",
+                "--spec",
+                "dir",
+                "run",
+                "--suite=canopen",
+                "--node",
+                "3"
+            ]),
+            ("canif --spec dir run canopen --node 3".into(), 1)
+        );
+        assert_eq!(
+            rewrite(&["canif", "run", "--side", "device", "--suite", "interface"]),
+            ("canif run device".into(), 2)
+        );
+        // Other commands keep their own --side; new spellings are untouched.
+        for args in [
+            &["canif", "list", "scenarios", "--side", "plc"][..],
+            &["canif", "certify", "--side", "plc"],
+            &["canif", "run", "plc", "--profile", "fc510x"],
+        ] {
+            assert_eq!(rewrite(args), (args.join(" "), 0));
+        }
+        // A value it does not know is left for clap to refuse.
+        assert_eq!(
+            rewrite(&["canif", "run", "--side", "gateway"]),
+            ("canif run --side gateway".into(), 0)
+        );
     }
 }

@@ -13,9 +13,10 @@ use canif_spec::Catalogue;
 
 use canif_harness::client::suite::ClientOptions;
 
-use super::run::{device, finish, plc, profiles, Plan};
+use super::run::{finish, profiles, Progress};
 use super::{client_declaration, declared_choices, resolve_client, resolve_iut};
 use crate::cli::{CompareFormat, IutOptions, SideArg};
+use canif_runner::Plan;
 
 /// How to check a certificate without canif, for the output and the docs.
 fn ssh_keygen_command(certificate: &Path) -> String {
@@ -67,13 +68,7 @@ pub(crate) fn certify(
                 ..Options::default()
             };
             let plan = Plan::new(profiles, options, product)?;
-            plan.check_selection(catalogue)?;
-            device::execute(
-                catalogue,
-                &kind,
-                &plan,
-                canif_harness::door::ethercat::Pace::Unpaced(device::SURVEY_CYCLES),
-            )
+            plan.run(catalogue, &kind, &Progress::new(catalogue))?
         }
         SideArg::Plc => {
             let kind = resolve_client(iut)?;
@@ -85,7 +80,7 @@ pub(crate) fn certify(
             }
             .declared_by(&kind);
             let plan = Plan::new(profiles, options, product)?;
-            plc::execute(catalogue, &kind, &plan)
+            plan.run(catalogue, &kind, &Progress::new(catalogue))?
         }
     };
     let code = finish(catalogue, &report, &out.join("run"));

@@ -72,7 +72,7 @@ pub(crate) fn resolve_iut(iut: &IutOptions) -> Result<IutKind, Stop> {
     Ok(kind)
 }
 
-/// The client named on the command line for `--side plc`, started once to
+/// The client named on the command line for `canif run plc`, started once to
 /// see that it can start, or the exit code of a usage error.
 pub(crate) fn resolve_client(iut: &IutOptions) -> Result<ClientKind, Stop> {
     let kind = client_kind(iut)?;
@@ -146,7 +146,7 @@ fn iut_kind(iut: &IutOptions) -> Result<IutKind, Stop> {
         }
         IutArg::Reference | IutArg::SoftClient => {
             return Err(stop!(
-                "--iut reference and softclient are PLC-side clients: add --side plc"
+                "--iut reference and softclient are PLC-side clients: use `canif run plc`"
             ));
         }
     })
@@ -168,13 +168,13 @@ fn named<T>(
         .collect()
 }
 
-/// The client `--iut` names for `--side plc`. A fault without `--iut` picks
+/// The client `--iut` names for `canif run plc`. A fault without `--iut` picks
 /// the soft client.
 fn client_kind(iut: &IutOptions) -> Result<ClientKind, Stop> {
     let faults = named(&iut.fault, ClientFault::from_name, "client fault")?;
     if faults.len() > 1 {
         return Err(stop!(
-            "--side plc: one --fault at a time (the soft client has one defect)"
+            "the PLC side: one --fault at a time (the soft client has one defect)"
         ));
     }
     let shapes = named(&iut.choice, ClientShape::from_name, "soft-client choice")?;
@@ -187,7 +187,7 @@ fn client_kind(iut: &IutOptions) -> Result<ClientKind, Stop> {
             })
         }
         _ => {
-            return Err(stop!("--side plc: --choice takes the soft client (--iut softclient), one at a time, without --fault"));
+            return Err(stop!("the PLC side: --choice takes the soft client (--iut softclient), one at a time, without --fault"));
         }
     }
     match (&iut.iut, faults.first()) {
@@ -212,7 +212,7 @@ fn client_kind(iut: &IutOptions) -> Result<ClientKind, Stop> {
         }
         (Some(other), _) => {
             Err(stop!(
-                "--side plc runs a client: --iut reference, softclient, exec:'COMMAND' or lib:PATH, not {other:?}"
+                "the PLC side runs a client: --iut reference, softclient, exec:'COMMAND' or lib:PATH, not {other:?}"
             ))
         }
         (None, Some(_)) => unreachable!("a fault without --iut is the soft client"),

@@ -258,19 +258,19 @@ pub(crate) fn faults(out: &mut String) -> ExitCode {
     }
     outln!(
         out,
-        "\nclient faults (--side plc --fault; the soft client):"
+        "\nclient faults (canif run plc --fault; the soft client):"
     );
     for fault in canif_harness::client::faulty::ClientFault::ALL {
         outln!(out, "{:<36} {}", fault.name(), fault.description());
     }
     outln!(
         out,
-        "\nclient ways of working (--side plc --choice; the soft client takes one and declares it):"
+        "\nclient ways of working (canif run plc --choice; the soft client takes one and declares it):"
     );
     for shape in canif_harness::client::faulty::ClientShape::ALL {
         outln!(out, "{:<36} declares {}", shape.name(), shape.declares());
     }
-    outln!(out, "\nmaster models (--side plc --master):");
+    outln!(out, "\nmaster models (canif run plc --master):");
     for master in canif_harness::client::master::Master::ALL {
         outln!(out, "{:<36} {}", master.name, master.description());
     }

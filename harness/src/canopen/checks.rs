@@ -63,7 +63,7 @@ impl NodeCheck {
     }
 }
 
-/// Every requirement the node checks exercise: what a run of `--suite canopen` can judge.
+/// Every requirement the node checks exercise: what a run of `canif run canopen` can judge.
 /// (Found by running the checks once on the simulated coupler, then kept.)
 pub fn node_check_ids() -> Vec<&'static str> {
     static IDS: std::sync::OnceLock<Vec<&'static str>> = std::sync::OnceLock::new();

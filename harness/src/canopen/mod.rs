@@ -4,7 +4,7 @@
 //! on a SocketCAN interface (`socketcan::SocketCanNode`, real time).
 //!
 //! - `checks`: the node checks; [`side`]: they as a side of the suite (what
-//!   `canif run --suite canopen` runs); `socketcand` and `on_bus`: the
+//!   `canif run canopen` runs); `socketcand` and `on_bus`: the
 //!   simulated coupler served to other tools. (`device::quick_start` sends the
 //!   same telegrams through an IUT's process image.)
 

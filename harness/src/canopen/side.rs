@@ -8,7 +8,7 @@
 //! side runs the script once per node it opens, and each case is one check
 //! of it. A node that cannot be opened is an error of every case.
 
-use std::cell::RefCell;
+use std::sync::Mutex;
 
 use canif_model::canopen::coupler::{Coupler, CouplerFault};
 use canif_model::canopen::NodeId;
@@ -119,21 +119,24 @@ type Script = (NodeTarget, Result<Vec<NodeCheck>, IutError>);
 #[derive(Debug, Default)]
 pub struct CanopenSide {
     pub selection: Selection,
+    /// The run's seed, for its report (the script itself draws nothing).
+    pub seed: u64,
     /// The script's checks on the node opened last, run once.
-    script: RefCell<Option<Script>>,
+    script: Mutex<Option<Script>>,
 }
 
 impl CanopenSide {
     pub fn new(selection: Selection) -> Self {
         CanopenSide {
             selection,
-            script: RefCell::new(None),
+            seed: 1,
+            script: Mutex::new(None),
         }
     }
 
     /// The script's result on `target`, run at the first case that asks.
     fn checks(&self, target: &NodeTarget) -> Result<Vec<NodeCheck>, IutError> {
-        let mut script = self.script.borrow_mut();
+        let mut script = self.script.lock().unwrap_or_else(|e| e.into_inner());
         if let Some((ran_on, result)) = script.as_ref() {
             if ran_on == target {
                 return result.clone();

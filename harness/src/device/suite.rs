@@ -47,6 +47,9 @@ pub struct Options {
     /// What the command line declares of the device's choices (over what
     /// the IUT kind declares itself).
     pub declared: Declared,
+    /// How a terminal over EtherCAT is surveyed before the run (behind
+    /// another door, nothing is).
+    pub survey: crate::door::ethercat::Pace,
     /// What each profile's run saw an undeclared device choose (shared by
     /// the clones a run makes, read when the report is written).
     pub observed: Arc<Mutex<Vec<Observed>>>,
@@ -78,6 +81,7 @@ impl Options {
             fail_fast: true,
             selection: Selection::default(),
             declared: Declared::default(),
+            survey: Default::default(),
             observed: Arc::default(),
             iut_declared: Arc::default(),
         }

@@ -192,6 +192,38 @@ impl Door {
         Some((host.command(role, path), host.timeouts))
     }
 
+    /// What a device run through this door needs before it starts, or why
+    /// it cannot: `terminals` names the catalogue's terminal profiles.
+    pub fn preflight(
+        &self,
+        profiles: &[&canif_spec::Profile],
+        bus_is_sim: bool,
+        terminals: &[&str],
+    ) -> Result<(), String> {
+        match self {
+            Door::Ethercat { link, .. } => {
+                ethercat::preflight(link, profiles, bus_is_sim, terminals)
+            }
+            Door::Exec { .. } | Door::Lib { .. } => Ok(()),
+        }
+    }
+
+    /// A capability of the EtherCAT door alone: the terminal of `profile`
+    /// brought up once before the run, for the report; `None` behind a
+    /// door that has no terminal to survey.
+    pub fn survey(
+        &self,
+        profile: &canif_spec::Profile,
+        pace: ethercat::Pace,
+    ) -> Option<Result<ethercat::TerminalFacts, BuildError>> {
+        match self {
+            Door::Ethercat { link, .. } if profile.ethercat.is_some() => {
+                Some(ethercat::survey(profile, link, pace))
+            }
+            _ => None,
+        }
+    }
+
     /// Whether the device's CAN controller is out of the harness's reach: it
     /// opens its own socket, or it is a terminal on a real bus.
     pub fn owns_its_bus(&self) -> bool {

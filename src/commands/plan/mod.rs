@@ -15,8 +15,8 @@ use canif_features::ScenarioInfo;
 use canif_harness::run::Side;
 use canif_spec::{Catalogue, Side as Role};
 
-use super::run::Plan;
 use crate::stop::{stop, Stop};
+use canif_runner::Plan;
 
 /// One case of a side's run, with the profiles it runs on.
 pub(crate) struct Case {

@@ -1,202 +1,112 @@
-//! `canif run`, `canif list scenarios` and `canif self-check`, for either
-//! side. A run is planned (profiles, selection, the Gherkin scenarios),
-//! executed (each profile's cases, then the Gherkin scenarios), judged once
-//! per requirement × profile, and reported. What differs between the sides
-//! is in `device` and `plc`; everything else is here, once.
+//! `canif run device|plc|canopen`, `canif list scenarios` and `canif
+//! self-check`. Each side's arguments become a [`Plan`] once (its module);
+//! the run itself is the library's ([`canif_runner`]); what is said while it
+//! runs is [`progress`]'s, and the verdict's lines are [`finish`]'s.
 
 mod canopen;
 pub(crate) mod device;
-mod plan;
 pub(crate) mod plc;
 mod progress;
-mod rerun;
 mod self_check;
 
 use std::path::Path;
 use std::process::ExitCode;
 
-use crate::cli::{RunArgs, SideArg, Suite};
+use crate::cli::{CampaignArgs, RunCommand, RunCommon, RunSide};
 use crate::stop::{stop, Stop};
 
 use canif_harness::report::RunReport;
-use canif_harness::run::Side;
+use canif_harness::run::{Selection, Side};
+use canif_runner::{Campaign, Plan, Rerun};
 use canif_spec::{Catalogue, Profile};
 
-pub(crate) use plan::Plan;
+pub(crate) use progress::Progress;
 pub(crate) use self_check::self_check;
 
 /// `canif run`: either side, or the CANopen suite, with its reports.
-pub(crate) fn command(catalogue: &Catalogue, args: RunArgs) -> Result<ExitCode, Stop> {
-    let RunArgs {
-        iut,
-        profile,
-        seed,
-        product,
-        cases,
-        duration,
-        no_counter_wrap,
-        report,
-        trace,
-        suite,
-        bus,
-        real_time,
-        no_fail_fast,
-        scenario,
-        requirement,
-        trace_epoch,
-        node,
-        coupler_fault,
-        side,
-        master,
-        jobs,
-        rerun_failed,
-        shard,
-    } = args;
-    let jobs = usize::from(jobs);
-    // What every shard of a campaign must have asked alike, read once.
-    let campaign = campaign_args(std::env::args().skip(1));
-    let bus = device::bus_choice(&bus, &real_time);
-    let pace = device::pace(&real_time);
-    let rerun = match &rerun_failed {
-        Some(path) => {
-            let role = match side {
-                SideArg::Device => canif_spec::Side::Device,
-                SideArg::Plc => canif_spec::Side::Plc,
-            };
-            Some(rerun::Rerun::read(path, role)?)
-        }
+pub(crate) fn command(catalogue: &Catalogue, args: RunCommand) -> Result<ExitCode, Stop> {
+    match args.side() {
+        RunSide::Device(args) => device::command(catalogue, args),
+        RunSide::Plc(args) => plc::command(catalogue, args),
+        RunSide::Canopen(args) => canopen::command(catalogue, args),
+    }
+}
+
+/// A plan's run, said as it goes, and its reports written.
+fn run_and_finish<S: Campaign>(
+    catalogue: &Catalogue,
+    plan: &Plan<'_, S>,
+    under_test: &S::UnderTest,
+    report_dir: &Path,
+) -> Result<ExitCode, Stop> {
+    let report = plan.run(catalogue, under_test, &Progress::new(catalogue))?;
+    finish(catalogue, &report, report_dir)
+}
+
+/// What a run of profiles selects: the command line's selection and
+/// profiles, or with `--rerun-failed` what failed in that report. `None`
+/// when a rerun finds nothing to run (said on stdout).
+struct Selected {
+    selection: Selection,
+    profiles: Vec<String>,
+    rerun: Option<Rerun>,
+}
+
+fn selected(
+    common: &RunCommon,
+    campaign: &CampaignArgs,
+    side: canif_spec::Side,
+) -> Result<Option<Selected>, Stop> {
+    let rerun = match &campaign.rerun_failed {
+        Some(path) => Some(Rerun::read(path, side).map_err(canif_runner::PlanError::from)?),
         None => None,
     };
-    let (scenario, profile) = match &rerun {
+    let (scenarios, profiles) = match &rerun {
         Some(rerun) if rerun.failed.is_empty() => {
             sayln!(
                 "--rerun-failed: nothing failed or erred in {}; nothing to rerun",
                 rerun.report.display()
             );
-            return Ok(ExitCode::SUCCESS);
+            return Ok(None);
         }
         Some(rerun) => (rerun.scenarios(), rerun.profiles()),
-        None => (scenario, profile),
+        None => (common.scenario.clone(), campaign.profile.clone()),
     };
-    let selection = canif_harness::run::Selection {
-        scenarios: scenario,
-        requirements: requirement,
-        shard,
-    };
-    let device_only = [
-        (suite == Suite::Canopen, "--suite canopen"),
-        (cases.is_some(), "--cases"),
-        (duration.is_some(), "--duration"),
-        (trace.is_some(), "--trace"),
-        (no_fail_fast, "--no-fail-fast"),
-        (real_time.ethercat_soak_s > 0, "--ethercat-soak-s"),
-    ];
-    let plc_only = [(!master.is_empty(), "--master")];
-    crate::cli::side_conflicts(side, &device_only, &plc_only)?;
-    if jobs > 1 {
-        let shared = match &iut.iut {
-            Some(crate::cli::IutArg::Ethercat(_)) => Some("an EtherCAT terminal: one link"),
-            Some(crate::cli::IutArg::Lib(_)) if iut.lib_in_process => {
-                Some("--lib-in-process: one library in canif's process")
-            }
-            _ if bus != canif_harness::device::bus::BusChoice::Sim => {
-                Some("a SocketCAN bus: one interface")
-            }
-            _ if suite == Suite::Canopen => Some("the CANopen suite: one node"),
-            _ => None,
-        };
-        if let Some(why) = shared {
-            return Err(stop!(
-                "--jobs {jobs}: the profiles would share {why}; run them one at a time"
-            ));
-        }
-    }
-    if suite == Suite::Canopen && selection.shard.is_some() {
-        return Err(stop!(
-            "--shard: the CANopen suite checks one node, whose profile is made for the run; run it whole"
-        ));
-    }
-    if suite == Suite::Canopen {
-        let target = canopen::target(&iut, &bus, node, coupler_fault.as_deref())?;
-        let profile = canopen::node_profile(catalogue, &target)?;
-        let side = canif_harness::canopen::side::CanopenSide::new(selection);
-        let plan = Plan::new(vec![&profile], side, product.product())?;
-        return canopen::run(catalogue, &target, &plan, seed, &report);
-    }
-    let mut profiles = profiles(catalogue, &profile)?;
-    // A terminal over EtherCAT can only be one of the terminal profiles:
-    // `all` (the default) means all of those.
-    let every = profile.is_empty() || profile.iter().any(|p| p == "all");
-    if every && matches!(iut.iut, Some(crate::cli::IutArg::Ethercat(_))) {
-        profiles.retain(|p| p.ethercat.is_some());
-    }
-    if side == SideArg::Plc {
-        let client_bus = plc::client_bus(&bus)?;
-        let kind = crate::commands::resolve_client(&iut)?;
-        let masters = plc::masters(&master)?;
-        let declared = crate::commands::client_declaration(&iut.declare)?;
-        let options = canif_harness::client::suite::ClientOptions {
-            seed,
-            bus: client_bus,
-            counter_wrap: !no_counter_wrap,
-            masters,
-            selection,
-            declared: Ok(declared),
-        };
-        // What the client declares of itself, asked once.
-        let options = options.declared_by(&kind);
-        if let Some(rerun) = &rerun {
-            rerun.same_iut(&kind.name())?;
-        }
-        let mut plan = Plan::new(profiles, options, product.product())?;
-        plan.jobs = jobs;
-        plan.rerun = rerun;
-        plan.campaign = campaign;
-        return plc::run(catalogue, &kind, &plan, &report);
-    }
-    if let Some(dir) = &trace {
-        // A trace folder that cannot be written is said before the
-        // run, not found missing after it.
-        let writable = std::fs::create_dir_all(dir).and_then(|()| {
-            let probe = dir.join(".canif-trace-probe");
-            std::fs::write(&probe, b"").and_then(|()| std::fs::remove_file(probe))
-        });
-        if let Err(error) = writable {
-            return Err(stop!(
-                "--trace {}: cannot write there: {error}",
-                dir.display()
-            ));
-        }
-    }
-    let declared = crate::commands::declared_choices(&iut.declare)?;
-    let started = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .unwrap_or_default();
-    let options = canif_harness::device::Options {
-        seed,
-        cases: if duration.is_some() {
-            1
-        } else {
-            cases.unwrap_or(4)
+    Ok(Some(Selected {
+        selection: Selection {
+            scenarios,
+            requirements: common.requirement.clone(),
+            shard: campaign.shard,
         },
-        generated_cycles: duration.map_or(200, |s| (s * 1000.0).max(1.0) as u64),
-        counter_wrap: !no_counter_wrap && bus.is_sim(),
-        trace_dir: trace,
-        trace_epoch: trace_epoch.map_or(started.as_nanos() as u64, |s| {
-            s.saturating_mul(1_000_000_000)
-        }),
-        bus,
-        selection,
-        fail_fast: !no_fail_fast,
-        declared,
-        observed: Default::default(),
-        iut_declared: Default::default(),
-    };
-    let mut plan = Plan::new(profiles, options, product.product())?;
-    plan.jobs = jobs;
+        profiles,
+        rerun,
+    }))
+}
+
+/// The plan of a run over profiles, with the campaign's settings.
+fn campaign_plan<'c, S: Side>(
+    profiles: Vec<&'c Profile>,
+    options: S,
+    common: &RunCommon,
+    campaign: &CampaignArgs,
+    rerun: Option<Rerun>,
+) -> Result<Plan<'c, S>, Stop> {
+    let mut plan = Plan::new(profiles, options, common.product.product())?;
+    plan.jobs = usize::from(campaign.jobs);
     plan.rerun = rerun;
-    plan.campaign = campaign;
-    device::run(catalogue, &iut, &plan, pace, &report)
+    plan.campaign = campaign_args(std::env::args().skip(1));
+    Ok(plan)
+}
+
+/// `--jobs N` where the profiles would share one thing that cannot be
+/// shared: `shared` names it.
+fn one_at_a_time(jobs: u16, shared: Option<&str>) -> Result<(), Stop> {
+    match shared {
+        Some(why) if jobs > 1 => Err(stop!(
+            "--jobs {jobs}: the profiles would share {why}; run them one at a time"
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// The run's arguments as a campaign's shards must share them: without

@@ -1,20 +1,49 @@
-//! `canif run --side plc`: a PLC-side client under test. The harness plays
-//! the device, the EtherCAT master and the application; the report has the
-//! same shape as the device side's, with `side: plc` and the master models.
+//! `canif run plc`: its arguments made into a plan of the PLC side, once.
 
-use std::path::Path;
 use std::process::ExitCode;
 
 use crate::stop::{stop, Stop};
 
-use canif_features::schedule::declined_by_client;
 use canif_harness::client::master::Master;
-use canif_harness::client::suite::{ClientBus, ClientKind, ClientOptions};
-use canif_harness::device::bus::BusChoice;
-use canif_harness::report::{ChoiceEntry, ChoiceSource, RunMeta, RunReport};
-use canif_spec::{Catalogue, Side};
+use canif_harness::client::suite::{ClientBus, ClientOptions};
+use canif_spec::Catalogue;
 
-use super::{finish, Plan};
+use super::{campaign_plan, one_at_a_time, profiles, run_and_finish, selected};
+use crate::cli::{BusArg, PlcRunArgs};
+use crate::commands::{client_declaration, resolve_client};
+
+pub(crate) fn command(catalogue: &Catalogue, args: PlcRunArgs) -> Result<ExitCode, Stop> {
+    let PlcRunArgs {
+        iut,
+        common,
+        campaign,
+        master,
+        bus,
+        frame_timeout_ms,
+    } = args;
+    let Some(selected) = selected(&common, &campaign, canif_spec::Side::Plc)? else {
+        return Ok(ExitCode::SUCCESS);
+    };
+    let bus = client_bus(&bus, frame_timeout_ms)?;
+    one_at_a_time(
+        campaign.jobs,
+        (bus != ClientBus::Sim).then_some("a SocketCAN bus: one interface"),
+    )?;
+    let profiles = profiles(catalogue, &selected.profiles)?;
+    let kind = resolve_client(&iut)?;
+    let options = ClientOptions {
+        seed: common.seed,
+        bus,
+        counter_wrap: !campaign.no_counter_wrap,
+        masters: masters(&master)?,
+        selection: selected.selection,
+        declared: Ok(client_declaration(&iut.declare)?),
+    };
+    // What the client declares of itself, asked once.
+    let options = options.declared_by(&kind);
+    let plan = campaign_plan(profiles, options, &common, &campaign, selected.rerun)?;
+    run_and_finish(catalogue, &plan, &kind, &common.report)
+}
 
 /// The master models named on the command line (all when none), or the exit code of a usage error.
 pub(crate) fn masters(names: &[String]) -> Result<Vec<Master>, Stop> {
@@ -32,16 +61,16 @@ pub(crate) fn masters(names: &[String]) -> Result<Vec<Master>, Stop> {
         .collect()
 }
 
-/// The bus of `--side plc`: the simulated one, or one SocketCAN interface
+/// The bus of `canif run plc`: the simulated one, or one SocketCAN interface
 /// that the played device's controller and the other nodes share.
-pub(crate) fn client_bus(bus: &BusChoice) -> Result<ClientBus, Stop> {
+#[cfg_attr(not(feature = "socketcan"), allow(unused_variables))]
+fn client_bus(bus: &BusArg, frame_timeout_ms: u64) -> Result<ClientBus, Stop> {
     match bus {
-        BusChoice::Sim => Ok(ClientBus::Sim),
+        BusArg::Sim => Ok(ClientBus::Sim),
         #[cfg(feature = "socketcan")]
-        BusChoice::SocketCan(options) => {
-            let spec = &options.spec;
+        BusArg::SocketCan(spec) => {
             if spec.iut != spec.tester {
-                return Err(stop!("--side plc: one interface (socketcan:IFACE); the device and the other nodes share it"));
+                return Err(stop!("canif run plc: one interface (socketcan:IFACE); the device and the other nodes share it"));
             }
             if let Err(error) = canif_kernel::probe()
                 .and_then(|()| canif_kernel::KernelSocket::open(&spec.iut, false).map(|_| ()))
@@ -50,94 +79,8 @@ pub(crate) fn client_bus(bus: &BusChoice) -> Result<ClientBus, Stop> {
             }
             Ok(ClientBus::SocketCan {
                 interface: spec.iut.clone(),
-                timeout: options.timeout,
+                timeout: std::time::Duration::from_millis(frame_timeout_ms),
             })
         }
     }
-}
-
-pub(crate) fn run(
-    catalogue: &Catalogue,
-    kind: &ClientKind,
-    plan: &Plan<ClientOptions>,
-    report_dir: &Path,
-) -> Result<ExitCode, Stop> {
-    plan.check_selection(catalogue)?;
-    finish(catalogue, &execute(catalogue, kind, plan), report_dir)
-}
-
-/// Every profile's client run and the `@plc` Gherkin scenarios, judged and put in one report.
-pub(crate) fn execute(
-    catalogue: &Catalogue,
-    kind: &ClientKind,
-    plan: &Plan<ClientOptions>,
-) -> RunReport {
-    let options = &plan.options;
-    let started = std::time::Instant::now();
-    let declared = options.declaration();
-    let meta = RunMeta {
-        side: Side::Plc,
-        masters: options.masters.iter().map(|m| m.name.to_string()).collect(),
-        // What the client declares: the verdicts rest on it.
-        choices: declared
-            .lines()
-            .into_iter()
-            .map(|choice| ChoiceEntry {
-                choice,
-                how: ChoiceSource::Declared,
-            })
-            .collect(),
-        ..RunMeta::new(kind.name(), options.bus.describe(), options.seed, catalogue)
-    };
-    // The Gherkin scenarios the client's declaration leaves out, with why.
-    let (gherkin, declined): (Vec<_>, Vec<_>) =
-        plan.gherkin
-            .iter()
-            .cloned()
-            .partition(|(profile, scenario)| {
-                let profile = plan.profiles.iter().find(|p| p.name == *profile);
-                profile.is_none_or(|p| declined_by_client(scenario, p, &declared).is_none())
-            });
-    let plan = &Plan {
-        profiles: plan.profiles.clone(),
-        options: plan.options.clone(),
-        product: plan.product.clone(),
-        gherkin,
-        jobs: plan.jobs,
-        rerun: plan.rerun.clone(),
-        campaign: plan.campaign.clone(),
-    };
-    let mut lockstep = plan.run_profiles_on(catalogue, kind, Some("task cycles"), plan.jobs);
-    for run in &mut lockstep {
-        for (profile, scenario) in declined.iter().filter(|(p, _)| *p == run.profile) {
-            let profile = plan.profiles.iter().find(|p| p.name == *profile);
-            if let Some(why) = profile.and_then(|p| declined_by_client(scenario, p, &declared)) {
-                run.reach
-                    .not_served
-                    .push((format!("gherkin: {}", scenario.id()), why));
-            }
-        }
-    }
-    let mut left_out = plan.selection_left_out();
-    if !options.counter_wrap {
-        left_out.push("the 65,600-cycle counter wrap (--no-counter-wrap)".to_string());
-    }
-    if options.masters.len() < Master::ALL.len() {
-        left_out.push("master models left out by --master".to_string());
-    }
-    let gherkin = if canif_harness::interrupt::requested() {
-        left_out.push("interrupted before the Gherkin scenarios".into());
-        Vec::new()
-    } else if options.bus != ClientBus::Sim {
-        left_out.push("Gherkin scenarios not run: they use the simulated bus".into());
-        Vec::new()
-    } else {
-        plan.run_gherkin(&canif_features::UnderTest::Client(
-            kind.clone(),
-            declared.clone(),
-        ))
-    };
-    // Client processes kept for the next program have none left to run.
-    canif_harness::door::Door::release_idle_clients();
-    plan.assemble(catalogue, lockstep, gherkin, left_out, meta, started)
 }

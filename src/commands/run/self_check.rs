@@ -6,7 +6,9 @@ use canif_features::UnderTest;
 use canif_harness::run::KillRow;
 use canif_spec::Catalogue;
 
-use super::plan::Plan;
+use canif_runner::Plan;
+
+use super::Progress;
 use crate::stop::Stop;
 
 /// `canif self-check`: both kill matrices, every fault of each side on every profile.
@@ -60,7 +62,7 @@ fn add_gherkin_failures(
         choices: vec![],
     };
     let faulty = UnderTest::Device(kind.clone(), kind.declared());
-    for (profile_name, run) in plan.run_gherkin(&faulty) {
+    for (profile_name, run) in plan.run_gherkin(&faulty, &Progress::new(catalogue)) {
         let canif_harness::GherkinOutcome::Fail { blamed, .. } = run.outcome else {
             continue;
         };

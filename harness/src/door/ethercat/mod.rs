@@ -44,7 +44,7 @@ pub use link::LinkFault;
 use link::{lock, InterfaceMaster, MemoryMaster, SharedTerminal};
 pub use session::Configurer;
 use start_up::SYNC0_CYCLE_NS;
-pub use survey::{survey, Pace, TerminalFacts};
+pub use survey::{preflight, survey, Pace, TerminalFacts};
 
 const MAX_SUBDEVICES: usize = 16;
 const MAX_PDI: usize = 4096;

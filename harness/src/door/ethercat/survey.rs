@@ -71,6 +71,18 @@ pub enum Pace {
     },
 }
 
+impl Pace {
+    /// Idle cycles an unpaced survey times.
+    pub const SURVEY_CYCLES: u32 = 1_000;
+}
+
+impl Default for Pace {
+    /// A burst of idle cycles, unpaced: what a run does unless a soak is asked for.
+    fn default() -> Self {
+        Pace::Unpaced(Self::SURVEY_CYCLES)
+    }
+}
+
 /// Brings the terminal up once with the profile's first interface, runs
 /// idle PLC cycles at `pace`, and reads `0x1C32:05`: who the terminal is and
 /// how its exchange performs, for the run's report.
@@ -134,4 +146,37 @@ pub fn survey(
     facts.period_ns = period.map(|p| p.as_nanos() as u64);
     facts.missed_cycles = missed;
     Ok(facts)
+}
+
+/// What a run over `link` needs before it starts, or why it cannot: a
+/// terminal on a network interface has its CAN port on a real bus, and
+/// only terminal profiles can be one.
+pub fn preflight(
+    link: &EthercatLink,
+    profiles: &[&canif_spec::Profile],
+    bus_is_sim: bool,
+    terminals: &[&str],
+) -> Result<(), String> {
+    if let EthercatLink::Interface { name, .. } = link {
+        if bus_is_sim {
+            return Err(format!(
+                "--iut ethercat:{name}: a terminal on a network interface has its CAN port on a real bus; \
+                 add --bus socketcan:IFACE (the CAN adapter cabled to it), or use ethercat:emulated"
+            ));
+        }
+    }
+    let not_terminals: Vec<&str> = profiles
+        .iter()
+        .filter(|p| p.ethercat.is_none())
+        .map(|p| p.name.as_str())
+        .collect();
+    match not_terminals.as_slice() {
+        [] => Ok(()),
+        names => Err(format!(
+            "--iut ethercat: {} {} no EtherCAT terminal; name terminal profiles with --profile ({})",
+            names.join(", "),
+            if names.len() == 1 { "is" } else { "are" },
+            terminals.join(", ")
+        )),
+    }
 }

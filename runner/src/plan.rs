@@ -1,6 +1,9 @@
 //! A run of one side, planned and checked before anything starts, then
 //! executed stage by stage: each profile's cases (`--jobs` side by side),
-//! the Gherkin scenarios, and the report assembled from both.
+//! the Gherkin scenarios, and the report assembled from both, once.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
 
 use canif_features::{ScenarioInfo, UnderTest};
 use canif_harness::report::{
@@ -8,15 +11,17 @@ use canif_harness::report::{
 };
 use canif_harness::run::{run_profile, ProfileRun, Side};
 use canif_harness::verdict::NotRunReason;
-use canif_harness::GherkinRun;
+use canif_harness::{GherkinOutcome, GherkinRun};
 use canif_spec::{Catalogue, Profile, ReqId};
 
-use super::progress::Progress;
-use super::rerun::Rerun;
-use crate::stop::{stop, Stop};
+use crate::error::{nearest, PlanError};
+use crate::event::{Event, Observer, Position, Stage};
+use crate::parallel::in_parallel;
+use crate::rerun::Rerun;
 
 /// A run of one side, checked before anything starts.
-pub(crate) struct Plan<'c, S> {
+#[derive(Clone)]
+pub struct Plan<'c, S> {
     pub profiles: Vec<&'c Profile>,
     pub options: S,
     pub product: Option<Product>,
@@ -31,14 +36,14 @@ pub(crate) struct Plan<'c, S> {
 }
 
 impl<'c, S: Side> Plan<'c, S> {
-    /// The plan, or the exit code of feature files that do not parse (said on stderr).
-    pub(crate) fn new(
+    /// The plan, or why the feature files do not parse.
+    pub fn new(
         profiles: Vec<&'c Profile>,
         options: S,
         product: Option<Product>,
-    ) -> Result<Self, Stop> {
+    ) -> Result<Self, PlanError> {
         let scenarios = canif_features::scenarios()
-            .map_err(|error| stop!("the feature files do not parse: {error}"))?;
+            .map_err(|error| PlanError::FeatureFiles(error.to_string()))?;
         // The feature files are the interface suite's.
         let gherkin = match S::SUITE {
             canif_spec::Suite::Interface => {
@@ -58,7 +63,7 @@ impl<'c, S: Side> Plan<'c, S> {
     }
 
     /// Every check the plan could run: (profile, name, requirements exercised).
-    pub(crate) fn candidates(&self) -> Vec<(String, String, Vec<String>)> {
+    pub fn candidates(&self) -> Vec<(String, String, Vec<String>)> {
         let mut list = Vec::new();
         for profile in &self.profiles {
             for case in self.options.cases(profile) {
@@ -77,17 +82,15 @@ impl<'c, S: Side> Plan<'c, S> {
     }
 
     /// An unknown requirement or a selection that matches nothing is a usage error.
-    pub(crate) fn check_selection(&self, catalogue: &Catalogue) -> Result<(), Stop> {
+    pub fn check_selection(&self, catalogue: &Catalogue) -> Result<(), PlanError> {
         let selection = self.options.selection();
         for id in &selection.requirements {
             if catalogue.requirement(id).is_none() {
-                let near = crate::commands::did_you_mean(
-                    id,
-                    catalogue.requirements().map(|r| r.id.as_str()),
-                );
-                return Err(stop!(
-                    "--requirement {id}: no such requirement{near}; `canif spec list` lists them"
-                ));
+                let near = nearest(id, catalogue.requirements().map(|r| r.id.as_str()));
+                return Err(PlanError::UnknownRequirement {
+                    id: id.clone(),
+                    near: near.map(str::to_string),
+                });
             }
         }
         if selection.is_everything()
@@ -103,115 +106,97 @@ impl<'c, S: Side> Plan<'c, S> {
                 continue;
             };
             if requirement.side != S::SIDE {
-                let own: Vec<&str> = requirement
+                let own = requirement
                     .related
                     .iter()
                     .filter(|r| catalogue.requirement(r).is_some_and(|r| r.side == S::SIDE))
-                    .map(String::as_str)
+                    .cloned()
                     .collect();
-                let own = match own.is_empty() {
-                    true => String::new(),
-                    false => format!("; this side's own statement: {}", own.join(", ")),
-                };
-                return Err(stop!(
-                    "--requirement {id} binds the {} side, not the {} side: `canif run --side {} --requirement {id}` judges it{own}",
-                    requirement.side,
-                    S::SIDE,
-                    requirement.side,
-                ));
+                return Err(PlanError::OtherSide {
+                    id: id.clone(),
+                    binds: requirement.side,
+                    this: S::SIDE,
+                    own,
+                });
             }
         }
-        Err(stop!(
-            "{} matches no check on {}; `canif list scenarios` lists them",
-            selection.flags(),
-            self.profiles
-                .iter()
-                .map(|p| p.name.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ))
+        Err(PlanError::NothingSelected {
+            flags: selection.flags(),
+            profiles: self.profiles.iter().map(|p| p.name.clone()).collect(),
+        })
     }
 
-    /// Each profile's cases against what is under test, with a progress line each.
-    pub(super) fn run_profiles(
-        &self,
-        catalogue: &Catalogue,
-        under_test: &S::UnderTest,
-        unit: Option<&str>,
-    ) -> Vec<ProfileRun> {
-        let count = self.profiles.len();
-        let started = std::time::Instant::now();
-        let mut runs = Vec::new();
-        for (n, profile) in self.profiles.iter().enumerate() {
-            if canif_harness::interrupt::requested() {
-                errln!("interrupted: the remaining profiles are not run");
-                break;
-            }
-            // How many of its cases the selection takes, for the terminal's pace.
-            let selection = self.options.selection();
-            let cases = self
-                .options
-                .cases(profile)
-                .iter()
-                .filter(|case| {
-                    selection.admits(
-                        &profile.name,
-                        &S::name(case),
-                        S::covers(case).iter().map(ReqId::as_str),
-                    )
-                })
-                .count();
-            let mut progress = Progress::new(n, count, &profile.name).of_cases(cases);
-            let run = run_profile(profile, under_test, &self.options, |run| {
-                progress.scenario(run)
-            });
-            progress.done_after(&run, (catalogue, profile, unit), (n + 1, started.elapsed()));
-            runs.push(run);
-        }
-        runs
+    /// How many of a profile's cases the selection takes.
+    fn selected_cases(&self, profile: &Profile) -> usize {
+        let selection = self.options.selection();
+        self.options
+            .cases(profile)
+            .iter()
+            .filter(|case| {
+                selection.admits(
+                    &profile.name,
+                    &S::name(case),
+                    S::covers(case).iter().map(ReqId::as_str),
+                )
+            })
+            .count()
     }
 
-    /// [`Plan::run_profiles`] on `jobs` threads, one profile each at a time:
-    /// the profiles are independent (each case starts a fresh instance of
-    /// what is under test), so the runs, returned in the plan's order, are
-    /// those of a serial run.
-    pub(super) fn run_profiles_on(
+    /// Each profile's cases against what is under test, on up to
+    /// [`Plan::jobs`] threads, one profile each at a time: the profiles are
+    /// independent (each case starts a fresh instance of what is under
+    /// test), so the runs, returned in the plan's order, are those of a
+    /// serial run. A profile a signal kept from starting is not run.
+    pub fn run_profiles(
         &self,
-        catalogue: &Catalogue,
         under_test: &S::UnderTest,
-        unit: Option<&str>,
-        jobs: usize,
+        unit: Option<&'static str>,
+        observer: &dyn Observer,
     ) -> Vec<ProfileRun>
     where
         S: Sync,
         S::UnderTest: Sync,
     {
-        if jobs <= 1 || self.profiles.len() <= 1 {
-            return self.run_profiles(catalogue, under_test, unit);
-        }
         let count = self.profiles.len();
-        let finished = std::sync::atomic::AtomicUsize::new(0);
-        let started = std::time::Instant::now();
-        let runs = in_parallel(&self.profiles, jobs, |n, profile| {
-            let run = run_profile(profile, under_test, &self.options, |_| {});
-            let done = 1 + finished.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-            Progress::new(n, count, &profile.name).done_after(
-                &run,
-                (catalogue, profile, unit),
-                (done, started.elapsed()),
-            );
+        let finished = AtomicUsize::new(0);
+        let started = Instant::now();
+        // One at a time, each case is told as it ends; beside others, only
+        // each profile's end is.
+        let serial = self.jobs <= 1 || count <= 1;
+        let runs = in_parallel(&self.profiles, self.jobs, |index, profile| {
+            let at = Position { index, count };
+            if serial {
+                let cases = self.selected_cases(profile);
+                observer.event(Event::ProfileStarted { at, profile, cases });
+            }
+            let run = run_profile(profile, under_test, &self.options, |run| {
+                if serial {
+                    observer.event(Event::ScenarioFinished { at, profile, run });
+                }
+            });
+            let done = 1 + finished.fetch_add(1, Ordering::SeqCst);
+            observer.event(Event::ProfileFinished {
+                at,
+                profile,
+                run: &run,
+                done,
+                elapsed: started.elapsed(),
+                unit,
+            });
             run
         });
         if canif_harness::interrupt::requested() {
-            errln!("interrupted: the remaining profiles are not run");
+            observer.event(Event::Interrupted(Stage::Profiles));
         }
-        // In the plan's order; a profile an interrupt kept from starting is
-        // not run, as in a serial run.
         runs.into_iter().map_while(|run| run).collect()
     }
 
     /// The selected Gherkin scenarios against what is under test: (profile, run).
-    pub(super) fn run_gherkin(&self, under_test: &UnderTest) -> Vec<(String, GherkinRun)> {
+    pub fn run_gherkin(
+        &self,
+        under_test: &UnderTest,
+        observer: &dyn Observer,
+    ) -> Vec<(String, GherkinRun)> {
         let selection = self.options.selection();
         let chosen: Vec<(&Profile, &ScenarioInfo)> = self
             .gherkin
@@ -239,27 +224,25 @@ impl<'c, S: Side> Plan<'c, S> {
             .map_while(|run| run)
             .collect();
         let count = |f: fn(&GherkinRun) -> bool| results.iter().filter(|(_, r)| f(r)).count();
-        errln!(
-            "Gherkin scenarios: {} run, {} failed, {} error",
-            results.len(),
-            count(|r| matches!(r.outcome, canif_harness::GherkinOutcome::Fail { .. })),
-            count(|r| matches!(r.outcome, canif_harness::GherkinOutcome::Error(_))),
-        );
+        observer.event(Event::GherkinFinished {
+            ran: results.len(),
+            failed: count(|r| matches!(r.outcome, GherkinOutcome::Fail { .. })),
+            errors: count(|r| matches!(r.outcome, GherkinOutcome::Error(_))),
+        });
         results
     }
 
     /// The report: every profile's checks judged once, with what the run left out.
-    pub(super) fn assemble(
+    pub(crate) fn assemble(
         &self,
         catalogue: &Catalogue,
-        lockstep: Vec<ProfileRun>,
-        gherkin: Vec<(String, GherkinRun)>,
+        (lockstep, gherkin): (Vec<ProfileRun>, Vec<(String, GherkinRun)>),
         left_out: Vec<String>,
         meta: RunMeta,
-        started: std::time::Instant,
+        (started, observer): (Instant, &dyn Observer),
     ) -> RunReport {
         for line in &left_out {
-            errln!("left out: {line}");
+            observer.event(Event::LeftOut(line));
         }
         let interrupted = canif_harness::interrupt::requested();
         let profiles = lockstep
@@ -289,7 +272,7 @@ impl<'c, S: Side> Plan<'c, S> {
             .as_ref()
             .map_or_else(Vec::new, |rerun| rerun.flaky(&profiles));
         for key in &flaky {
-            errln!("FLAKY {key}: it failed in the run before and passes now");
+            observer.event(Event::Flaky(key));
         }
         let meta = RunMeta {
             product: self.product.clone(),
@@ -340,7 +323,7 @@ impl<'c, S: Side> Plan<'c, S> {
     }
 
     /// The selection as the run's first left-out line, when it leaves anything out.
-    pub(super) fn selection_left_out(&self) -> Vec<String> {
+    pub(crate) fn selection_left_out(&self) -> Vec<String> {
         let selection = self.options.selection();
         if selection.is_everything() {
             Vec::new()
@@ -348,54 +331,4 @@ impl<'c, S: Side> Plan<'c, S> {
             vec![selection.describe()]
         }
     }
-}
-/// `work` on each item, on up to `jobs` threads, in the items' order: `None`
-/// for an item a SIGINT kept from starting.
-pub(super) fn in_parallel<T: Sync, R: Send>(
-    items: &[T],
-    jobs: usize,
-    work: impl Fn(usize, &T) -> R + Sync,
-) -> Vec<Option<R>> {
-    use std::sync::atomic::{AtomicUsize, Ordering};
-    use std::sync::Mutex;
-    if jobs <= 1 {
-        let mut results = Vec::new();
-        for (n, item) in items.iter().enumerate() {
-            if canif_harness::interrupt::requested() {
-                break;
-            }
-            results.push(Some(work(n, item)));
-        }
-        return results;
-    }
-    let next = AtomicUsize::new(0);
-    let results: Vec<Mutex<Option<R>>> = items.iter().map(|_| Mutex::new(None)).collect();
-    let worker = || loop {
-        let n = next.fetch_add(1, Ordering::SeqCst);
-        let Some(item) = items.get(n) else { break };
-        if canif_harness::interrupt::requested() {
-            break;
-        }
-        let result = work(n, item);
-        *results[n].lock().unwrap_or_else(|e| e.into_inner()) = Some(result);
-    };
-    std::thread::scope(|scope| {
-        let mut spawned = 0;
-        for _ in 0..jobs.min(items.len()) {
-            // A Gherkin world and the model's state machines want the
-            // stack a main thread has, not a spawned thread's 2 MiB.
-            let thread = std::thread::Builder::new()
-                .stack_size(16 << 20)
-                .spawn_scoped(scope, worker);
-            spawned += usize::from(thread.is_ok());
-        }
-        if spawned == 0 {
-            // No thread to be had: the work is done here, one at a time.
-            worker();
-        }
-    });
-    results
-        .into_iter()
-        .map(|slot| slot.into_inner().unwrap_or_else(|e| e.into_inner()))
-        .collect()
 }

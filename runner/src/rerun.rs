@@ -7,11 +7,11 @@ use std::path::{Path, PathBuf};
 use canif_harness::report::{ProfileReport, ReportFile};
 use canif_harness::verdict::{CheckResult, VerdictKind};
 
-use crate::stop::{stop, Stop};
+use crate::error::RerunError;
 
 /// What a report said failed: `(profile, check key)`.
 #[derive(Debug, Clone)]
-pub(crate) struct Rerun {
+pub struct Rerun {
     pub report: PathBuf,
     pub iut: String,
     pub failed: Vec<(String, String)>,
@@ -19,18 +19,19 @@ pub(crate) struct Rerun {
 
 impl Rerun {
     /// The report's failing and erring checks, from a run of the same side.
-    pub(crate) fn read(path: &Path, side: canif_spec::Side) -> Result<Self, Stop> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| stop!("--rerun-failed {}: {e}", path.display()))?;
-        let report = ReportFile::parse(&text)
-            .map_err(|e| stop!("--rerun-failed {}: {e}", path.display()))?;
+    pub fn read(path: &Path, side: canif_spec::Side) -> Result<Self, RerunError> {
+        let unreadable = |cause: String| RerunError::Unreadable {
+            report: path.to_path_buf(),
+            cause,
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| unreadable(e.to_string()))?;
+        let report = ReportFile::parse(&text).map_err(|e| unreadable(e.to_string()))?;
         if report.meta.side != side {
-            return Err(stop!(
-                "--rerun-failed {}: a {} side run; this is the {} side",
-                path.display(),
-                report.meta.side,
-                side
-            ));
+            return Err(RerunError::OtherSide {
+                report: path.to_path_buf(),
+                was: report.meta.side,
+                this: side,
+            });
         }
         let mut failed = Vec::new();
         for profile in &report.profiles {
@@ -49,7 +50,7 @@ impl Rerun {
     }
 
     /// The checks' names as `--scenario` takes them (without `scenario: `).
-    pub(crate) fn scenarios(&self) -> Vec<String> {
+    pub fn scenarios(&self) -> Vec<String> {
         let mut names: Vec<String> = self
             .failed
             .iter()
@@ -64,7 +65,7 @@ impl Rerun {
         names
     }
 
-    pub(crate) fn profiles(&self) -> Vec<String> {
+    pub fn profiles(&self) -> Vec<String> {
         let mut names: Vec<String> = self.failed.iter().map(|(p, _)| p.clone()).collect();
         names.sort();
         names.dedup();
@@ -72,20 +73,20 @@ impl Rerun {
     }
 
     /// The rerun is of the implementation the report was.
-    pub(crate) fn same_iut(&self, iut: &str) -> Result<(), Stop> {
+    pub fn same_iut(&self, iut: &str) -> Result<(), RerunError> {
         match self.iut == iut {
             true => Ok(()),
-            false => Err(stop!(
-                "--rerun-failed {}: that run was of `{}`, this one of `{iut}`",
-                self.report.display(),
-                self.iut
-            )),
+            false => Err(RerunError::OtherIut {
+                report: self.report.clone(),
+                was: self.iut.clone(),
+                this: iut.to_string(),
+            }),
         }
     }
 
     /// `profile::check` of every check that failed before and all of whose
     /// runs pass now.
-    pub(crate) fn flaky(&self, profiles: &[ProfileReport]) -> Vec<String> {
+    pub fn flaky(&self, profiles: &[ProfileReport]) -> Vec<String> {
         self.failed
             .iter()
             .filter(|(profile, key)| {

@@ -1,0 +1,191 @@
+//! A run of the device side: an IUT that must behave like an EL6751, with
+//! the harness playing the PLC and the other nodes. Each profile's lockstep,
+//! then the Gherkin scenarios, judged once over all of them.
+
+use canif_harness::device::bus::BusChoice;
+use canif_harness::device::{IutKind, Options};
+use canif_harness::report::{ChoiceEntry, ChoiceSource, RunMeta, RunReport, TerminalEntry};
+use canif_harness::{Outcome, RunError};
+use canif_spec::Catalogue;
+
+use crate::error::PlanError;
+use crate::event::{Event, Observer, Stage};
+use crate::{Campaign, Plan};
+
+impl Campaign for Options {
+    const UNIT: Option<&'static str> = Some("cycles");
+
+    fn preflight(
+        plan: &Plan<'_, Self>,
+        catalogue: &Catalogue,
+        kind: &IutKind,
+    ) -> Result<(), PlanError> {
+        if let Some(rerun) = &plan.rerun {
+            rerun.same_iut(&kind.name())?;
+        }
+        if let IutKind::Door(door) = kind {
+            door.preflight(
+                &plan.profiles,
+                plan.options.bus.is_sim(),
+                &catalogue.terminal_names(),
+            )
+            .map_err(PlanError::Preflight)?;
+        }
+        #[cfg(feature = "socketcan")]
+        if let BusChoice::SocketCan(kernel) = &plan.options.bus {
+            // A bus that cannot be opened at all is one error, not one per scenario.
+            let opened = canif_kernel::probe().and_then(|()| {
+                canif_kernel::KernelSocket::open(&kernel.spec.iut, false)?;
+                canif_kernel::KernelSocket::open(&kernel.spec.tester, false).map(|_| ())
+            });
+            if let Err(error) = opened {
+                return Err(PlanError::Preflight(format!(
+                    "error: --bus {}: {error}",
+                    kernel.spec.describe()
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    fn execute(
+        plan: &Plan<'_, Self>,
+        catalogue: &Catalogue,
+        kind: &IutKind,
+        observer: &dyn Observer,
+    ) -> RunReport {
+        let options = &plan.options;
+        let started = std::time::Instant::now();
+        let mut meta = RunMeta::new(
+            kind.name(),
+            describe_bus(&options.bus),
+            options.seed,
+            catalogue,
+        );
+        meta.terminals = survey_terminals(kind, plan, observer);
+        let lockstep = plan.run_profiles(kind, Self::UNIT, observer);
+        meta.choices = judged_choices(options, kind);
+        let iut_broke = lockstep.iter().flat_map(|p| &p.runs).any(|r| {
+            matches!(
+                r.outcome,
+                Outcome::Error(RunError::Iut(_) | RunError::Skipped(_))
+            )
+        });
+        let mut left_out = plan.selection_left_out();
+        let gherkin = if canif_harness::interrupt::requested() {
+            observer.event(Event::Interrupted(Stage::Gherkin));
+            left_out.push("interrupted before the Gherkin scenarios".into());
+            Vec::new()
+        } else if iut_broke && options.fail_fast {
+            left_out.push(
+                "Gherkin scenarios not run: the IUT broke (--no-fail-fast runs them anyway)".into(),
+            );
+            Vec::new()
+        } else if !options.bus.is_sim() {
+            left_out.push("Gherkin scenarios not run: they use the simulated bus".into());
+            Vec::new()
+        } else {
+            plan.run_gherkin(
+                &canif_features::UnderTest::Device(kind.clone(), options.declared_by(kind)),
+                observer,
+            )
+        };
+        plan.assemble(
+            catalogue,
+            (lockstep, gherkin),
+            left_out,
+            meta,
+            (started, observer),
+        )
+    }
+}
+
+/// Each profile's terminal brought up once before the run, where the door
+/// has one to survey: its identity, 0x1C32:05 and the time of an exchange,
+/// for the report.
+fn survey_terminals(
+    kind: &IutKind,
+    plan: &Plan<'_, Options>,
+    observer: &dyn Observer,
+) -> Vec<TerminalEntry> {
+    let IutKind::Door(door) = kind else {
+        return Vec::new();
+    };
+    let mut terminals = Vec::new();
+    for profile in &plan.profiles {
+        match door.survey(profile, plan.options.survey) {
+            None => {}
+            Some(Ok(facts)) => {
+                observer.event(Event::TerminalSurveyed {
+                    profile,
+                    facts: &facts,
+                });
+                terminals.push(facts);
+            }
+            Some(Err(error)) => observer.event(Event::TerminalNotSurveyed {
+                profile,
+                error: &error.to_string(),
+            }),
+        }
+    }
+    terminals
+}
+
+/// The choices the verdicts rest on: declared for the device (on the command
+/// line, by its kind, or by the IUT itself), or shown by a scenario on a
+/// profile where it declared none.
+fn judged_choices(options: &Options, kind: &IutKind) -> Vec<ChoiceEntry> {
+    let declared = options
+        .declared_by(kind)
+        .lines()
+        .into_iter()
+        .map(|choice| ChoiceEntry {
+            choice,
+            how: ChoiceSource::Declared,
+        });
+    let observed = options
+        .observed
+        .lock()
+        .map(|o| o.clone())
+        .unwrap_or_default();
+    let by_iut = options
+        .iut_declared
+        .lock()
+        .map(|d| d.clone())
+        .unwrap_or_default();
+    declared
+        .chain(by_iut.into_iter().map(|choice| ChoiceEntry {
+            choice,
+            how: ChoiceSource::DeclaredByIut,
+        }))
+        .chain(observed.into_iter().map(|o| ChoiceEntry {
+            choice: o.line(),
+            how: ChoiceSource::Observed {
+                profile: o.profile,
+                scenario: o.scenario,
+            },
+        }))
+        .collect()
+}
+
+/// The bus as the report names it.
+fn describe_bus(bus: &BusChoice) -> String {
+    match bus {
+        BusChoice::Sim => "simulated bus (virtual time)".into(),
+        #[cfg(feature = "socketcan")]
+        BusChoice::SocketCan(k) => format!(
+            "{} on Linux {}, real time, {} µs cycle, time stamps within {} µs{}",
+            k.spec.describe(),
+            canif_kernel::kernel_release(),
+            k.cycle_time / 1_000,
+            k.time_stamp_tolerance / 1_000,
+            match (k.remote_frames, k.esi_settable) {
+                (true, true) => "",
+                (false, true) => ", remote frames sent as data frames",
+                (true, false) => ", ESI left to the controllers",
+                (false, false) =>
+                    ", remote frames sent as data frames, ESI left to the controllers",
+            }
+        ),
+    }
+}
