@@ -45,6 +45,7 @@ impl SharedMap {
     pub fn open(fd: OwnedFd) -> io::Result<SharedMap> {
         // SAFETY: fstat into a zeroed struct of the right type.
         let mut stat: libc::stat = unsafe { std::mem::zeroed() };
+        // SAFETY: `fd` is an open descriptor we own; fstat(2) writes only `stat`.
         if unsafe { libc::fstat(fd.as_raw_fd(), &mut stat) } != 0 {
             return Err(io::Error::last_os_error());
         }
@@ -152,6 +153,7 @@ pub fn inherited(fd: i32) -> io::Result<OwnedFd> {
 pub fn cpus_allowed() -> usize {
     // SAFETY: a zeroed cpu_set_t filled in by sched_getaffinity(2).
     let mut set: libc::cpu_set_t = unsafe { std::mem::zeroed() };
+    // SAFETY: sched_getaffinity(2) writes at most the size it is given into `set`.
     if unsafe { libc::sched_getaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &mut set) } != 0
     {
         return 1;

@@ -319,8 +319,8 @@ impl Checker<'_> {
                 },
                 TypeExpr::Array { low, high, element },
             ) => {
-                let expected_count = crate::parse::element_count(*e_low, *e_high);
-                let count = crate::parse::element_count(*low, *high);
+                let expected_count = crate::types::element_count(*e_low, *e_high);
+                let count = crate::types::element_count(*low, *high);
                 if low != e_low {
                     self.defect(
                         place,

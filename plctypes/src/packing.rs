@@ -230,7 +230,7 @@ impl Declarations {
             TypeExpr::String { bytes } => Ok((*bytes, 1)),
             TypeExpr::Array { low, high, element } => {
                 let (size, align) = self.size_align(element, place, depth + 1)?;
-                let count = crate::parse::element_count(*low, *high);
+                let count = crate::types::element_count(*low, *high);
                 let total = size.checked_mul(count).ok_or_else(|| DeclarationError {
                     place: place.clone(),
                     cause: Cause::EmptyArray {

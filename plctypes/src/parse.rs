@@ -462,11 +462,6 @@ impl Parser<'_> {
 /// no count overflows).
 const MAX_ELEMENTS: u32 = 1 << 24;
 
-/// Elements of `ARRAY [low..high]` (as parsed: at most [`MAX_ELEMENTS`]).
-pub(crate) fn element_count(low: i64, high: i64) -> usize {
-    usize::try_from(i128::from(high) - i128::from(low) + 1).unwrap_or(0)
-}
-
 /// `attribute 'pack_mode' := '0'` → `0`.
 fn pack_mode_of(pragma: &str) -> Option<&str> {
     let rest = pragma.trim().strip_prefix("attribute")?.trim_start();

@@ -298,7 +298,7 @@ impl ImageTypes {
         match data_type {
             DataType::Elementary(e) => e.size(),
             DataType::Array { low, high, element } => {
-                crate::parse::element_count(*low, *high).saturating_mul(self.size_of(element))
+                element_count(*low, *high).saturating_mul(self.size_of(element))
             }
             DataType::Named(name) => match self.aliases.iter().find(|a| &a.name == name) {
                 Some(alias) => self.size_of(&alias.data_type),
@@ -489,6 +489,12 @@ fn message(layout: &'static MessageLayout, role: Role) -> StructType {
         size: layout.size,
         comment: format!("{} message", layout.name),
     }
+}
+
+/// Elements of `ARRAY [low..high]` (as parsed: at most 2^24): what an
+/// array type holds, whoever reads its bounds.
+pub(crate) fn element_count(low: i64, high: i64) -> usize {
+    usize::try_from(i128::from(high) - i128::from(low) + 1).unwrap_or(0)
 }
 
 #[cfg(test)]

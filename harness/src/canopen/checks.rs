@@ -143,167 +143,213 @@ fn guard_answer(
 /// state. `tolerance`: how far a heartbeat may be from its due time (0 in
 /// virtual time; a real bus needs the poll step plus scheduling jitter).
 pub fn check_node(target: &mut dyn CanNode, node: NodeId, tolerance: Nanos) -> Vec<NodeCheck> {
-    let mut results = Vec::new();
-    let mut now: Nanos = 0;
-    let mut guard = GuardChecker::default();
-
-    let guarding = (0..4).try_for_each(|_| {
-        now += 1_000_000;
-        match guard_answer(target, node, &mut guard, now)? {
-            NmtState::PreOperational => Ok(()),
-            other => Err((
-                &["GRD-003"][..],
-                format!("state {other:?}, expected pre-operational after boot"),
-            )),
-        }
-    });
-    results.push(NodeCheck {
-        name: "guarding answers with the state and a toggling bit 7",
-        requirements: &["GRD-001", "GRD-002", "GRD-003", "GRD-004"],
-        blamed: guarding.as_ref().err().map_or(&[][..], |(ids, _)| ids),
-        outcome: guarding.map_err(|(_, why)| why),
-    });
-
-    target.handle(&command_frame(NmtCommand::StartRemoteNode, None), now);
-    const NMT_START: &[&str] = &["NMT-001", "NMT-003", "NMT-004", "NMT-006"];
-    // When the state cannot be read the guarding answer is what broke, and
-    // NMT start is charged nothing (issue 36: the statement, not the symptom).
-    let (blamed, outcome) = match guard_answer(target, node, &mut guard, now) {
-        Err((blamed, why)) => (blamed, Err(format!("the state cannot be read: {why}"))),
-        Ok(NmtState::Operational) => (NMT_START, Ok(())),
-        Ok(other) => (NMT_START, Err(format!("state {other:?}"))),
+    let mut script = Script {
+        target,
+        node,
+        tolerance,
+        now: 0,
+        guard: GuardChecker::default(),
+        results: Vec::new(),
     };
-    results.push(NodeCheck {
-        name: "NMT start (0x000: 01 00) makes the node operational",
-        requirements: NMT_START,
-        blamed,
-        outcome,
-    });
-    let mut record =
-        |name, requirements, outcome| results.push(NodeCheck::new(name, requirements, outcome));
+    script.guarding_after_boot();
+    script.nmt_start();
+    script.analog_inputs_on_request();
+    script.expedited_uploads();
+    script.heartbeat();
+    script.aborts();
+    script.analog_event_objects();
+    script.state_changes();
+    script.stopped_node_is_silent();
+    script.resets();
+    script.results
+}
 
-    record(
-        "an RTR on the analog inputs is answered on 0x280 + node id",
-        &["PDO-003", "COB-001", "PDO-002"],
-        {
-            let id = default_cob_id(Channel::AnalogInputs1To4, node);
-            let answers = target.handle(&Frame::remote(CanId::Standard(id), 8).expect("rtr"), now);
-            match answers.as_slice() {
-                [answer]
-                    if answer.id == CanId::Standard(id)
-                        && answer.data().len() % 2 == 0
-                        && !answer.data().is_empty() =>
-                {
-                    Ok(())
-                }
-                other => Err(format!("answers {other:?}")),
-            }
-        },
-    );
+/// The script's state between its checks: the node, the time, the
+/// guarding toggle seen last, and the checks so far. Each method is one
+/// step of the script, in the order [`check_node`] takes them.
+struct Script<'t> {
+    target: &'t mut dyn CanNode,
+    node: NodeId,
+    tolerance: Nanos,
+    now: Nanos,
+    guard: GuardChecker,
+    results: Vec<NodeCheck>,
+}
 
-    for (name, requirements, index, size, command) in [
-        (
-            "a 4-byte upload (0x1000) is answered with 0x43",
-            &["SDO-001", "SDO-002", "SDO-005", "SDO-009"][..],
-            0x1000u16,
-            4u8,
-            0x43u8,
-        ),
-        (
-            "an Unsigned8 upload (0x1001) is answered with 0x4F, value in D0",
-            &["SDO-005", "SDO-008"][..],
-            0x1001,
-            1,
-            0x4F,
-        ),
-    ] {
-        let outcome = sdo(
-            target,
-            node,
-            SdoRequest::Upload {
-                index,
-                sub_index: 0,
-            },
-            now,
-        )
-        .and_then(|answer| match answer {
-            SdoResponse::Upload {
-                index: i,
-                sub_index: 0,
-                size: s,
-                ..
-            } if i == index && s == size => Ok(()),
-            other => Err(format!(
-                "answer {other:?} ({:02X?}), expected command byte 0x{command:02X}",
-                other.to_bytes()
-            )),
-        });
-        record(name, requirements, outcome);
+impl Script<'_> {
+    fn record(
+        &mut self,
+        name: &'static str,
+        requirements: &'static [&'static str],
+        outcome: Result<(), String>,
+    ) {
+        self.results
+            .push(NodeCheck::new(name, requirements, outcome));
     }
 
-    let period_ms = 100u16;
-    let download = sdo(target, node, heartbeat::set_producer_time(period_ms), now);
-    record(
-        "the heartbeat download (22 17 10 00 …) is confirmed with 0x60",
-        &["HB-002", "SDO-003", "SDO-004", "SDO-006"],
-        match download {
-            Ok(SdoResponse::DownloadAck {
-                index: 0x1017,
-                sub_index: 0,
-            }) => Ok(()),
-            other => Err(format!("answer {other:?}")),
-        },
-    );
-    let start = now;
-    let mut beats = Vec::new();
-    for step in 0..=35 {
-        let at = start + step * 10_000_000;
-        for frame in target.poll(at) {
-            if frame.id == CanId::Standard(default_cob_id(Channel::ErrorControl, node)) {
-                beats.push((at, frame.data().to_vec()));
+    fn guard_answer(&mut self) -> Result<NmtState, (&'static [&'static str], String)> {
+        guard_answer(self.target, self.node, &mut self.guard, self.now)
+    }
+
+    fn sdo(&mut self, request: SdoRequest) -> Result<SdoResponse, String> {
+        sdo(self.target, self.node, request, self.now)
+    }
+
+    fn guarding_after_boot(&mut self) {
+        let guarding = (0..4).try_for_each(|_| {
+            self.now += 1_000_000;
+            match self.guard_answer()? {
+                NmtState::PreOperational => Ok(()),
+                other => Err((
+                    &["GRD-003"][..],
+                    format!("state {other:?}, expected pre-operational after boot"),
+                )),
             }
+        });
+        self.results.push(NodeCheck {
+            name: "guarding answers with the state and a toggling bit 7",
+            requirements: &["GRD-001", "GRD-002", "GRD-003", "GRD-004"],
+            blamed: guarding.as_ref().err().map_or(&[][..], |(ids, _)| ids),
+            outcome: guarding.map_err(|(_, why)| why),
+        });
+    }
+
+    fn nmt_start(&mut self) {
+        self.target
+            .handle(&command_frame(NmtCommand::StartRemoteNode, None), self.now);
+        const NMT_START: &[&str] = &["NMT-001", "NMT-003", "NMT-004", "NMT-006"];
+        // When the state cannot be read the guarding answer is what broke, and
+        // NMT start is charged nothing (issue 36: the statement, not the symptom).
+        let (blamed, outcome) = match self.guard_answer() {
+            Err((blamed, why)) => (blamed, Err(format!("the state cannot be read: {why}"))),
+            Ok(NmtState::Operational) => (NMT_START, Ok(())),
+            Ok(other) => (NMT_START, Err(format!("state {other:?}"))),
+        };
+        self.results.push(NodeCheck {
+            name: "NMT start (0x000: 01 00) makes the node operational",
+            requirements: NMT_START,
+            blamed,
+            outcome,
+        });
+    }
+
+    fn analog_inputs_on_request(&mut self) {
+        let id = default_cob_id(Channel::AnalogInputs1To4, self.node);
+        let answers = self.target.handle(
+            &Frame::remote(CanId::Standard(id), 8).expect("rtr"),
+            self.now,
+        );
+        let outcome = match answers.as_slice() {
+            [answer]
+                if answer.id == CanId::Standard(id)
+                    && answer.data().len() % 2 == 0
+                    && !answer.data().is_empty() =>
+            {
+                Ok(())
+            }
+            other => Err(format!("answers {other:?}")),
+        };
+        self.record(
+            "an RTR on the analog inputs is answered on 0x280 + node id",
+            &["PDO-003", "COB-001", "PDO-002"],
+            outcome,
+        );
+    }
+
+    fn expedited_uploads(&mut self) {
+        for (name, requirements, index, size, command) in [
+            (
+                "a 4-byte upload (0x1000) is answered with 0x43",
+                &["SDO-001", "SDO-002", "SDO-005", "SDO-009"][..],
+                0x1000u16,
+                4u8,
+                0x43u8,
+            ),
+            (
+                "an Unsigned8 upload (0x1001) is answered with 0x4F, value in D0",
+                &["SDO-005", "SDO-008"][..],
+                0x1001,
+                1,
+                0x4F,
+            ),
+        ] {
+            let outcome = self.sdo(upload(index)).and_then(|answer| match answer {
+                SdoResponse::Upload {
+                    index: i,
+                    sub_index: 0,
+                    size: s,
+                    ..
+                } if i == index && s == size => Ok(()),
+                other => Err(format!(
+                    "answer {other:?} ({:02X?}), expected command byte 0x{command:02X}",
+                    other.to_bytes()
+                )),
+            });
+            self.record(name, requirements, outcome);
         }
     }
-    record(
-        "heartbeats carry the state every producer time",
-        &["HB-001", "HB-003"],
-        {
-            let times: Vec<Nanos> = beats.iter().map(|(at, _)| at - start).collect();
-            let states_ok = beats
-                .iter()
-                .all(|(_, data)| data == &[NmtState::Operational.code()]);
-            let period = Nanos::from(period_ms) * 1_000_000;
-            let on_time = times.len() == 4
-                && times
-                    .iter()
-                    .zip(0..)
-                    .all(|(t, k)| t.abs_diff(k * period) <= tolerance);
-            if on_time && states_ok {
-                Ok(())
-            } else {
-                Err(format!(
-                    "heartbeats at {times:?} ns, data {:?}",
-                    beats.iter().map(|(_, d)| d).collect::<Vec<_>>()
-                ))
+
+    fn heartbeat(&mut self) {
+        let period_ms = 100u16;
+        let download = self.sdo(heartbeat::set_producer_time(period_ms));
+        self.record(
+            "the heartbeat download (22 17 10 00 …) is confirmed with 0x60",
+            &["HB-002", "SDO-003", "SDO-004", "SDO-006"],
+            match download {
+                Ok(SdoResponse::DownloadAck {
+                    index: 0x1017,
+                    sub_index: 0,
+                }) => Ok(()),
+                other => Err(format!("answer {other:?}")),
+            },
+        );
+        let start = self.now;
+        let mut beats = Vec::new();
+        for step in 0..=35 {
+            let at = start + step * 10_000_000;
+            for frame in self.target.poll(at) {
+                if frame.id == CanId::Standard(default_cob_id(Channel::ErrorControl, self.node)) {
+                    beats.push((at, frame.data().to_vec()));
+                }
             }
-        },
-    );
-    now = start + 400_000_000;
-    let stop = sdo(target, node, heartbeat::set_producer_time(0), now);
-    record(
-        "producer time 0 stops the heartbeat",
-        &["HB-002", "SDO-006"],
-        match stop {
+        }
+        self.record(
+            "heartbeats carry the state every producer time",
+            &["HB-001", "HB-003"],
+            {
+                let times: Vec<Nanos> = beats.iter().map(|(at, _)| at - start).collect();
+                let states_ok = beats
+                    .iter()
+                    .all(|(_, data)| data == &[NmtState::Operational.code()]);
+                let period = Nanos::from(period_ms) * 1_000_000;
+                let on_time = times.len() == 4
+                    && times
+                        .iter()
+                        .zip(0..)
+                        .all(|(t, k)| t.abs_diff(k * period) <= self.tolerance);
+                if on_time && states_ok {
+                    Ok(())
+                } else {
+                    Err(format!(
+                        "heartbeats at {times:?} ns, data {:?}",
+                        beats.iter().map(|(_, d)| d).collect::<Vec<_>>()
+                    ))
+                }
+            },
+        );
+        self.now = start + 400_000_000;
+        let stopped = match self.sdo(heartbeat::set_producer_time(0)) {
             Ok(SdoResponse::DownloadAck {
                 index: 0x1017,
                 sub_index: 0,
             }) => {
-                now += 300_000_000;
-                let late: Vec<Frame> = target
-                    .poll(now)
+                self.now += 300_000_000;
+                let late: Vec<Frame> = self
+                    .target
+                    .poll(self.now)
                     .into_iter()
                     .filter(|f| {
-                        f.id == CanId::Standard(default_cob_id(Channel::ErrorControl, node))
+                        f.id == CanId::Standard(default_cob_id(Channel::ErrorControl, self.node))
                     })
                     .collect();
                 // One beat may have been on its way when the download arrived.
@@ -314,146 +360,167 @@ pub fn check_node(target: &mut dyn CanNode, node: NodeId, tolerance: Nanos) -> V
                 }
             }
             other => Err(format!("answer {other:?}")),
-        },
-    );
+        };
+        self.record(
+            "producer time 0 stops the heartbeat",
+            &["HB-002", "SDO-006"],
+            stopped,
+        );
+    }
 
-    for (name, index, sub_index, code) in [
-        (
-            "an unknown object is aborted with 0x06020000",
-            0x2345u16,
-            0u8,
-            abort_code::OBJECT_DOES_NOT_EXIST,
-        ),
-        (
-            "an unknown sub-index is aborted with 0x06090011",
-            0x1018,
-            9,
-            abort_code::SUB_INDEX_DOES_NOT_EXIST,
-        ),
-    ] {
-        let outcome =
-            sdo(target, node, SdoRequest::Upload { index, sub_index }, now).and_then(|answer| {
-                match answer {
+    fn aborts(&mut self) {
+        for (name, index, sub_index, code) in [
+            (
+                "an unknown object is aborted with 0x06020000",
+                0x2345u16,
+                0u8,
+                abort_code::OBJECT_DOES_NOT_EXIST,
+            ),
+            (
+                "an unknown sub-index is aborted with 0x06090011",
+                0x1018,
+                9,
+                abort_code::SUB_INDEX_DOES_NOT_EXIST,
+            ),
+        ] {
+            let outcome = self
+                .sdo(SdoRequest::Upload { index, sub_index })
+                .and_then(|answer| match answer {
                     SdoResponse::Abort {
                         index: i,
                         sub_index: s,
                         code: c,
                     } if i == index && s == sub_index && c == code => Ok(()),
                     other => Err(format!("answer {other:?}")),
-                }
-            });
-        record(name, &["SDO-007", "ERR-R8"], outcome);
+                });
+            self.record(name, &["SDO-007", "ERR-R8"], outcome);
+        }
     }
 
-    let missing: Vec<String> = [(0x6424u16, 1u8), (0x6425, 1), (0x6426, 1), (0x1801, 3)]
-        .into_iter()
-        .filter_map(|(index, sub_index)| {
-            match sdo(target, node, SdoRequest::Upload { index, sub_index }, now) {
-                Ok(SdoResponse::Upload { .. }) => None,
-                other => Some(format!("0x{index:04X}:{sub_index} {other:?}")),
-            }
-        })
-        .collect();
-    record(
-        "the analog event objects 002 names answer: 0x6424, 0x6425, 0x6426, 0x1801",
-        &["PDO-004"],
-        if missing.is_empty() {
-            Ok(())
-        } else {
-            Err(missing.join("; "))
-        },
-    );
-
-    target.handle(&command_frame(NmtCommand::EnterPreOperational, None), now);
-    let pre_operational = guard_answer(target, node, &mut guard, now);
-    target.handle(&command_frame(NmtCommand::StopRemoteNode, Some(node)), now);
-    let stopped = guard_answer(target, node, &mut guard, now);
-    const STATES: &[&str] = &[
-        "NMT-002", "NMT-003", "NMT-004", "NMT-005", "ERR-R6", "GRD-003",
-    ];
-    let (blamed, outcome) = match (pre_operational, stopped) {
-        (Ok(NmtState::PreOperational), Ok(NmtState::Stopped)) => (STATES, Ok(())),
-        (Err((blamed, why)), _) | (_, Err((blamed, why))) => {
-            (blamed, Err(format!("the state cannot be read: {why}")))
-        }
-        other => (STATES, Err(format!("states {other:?}"))),
-    };
-    results.push(NodeCheck {
-        name: "0x80 enters pre-operational (0x7F), 0x02 stops (0x04)",
-        requirements: STATES,
-        blamed,
-        outcome,
-    });
-    let mut record =
-        |name, requirements, outcome| results.push(NodeCheck::new(name, requirements, outcome));
-
-    // CiA 301: stopped serves NMT and error control only.
-    let answers = target.handle(&sdo_request(node, upload(0x1017)), now);
-    let response_id = CanId::Standard(default_cob_id(Channel::SdoResponse, node));
-    record(
-        "a stopped node answers no SDO (CiA 301)",
-        &["NMT-008"],
-        match answers.iter().find(|f| f.id == response_id) {
-            None => Ok(()),
-            Some(answer) => Err(format!("answered {answer}")),
-        },
-    );
-
-    // Resets restore the power-on values: communication objects for reset
-    // communication, every object for reset node; each ends with a boot-up.
-    target.handle(&command_frame(NmtCommand::StartRemoteNode, None), now);
-    let reset = |target: &mut dyn CanNode, command: NmtCommand, now: &mut Nanos| {
-        for (index, value) in [
-            (GUARD_TIME, 100),
-            (PRODUCER_HEARTBEAT_TIME, 1000),
-            (ANALOG_EVENTS, 1),
-        ] {
-            sdo(target, node, SdoRequest::download(index, 0, value), *now)?;
-        }
-        *now += 10_000_000;
-        let mut seen = target.handle(&command_frame(command, Some(node)), *now);
-        *now += 50_000_000;
-        seen.extend(target.poll(*now));
-        let boot = CanId::Standard(default_cob_id(Channel::ErrorControl, node));
-        if !seen.iter().any(|f| f.id == boot && f.data() == [0x00]) {
-            return Err(format!(
-                "no boot-up (0x{:03X}: 00) among {seen:?}",
-                boot.raw()
-            ));
-        }
-        [GUARD_TIME, PRODUCER_HEARTBEAT_TIME, ANALOG_EVENTS]
+    fn analog_event_objects(&mut self) {
+        let missing: Vec<String> = [(0x6424u16, 1u8), (0x6425, 1), (0x6426, 1), (0x1801, 3)]
             .into_iter()
-            .map(|index| {
-                let answer = sdo(target, node, upload(index), *now)?;
-                answer
-                    .value()
-                    .ok_or_else(|| format!("0x{index:04X}: {answer:?}"))
+            .filter_map(|(index, sub_index)| {
+                match self.sdo(SdoRequest::Upload { index, sub_index }) {
+                    Ok(SdoResponse::Upload { .. }) => None,
+                    other => Some(format!("0x{index:04X}:{sub_index} {other:?}")),
+                }
             })
-            .collect::<Result<Vec<u32>, String>>()
-    };
-    record(
-        "reset communication (0x82) restores 0x100C and 0x1017, keeps 0x6423 (CiA 301)",
-        &["NMT-009"],
-        reset(target, NmtCommand::ResetCommunication, &mut now).and_then(
-            |values| match values[..] {
+            .collect();
+        self.record(
+            "the analog event objects 002 names answer: 0x6424, 0x6425, 0x6426, 0x1801",
+            &["PDO-004"],
+            if missing.is_empty() {
+                Ok(())
+            } else {
+                Err(missing.join("; "))
+            },
+        );
+    }
+
+    fn state_changes(&mut self) {
+        self.target.handle(
+            &command_frame(NmtCommand::EnterPreOperational, None),
+            self.now,
+        );
+        let pre_operational = self.guard_answer();
+        self.target.handle(
+            &command_frame(NmtCommand::StopRemoteNode, Some(self.node)),
+            self.now,
+        );
+        let stopped = self.guard_answer();
+        const STATES: &[&str] = &[
+            "NMT-002", "NMT-003", "NMT-004", "NMT-005", "ERR-R6", "GRD-003",
+        ];
+        let (blamed, outcome) = match (pre_operational, stopped) {
+            (Ok(NmtState::PreOperational), Ok(NmtState::Stopped)) => (STATES, Ok(())),
+            (Err((blamed, why)), _) | (_, Err((blamed, why))) => {
+                (blamed, Err(format!("the state cannot be read: {why}")))
+            }
+            other => (STATES, Err(format!("states {other:?}"))),
+        };
+        self.results.push(NodeCheck {
+            name: "0x80 enters pre-operational (0x7F), 0x02 stops (0x04)",
+            requirements: STATES,
+            blamed,
+            outcome,
+        });
+    }
+
+    fn stopped_node_is_silent(&mut self) {
+        // CiA 301: stopped serves NMT and error control only.
+        let answers = self
+            .target
+            .handle(&sdo_request(self.node, upload(0x1017)), self.now);
+        let response_id = CanId::Standard(default_cob_id(Channel::SdoResponse, self.node));
+        self.record(
+            "a stopped node answers no SDO (CiA 301)",
+            &["NMT-008"],
+            match answers.iter().find(|f| f.id == response_id) {
+                None => Ok(()),
+                Some(answer) => Err(format!("answered {answer}")),
+            },
+        );
+    }
+
+    /// Resets restore the power-on values: communication objects for reset
+    /// communication, every object for reset node; each ends with a boot-up.
+    fn resets(&mut self) {
+        self.target
+            .handle(&command_frame(NmtCommand::StartRemoteNode, None), self.now);
+        let node = self.node;
+        let reset = |target: &mut dyn CanNode, command: NmtCommand, now: &mut Nanos| {
+            for (index, value) in [
+                (GUARD_TIME, 100),
+                (PRODUCER_HEARTBEAT_TIME, 1000),
+                (ANALOG_EVENTS, 1),
+            ] {
+                sdo(target, node, SdoRequest::download(index, 0, value), *now)?;
+            }
+            *now += 10_000_000;
+            let mut seen = target.handle(&command_frame(command, Some(node)), *now);
+            *now += 50_000_000;
+            seen.extend(target.poll(*now));
+            let boot = CanId::Standard(default_cob_id(Channel::ErrorControl, node));
+            if !seen.iter().any(|f| f.id == boot && f.data() == [0x00]) {
+                return Err(format!(
+                    "no boot-up (0x{:03X}: 00) among {seen:?}",
+                    boot.raw()
+                ));
+            }
+            [GUARD_TIME, PRODUCER_HEARTBEAT_TIME, ANALOG_EVENTS]
+                .into_iter()
+                .map(|index| {
+                    let answer = sdo(target, node, upload(index), *now)?;
+                    answer
+                        .value()
+                        .ok_or_else(|| format!("0x{index:04X}: {answer:?}"))
+                })
+                .collect::<Result<Vec<u32>, String>>()
+        };
+        let communication = reset(self.target, NmtCommand::ResetCommunication, &mut self.now);
+        self.record(
+            "reset communication (0x82) restores 0x100C and 0x1017, keeps 0x6423 (CiA 301)",
+            &["NMT-009"],
+            communication.and_then(|values| match values[..] {
                 [0, 0, 1] => Ok(()),
                 _ => Err(format!(
                     "0x100C, 0x1017, 0x6423 read {values:?}, expected [0, 0, 1]"
                 )),
-            },
-        ),
-    );
-    record(
-        "reset node (0x81) restores every object, 0x6423 too (CiA 301)",
-        &["NMT-010"],
-        reset(target, NmtCommand::ResetNode, &mut now).and_then(|values| match values[..] {
-            [0, 0, 0] => Ok(()),
-            _ => Err(format!(
-                "0x100C, 0x1017, 0x6423 read {values:?}, expected [0, 0, 0]"
-            )),
-        }),
-    );
-    results
+            }),
+        );
+        let node = reset(self.target, NmtCommand::ResetNode, &mut self.now);
+        self.record(
+            "reset node (0x81) restores every object, 0x6423 too (CiA 301)",
+            &["NMT-010"],
+            node.and_then(|values| match values[..] {
+                [0, 0, 0] => Ok(()),
+                _ => Err(format!(
+                    "0x100C, 0x1017, 0x6423 read {values:?}, expected [0, 0, 0]"
+                )),
+            }),
+        );
+    }
 }
 
 fn upload(index: u16) -> SdoRequest {

@@ -202,6 +202,11 @@ impl MasterRun {
     }
 
     /// The inputs this task sees, neighbour bytes behind.
+    /// The image layout the master exchanges.
+    pub fn layout(&self) -> ImageLayout {
+        self.layout
+    }
+
     pub fn task_inputs(&self) -> &[u8] {
         &self.task_inputs
     }

@@ -16,7 +16,7 @@ use super::application::{ClientScenario, Event};
 use super::judge::{self, Breach, Judge, TaskSeen, SENT_REPORTS, TRANSACTION_NUMBERS};
 use super::master::{Master, MasterRun};
 use super::{Client, ClientDeclaration, IutError, TaskIo};
-use crate::client::played_device::{DeviceSide, PlayedDevice};
+use crate::client::played_device::{DeviceSide, Ended, PlayedDevice};
 use crate::door::iut::BuildError;
 use crate::error::{HarnessError, IutCause, Refusal, RunError};
 use crate::outcome::{BusFrame, Failure, Outcome, ScenarioRun, TaskView, Timeline};
@@ -81,13 +81,6 @@ impl std::fmt::Display for Note {
             Note::Overrun(task) => write!(f, "task {task}: overrun, the client does not run"),
         }
     }
-}
-
-/// A frame that ended on the bus, before it is written as text.
-struct Ended {
-    end: Nanos,
-    from_device: bool,
-    frame: Frame,
 }
 
 /// Where a run is, for the failure it may end in.
@@ -405,93 +398,19 @@ fn drive(
                 }
             }
         }
-        for ended in device
+        let ended = device
             .run_until(time)
-            .map_err(|e| Stop::Error(RunError::Bus(e)))?
-        {
-            tracker.frames.push(Ended {
-                end: ended.end,
-                from_device: ended.from_device,
-                frame: ended.frame,
-            });
-            if ended.from_device {
-                if record.keep_frames {
-                    record.sent.push(ended.frame);
-                }
-                tracker.breached(judge.device_sent(&ended.frame));
-                record.frames_checked += 1;
-                if let Some(at) = requested.iter().position(|(f, _)| *f == ended.frame) {
-                    let (_, asked) = requested.remove(at).expect("found");
-                    record.advisories.frame_sent(asked, ended.end);
-                }
-            }
-        }
+            .map_err(|e| Stop::Error(RunError::Bus(e)))?;
+        bus_frames_ended(ended, &mut requested, (tracker, &mut judge, record));
         if exchange.client_runs() {
-            let mut buffer = exchange.output_buffer();
-            let inputs = exchange.task_inputs().to_vec();
             let asked = std::mem::take(&mut requests);
-            let answer = catch_unwind(AssertUnwindSafe(|| {
-                client.task(TaskIo {
-                    inputs: &inputs,
-                    outputs: &mut buffer,
-                    requests: &asked,
-                })
-            }))
-            .unwrap_or_else(|panic| Err(IutError::new(IutCause::Panicked, panic_message(&panic))))
-            .map_err(|e| match e.cause {
-                // Stopped at an image's end by its host: what it did, judged.
-                IutCause::OutsideImage => Stop::Breach(judge::outside_image(&e.what)),
-                _ => Stop::Error(RunError::Iut(e)),
-            })?;
-            let accepted: Vec<MessageRepr> = asked
-                .iter()
-                .enumerate()
-                .filter(|(i, _)| !answer.refused.contains(i))
-                .map(|(_, m)| *m)
-                .collect();
-            tracker.task_ran(
-                layout,
-                (&inputs, &buffer),
-                (asked.len(), answer.delivered.len()),
-            );
-            let breaches = judge.task(
-                task,
-                TaskSeen {
-                    inputs: exchange.task_input_image(),
-                    before: exchange.device_outputs(),
-                    after: &buffer,
-                    accepted: &accepted,
-                    delivered: &answer.delivered,
-                    not_frames: &answer.not_frames,
-                    sent: &answer.sent,
-                },
-                deadline,
-            );
-            for breach in breaches {
-                tracker.breached(Err(breach));
-            }
-            record.frames_checked += answer.delivered.len() as u64;
-            if record.keep_frames {
-                record.delivered.extend_from_slice(&answer.delivered);
-            }
-            record.told_sent.extend_from_slice(&answer.sent);
-            // A new batch: a TxCounter the client did not write before and
-            // the device has not acknowledged (a restarted program taking
-            // Inputs.TxCounter over asks for nothing).
-            let header = |image: &[u8]| OutputImage::new_checked(image, layout).map(|o| o.header());
-            let acknowledged = InputImage::new_checked(exchange.task_input_image(), layout)
-                .map(|i| i.tx_counter());
-            let written = (
-                header(exchange.device_outputs()),
-                header(&buffer[..layout.output_size()]),
-            );
-            if let ((Ok(was), Ok(now)), Ok(acknowledged)) = (written, acknowledged) {
-                if now.tx_counter != was.tx_counter && now.tx_counter != acknowledged {
-                    record.advisories.batches += 1;
-                    record.advisories.empty_batches += u64::from(now.no_of_tx_messages == 0);
-                }
-            }
-            exchange.client_wrote(&buffer[..layout.output_size()]);
+            client_task(
+                client.as_mut(),
+                &asked,
+                &mut exchange,
+                (task, deadline),
+                (tracker, &mut judge, record),
+            )?;
         } else {
             tracker.note(Note::Overrun(task));
         }
@@ -514,6 +433,108 @@ fn drive(
     if tracker.breaches.is_empty() {
         tracker.breached(judge.finish(device.queued_rx()));
     }
+    Ok(())
+}
+
+/// The frames that ended on the bus up to a task's time: each kept for the
+/// trace, and those the device sent judged, counted, and matched with the
+/// application's request they answer (for the advisories).
+fn bus_frames_ended(
+    ended: Vec<Ended>,
+    requested: &mut std::collections::VecDeque<(Frame, Nanos)>,
+    (tracker, judge, record): (&mut Tracker, &mut Judge, &mut Record),
+) {
+    for ended in ended {
+        tracker.frames.push(ended);
+        if ended.from_device {
+            if record.keep_frames {
+                record.sent.push(ended.frame);
+            }
+            tracker.breached(judge.device_sent(&ended.frame));
+            record.frames_checked += 1;
+            if let Some(at) = requested.iter().position(|(f, _)| *f == ended.frame) {
+                let (_, asked) = requested.remove(at).expect("found");
+                record.advisories.frame_sent(asked, ended.end);
+            }
+        }
+    }
+}
+
+/// One task of the client's program: it reads the inputs the master gave
+/// it and fills the output buffer, with the application's requests `asked`;
+/// what it did is judged, and what it wrote handed to the master.
+fn client_task(
+    client: &mut dyn Client,
+    asked: &[MessageRepr],
+    exchange: &mut MasterRun,
+    (task, deadline): (u64, u64),
+    (tracker, judge, record): (&mut Tracker, &mut Judge, &mut Record),
+) -> Result<(), Stop> {
+    let layout = exchange.layout();
+    let mut buffer = exchange.output_buffer();
+    let inputs = exchange.task_inputs().to_vec();
+    let answer = catch_unwind(AssertUnwindSafe(|| {
+        client.task(TaskIo {
+            inputs: &inputs,
+            outputs: &mut buffer,
+            requests: asked,
+        })
+    }))
+    .unwrap_or_else(|panic| Err(IutError::new(IutCause::Panicked, panic_message(&panic))))
+    .map_err(|e| match e.cause {
+        // Stopped at an image's end by its host: what it did, judged.
+        IutCause::OutsideImage => Stop::Breach(judge::outside_image(&e.what)),
+        _ => Stop::Error(RunError::Iut(e)),
+    })?;
+    let accepted: Vec<MessageRepr> = asked
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !answer.refused.contains(i))
+        .map(|(_, m)| *m)
+        .collect();
+    tracker.task_ran(
+        layout,
+        (&inputs, &buffer),
+        (asked.len(), answer.delivered.len()),
+    );
+    let breaches = judge.task(
+        task,
+        TaskSeen {
+            inputs: exchange.task_input_image(),
+            before: exchange.device_outputs(),
+            after: &buffer,
+            accepted: &accepted,
+            delivered: &answer.delivered,
+            not_frames: &answer.not_frames,
+            sent: &answer.sent,
+        },
+        deadline,
+    );
+    for breach in breaches {
+        tracker.breached(Err(breach));
+    }
+    record.frames_checked += answer.delivered.len() as u64;
+    if record.keep_frames {
+        record.delivered.extend_from_slice(&answer.delivered);
+    }
+    record.told_sent.extend_from_slice(&answer.sent);
+    // A new batch: a TxCounter the client did not write before and
+    // the device has not acknowledged (a restarted program taking
+    // Inputs.TxCounter over asks for nothing).
+    let header = |image: &[u8]| OutputImage::new_checked(image, layout).map(|o| o.header());
+    let acknowledged =
+        InputImage::new_checked(exchange.task_input_image(), layout).map(|i| i.tx_counter());
+    let written = (
+        header(exchange.device_outputs()),
+        header(&buffer[..layout.output_size()]),
+    );
+    if let ((Ok(was), Ok(now)), Ok(acknowledged)) = (written, acknowledged) {
+        if now.tx_counter != was.tx_counter && now.tx_counter != acknowledged {
+            record.advisories.batches += 1;
+            record.advisories.empty_batches += u64::from(now.no_of_tx_messages == 0);
+        }
+    }
+    exchange.client_wrote(&buffer[..layout.output_size()]);
     Ok(())
 }
 

@@ -213,28 +213,23 @@ impl<B: Bus + ?Sized> Lockstep<B> {
     /// Cycle `k`: the bus up to its start, the PLC's task, the model's and
     /// the IUT's cycle on the same outputs, their inputs compared; then the
     /// other nodes' frames of the step go on the bus.
-    pub fn cycle(&mut self, k: u64, mut step: Step) -> Result<Seen, Outcome> {
+    /// The PLC's part of cycle `k`: the step's messages handed to it, the
+    /// controller status given to both devices, and its task run (unless
+    /// the step keeps it busy), its confirmation delay checked.
+    fn plc_task(&mut self, k: u64, step: &mut Step) -> Result<TaskReport, Outcome> {
         let rules = &self.rules;
-        let start = self.start_of(k);
         let layout = self.pair.layout;
-        self.bus.run_until(&mut self.pair, start)?;
-        let t = if self.bus.real_time() {
-            self.pair.now
-        } else {
-            start
-        };
-        self.pair.cycle = k;
         for message in &mut step.send {
             message.frame = self.bus.adapt(message.frame);
         }
-        for message in step.send {
+        for message in std::mem::take(&mut step.send) {
             if self.plc.send(message).is_err() {
                 return Err(Outcome::Error(RunError::Harness(HarnessError::Scenario(
                     format!("a message that does not fit {}", layout.tx_message.name),
                 ))));
             }
         }
-        if let Some(status) = step.status {
+        if let Some(status) = step.status.take() {
             self.pair
                 .iut
                 .controller_status(&status)
@@ -269,6 +264,20 @@ impl<B: Bus + ?Sized> Lockstep<B> {
                 _ => {}
             }
         }
+        Ok(report)
+    }
+
+    pub fn cycle(&mut self, k: u64, mut step: Step) -> Result<Seen, Outcome> {
+        let start = self.start_of(k);
+        let layout = self.pair.layout;
+        self.bus.run_until(&mut self.pair, start)?;
+        let t = if self.bus.real_time() {
+            self.pair.now
+        } else {
+            start
+        };
+        self.pair.cycle = k;
+        let report = self.plc_task(k, &mut step)?;
         // Borrowed, not copied: the pair's devices and its history are
         // fields of their own, so nothing here needs a second image.
         let outputs = self.plc.outputs();
@@ -281,7 +290,7 @@ impl<B: Bus + ?Sized> Lockstep<B> {
         let handshake = Handshake {
             rx_before: before.0,
             plc_released: written.rx_counter,
-            fast: rules.fast_queue,
+            fast: self.rules.fast_queue,
             no_of_tx_messages: written.no_of_tx_messages,
             tx_before: before.1,
             tx_requested: written.tx_counter,

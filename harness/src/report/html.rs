@@ -25,147 +25,11 @@ fn anchor(profile: &str, index: usize) -> String {
 impl RunReport {
     pub fn html(&self, catalogue: &Catalogue) -> String {
         let m = &self.meta;
-        let mut meta = String::new();
-        for (name, value) in [
-            ("implementation", m.iut.clone()),
-            (
-                "product",
-                m.product.as_ref().map_or("not declared".into(), |p| {
-                    format!("{} {}", p.name, p.version)
-                }),
-            ),
-            ("side / suite", format!("{} / {:?}", m.side, m.suite)),
-            (
-                "master models",
-                if m.masters.is_empty() {
-                    "not applicable (device side)".into()
-                } else {
-                    m.masters.join(", ")
-                },
-            ),
-            ("bus", m.bus.clone()),
-            ("seed", m.seed.to_string()),
-            ("started", utc(m.started_unix)),
-            ("canif", format!("{} ({})", m.canif_version, m.canif_commit)),
-            ("catalogue SHA-256", m.catalogue_sha256.clone()),
-            (
-                "left out",
-                m.left_out.clone().unwrap_or_else(|| "nothing".into()),
-            ),
-            ("wall time", format!("{} ms", self.wall_time_ms)),
-        ] {
-            let _ = writeln!(meta, "<tr><th>{name}</th><td>{}</td></tr>", esc(&value));
-        }
-        let mut profiles = String::new();
-        for p in &self.profiles {
-            let _ = write!(profiles, "<tr><td>{}</td>", esc(&p.profile));
-            for kind in VerdictKind::ALL {
-                // A count is coloured by its verdict only when there is one:
-                // a zero fail is not alarming.
-                let count = p.count(kind);
-                match count {
-                    0 => profiles.push_str("<td>0</td>"),
-                    _ => {
-                        let class = kind.label().replace(' ', "-");
-                        let _ = write!(profiles, "<td class=\"{class}\">{count}</td>");
-                    }
-                }
-            }
-            let _ = writeln!(
-                profiles,
-                "<td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
-                p.ran.tally.scenarios,
-                p.ran.tally.gherkin_scenarios,
-                p.ran.checks.len(),
-                p.ran.tally.cycles,
-                p.ran.tally.frames_checked
-            );
-        }
-        let problems: String = self
-            .problems(catalogue)
-            .iter()
-            .map(|problem| format!("<li>{}</li>\n", esc(&problem.to_string())))
-            .collect();
-        let advisories: String = self
-            .profiles
-            .iter()
-            .filter(|p| !p.ran.advisories.is_empty())
-            .map(|p| {
-                let line = p.ran.advisories.line();
-                format!("<li>{}: {}</li>\n", esc(&p.profile), esc(&line))
-            })
-            .collect();
-        let not_served: String = self
-            .not_served()
-            .iter()
-            .map(|line| format!("<li>{}</li>\n", esc(line)))
-            .collect();
-        let not_served = match not_served.is_empty() {
-            true => String::new(),
-            false => format!(
-                "<h2>Not applicable: what the implementation declares it does not serve</h2>\n<ul id=\"not-served\">{not_served}</ul>\n"
-            ),
-        };
-        let advisories = match advisories.is_empty() {
-            true => String::new(),
-            false => format!(
-                "<h2>Advisories (allowed, never a verdict)</h2>\n<ul id=\"advisories\">{advisories}</ul>\n"
-            ),
-        };
-        let mut failures = String::new();
-        let mut checks = String::new();
-        for p in &self.profiles {
-            for (i, check) in p.ran.checks.iter().enumerate() {
-                let label = check.result.kind().label();
-                let cause = check.result.cause().unwrap_or_default();
-                let _ = writeln!(
-                    checks,
-                    "<tr id=\"{}\" class=\"{label}\"><td>{}</td><td>{}</td><td>{label}</td><td>{}</td><td>{}</td></tr>",
-                    anchor(&p.profile, i),
-                    esc(&p.profile),
-                    esc(&check.evidence.key()),
-                    esc(&check.covers.join(", ")),
-                    esc(cause)
-                );
-                let CheckResult::Fail(finding) = &check.result else {
-                    continue;
-                };
-                let diagram = finding
-                    .failure
-                    .and_then(|n| p.ran.failures.get(n))
-                    .map(|f| {
-                        format!(
-                            "<p>expected <code>{}</code><br>actual <code>{}</code></p>\n{}",
-                            esc(&f.expected),
-                            esc(&f.actual),
-                            timing_diagram(f)
-                        )
-                    })
-                    .unwrap_or_default();
-                let _ = writeln!(
-                    failures,
-                    "<section class=\"failure\" id=\"failure-{}\"><h3>{} — {} ({})</h3>\n<p class=\"cause\">{}</p>\n{diagram}<pre>{}</pre></section>",
-                    anchor(&p.profile, i),
-                    esc(&p.profile),
-                    esc(&check.evidence.key()),
-                    esc(&finding.requirements.join(", ")),
-                    esc(&finding.cause),
-                    esc(&finding.details)
-                );
-            }
-        }
-        let errors: String = self
-            .errors_by_cause()
-            .iter()
-            .map(|(cause, list)| {
-                format!(
-                    "<li><b>{} check(s)</b>: {}<br><small>first: {}</small></li>\n",
-                    list.len(),
-                    esc(cause),
-                    esc(&list[0])
-                )
-            })
-            .collect();
+        let meta = self.meta_rows();
+        let profiles = self.profile_rows();
+        let (problems, not_served, advisories) = self.listed(catalogue);
+        let (checks, failures) = self.checks_and_failures();
+        let errors = self.error_items();
         let verdicts = self.verdicts_by_area(catalogue);
         let none = |html: String| {
             if html.is_empty() {
@@ -260,6 +124,174 @@ window.addEventListener('error', function (e) {{ document.body.dataset.errors = 
                 format!("<ul>{errors}</ul>")
             },
         )
+    }
+}
+
+impl RunReport {
+    /// The run's metadata, one table row each.
+    fn meta_rows(&self) -> String {
+        let m = &self.meta;
+        let mut meta = String::new();
+        for (name, value) in [
+            ("implementation", m.iut.clone()),
+            (
+                "product",
+                m.product.as_ref().map_or("not declared".into(), |p| {
+                    format!("{} {}", p.name, p.version)
+                }),
+            ),
+            ("side / suite", format!("{} / {:?}", m.side, m.suite)),
+            (
+                "master models",
+                if m.masters.is_empty() {
+                    "not applicable (device side)".into()
+                } else {
+                    m.masters.join(", ")
+                },
+            ),
+            ("bus", m.bus.clone()),
+            ("seed", m.seed.to_string()),
+            ("started", utc(m.started_unix)),
+            ("canif", format!("{} ({})", m.canif_version, m.canif_commit)),
+            ("catalogue SHA-256", m.catalogue_sha256.clone()),
+            (
+                "left out",
+                m.left_out.clone().unwrap_or_else(|| "nothing".into()),
+            ),
+            ("wall time", format!("{} ms", self.wall_time_ms)),
+        ] {
+            let _ = writeln!(meta, "<tr><th>{name}</th><td>{}</td></tr>", esc(&value));
+        }
+        meta
+    }
+
+    /// One row per profile: its verdicts counted, what it ran.
+    fn profile_rows(&self) -> String {
+        let mut profiles = String::new();
+        for p in &self.profiles {
+            let _ = write!(profiles, "<tr><td>{}</td>", esc(&p.profile));
+            for kind in VerdictKind::ALL {
+                // A count is coloured by its verdict only when there is one:
+                // a zero fail is not alarming.
+                let count = p.count(kind);
+                match count {
+                    0 => profiles.push_str("<td>0</td>"),
+                    _ => {
+                        let class = kind.label().replace(' ', "-");
+                        let _ = write!(profiles, "<td class=\"{class}\">{count}</td>");
+                    }
+                }
+            }
+            let _ = writeln!(
+                profiles,
+                "<td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+                p.ran.tally.scenarios,
+                p.ran.tally.gherkin_scenarios,
+                p.ran.checks.len(),
+                p.ran.tally.cycles,
+                p.ran.tally.frames_checked
+            );
+        }
+        profiles
+    }
+
+    /// The failing and erring requirements, what is not served, the
+    /// advisories: each a list, or nothing.
+    fn listed(&self, catalogue: &Catalogue) -> (String, String, String) {
+        let problems: String = self
+            .problems(catalogue)
+            .iter()
+            .map(|problem| format!("<li>{}</li>\n", esc(&problem.to_string())))
+            .collect();
+        let advisories: String = self
+            .profiles
+            .iter()
+            .filter(|p| !p.ran.advisories.is_empty())
+            .map(|p| {
+                let line = p.ran.advisories.line();
+                format!("<li>{}: {}</li>\n", esc(&p.profile), esc(&line))
+            })
+            .collect();
+        let not_served: String = self
+            .not_served()
+            .iter()
+            .map(|line| format!("<li>{}</li>\n", esc(line)))
+            .collect();
+        let not_served = match not_served.is_empty() {
+            true => String::new(),
+            false => format!(
+                "<h2>Not applicable: what the implementation declares it does not serve</h2>\n<ul id=\"not-served\">{not_served}</ul>\n"
+            ),
+        };
+        let advisories = match advisories.is_empty() {
+            true => String::new(),
+            false => format!(
+                "<h2>Advisories (allowed, never a verdict)</h2>\n<ul id=\"advisories\">{advisories}</ul>\n"
+            ),
+        };
+        (problems, not_served, advisories)
+    }
+
+    /// Every check's row, and a section per failure with its diagram.
+    fn checks_and_failures(&self) -> (String, String) {
+        let mut failures = String::new();
+        let mut checks = String::new();
+        for p in &self.profiles {
+            for (i, check) in p.ran.checks.iter().enumerate() {
+                let label = check.result.kind().label();
+                let cause = check.result.cause().unwrap_or_default();
+                let _ = writeln!(
+                    checks,
+                    "<tr id=\"{}\" class=\"{label}\"><td>{}</td><td>{}</td><td>{label}</td><td>{}</td><td>{}</td></tr>",
+                    anchor(&p.profile, i),
+                    esc(&p.profile),
+                    esc(&check.evidence.key()),
+                    esc(&check.covers.join(", ")),
+                    esc(cause)
+                );
+                let CheckResult::Fail(finding) = &check.result else {
+                    continue;
+                };
+                let diagram = finding
+                    .failure
+                    .and_then(|n| p.ran.failures.get(n))
+                    .map(|f| {
+                        format!(
+                            "<p>expected <code>{}</code><br>actual <code>{}</code></p>\n{}",
+                            esc(&f.expected),
+                            esc(&f.actual),
+                            timing_diagram(f)
+                        )
+                    })
+                    .unwrap_or_default();
+                let _ = writeln!(
+                    failures,
+                    "<section class=\"failure\" id=\"failure-{}\"><h3>{} — {} ({})</h3>\n<p class=\"cause\">{}</p>\n{diagram}<pre>{}</pre></section>",
+                    anchor(&p.profile, i),
+                    esc(&p.profile),
+                    esc(&check.evidence.key()),
+                    esc(&finding.requirements.join(", ")),
+                    esc(&finding.cause),
+                    esc(&finding.details)
+                );
+            }
+        }
+        (checks, failures)
+    }
+
+    /// The errors grouped by cause, one item each.
+    fn error_items(&self) -> String {
+        self.errors_by_cause()
+            .iter()
+            .map(|(cause, list)| {
+                format!(
+                    "<li><b>{} check(s)</b>: {}<br><small>first: {}</small></li>\n",
+                    list.len(),
+                    esc(cause),
+                    esc(&list[0])
+                )
+            })
+            .collect()
     }
 }
 

@@ -94,45 +94,7 @@ pub fn merge(
             ours: catalogue.sha256.clone(),
         });
     }
-    for (file, part) in &parts {
-        if part.format != PART_FORMAT {
-            return Err(MergeError::Malformed {
-                file: file.clone(),
-                what: format!(
-                    "a shard.json of format {}; this canif reads {PART_FORMAT}",
-                    part.format
-                ),
-            });
-        }
-    }
-    same_run(&parts)?;
-    let count = first.shard.count;
-    let mut seen: Vec<Option<&PathBuf>> = vec![None; count as usize];
-    for (file, part) in &parts {
-        if !(1..=count).contains(&part.shard.index) {
-            return Err(MergeError::Malformed {
-                file: file.clone(),
-                what: format!("shard {}: shards count from 1 to N", part.shard),
-            });
-        }
-        let slot = &mut seen[(part.shard.index - 1) as usize];
-        if let Some(earlier) = slot {
-            return Err(MergeError::Twice {
-                index: part.shard.index,
-                count,
-                first: (*earlier).clone(),
-                other: file.clone(),
-            });
-        }
-        *slot = Some(file);
-    }
-    if let Some(gap) = seen.iter().position(Option::is_none) {
-        return Err(MergeError::Missing {
-            index: gap as u32 + 1,
-            count,
-        });
-    }
-
+    every_shard_once(&parts)?;
     // What the campaign left out: each shard's lines, its share replaced by
     // the selection every shard has.
     let unsharded = first.selection.unsharded();
@@ -157,69 +119,7 @@ pub fn merge(
                 file: first_file.clone(),
                 what: format!("profile `{name}` is not in this canif's catalogue"),
             })?;
-        let mut placed = Vec::new();
-        let mut checks = ProfileChecks {
-            reach: profile_part.checks.reach.clone(),
-            ..ProfileChecks::default()
-        };
-        for (file, part) in &parts {
-            let mine = &part.profiles[n];
-            if mine.order.len() != mine.checks.checks.len() {
-                return Err(MergeError::Malformed {
-                    file: file.clone(),
-                    what: format!(
-                        "{name}: {} checks but {} places",
-                        mine.checks.checks.len(),
-                        mine.order.len()
-                    ),
-                });
-            }
-            checks.tally += mine.checks.tally;
-            checks.advisories.add(&mine.checks.advisories);
-            let reach = &mut checks.reach;
-            reach.here.extend(mine.checks.reach.here.iter().cloned());
-            for (id, why) in &mine.checks.reach.unobserved {
-                reach
-                    .unobserved
-                    .entry(id.clone())
-                    .or_insert_with(|| why.clone());
-            }
-            for (id, why) in &mine.checks.reach.not_applicable {
-                reach
-                    .not_applicable
-                    .entry(id.clone())
-                    .or_insert_with(|| why.clone());
-            }
-            for (place, check) in mine.order.iter().zip(&mine.checks.checks) {
-                let failure = match &check.result {
-                    crate::verdict::CheckResult::Fail(finding) => match finding.failure {
-                        Some(i) => Some(mine.checks.failures.get(i).ok_or_else(|| {
-                            MergeError::Malformed {
-                                file: file.clone(),
-                                what: format!(
-                                    "{name}: a check names failure {i}, which is not there"
-                                ),
-                            }
-                        })?),
-                        None => None,
-                    },
-                    _ => None,
-                };
-                placed.push((*place, check, failure));
-            }
-        }
-        // The plan's order; the checks of one case stay in their shard's order.
-        placed.sort_by_key(|(place, _, _)| *place);
-        for (_, check, failure) in placed {
-            let mut check = check.clone();
-            if let (crate::verdict::CheckResult::Fail(finding), Some(failure)) =
-                (&mut check.result, failure)
-            {
-                finding.failure = Some(checks.failures.len());
-                checks.failures.push(failure.clone());
-            }
-            checks.checks.push(check);
-        }
+        let mut checks = merged_checks(&parts, n, profile_part)?;
         checks.reach.left_out = reason.clone();
         profiles.push(ProfileReport::judged(catalogue, profile, checks));
     }
@@ -253,6 +153,128 @@ pub fn merge(
         flaky,
         part: None,
     })
+}
+
+/// Every shard of the same format, each K of N once and none missing.
+fn every_shard_once(parts: &[(PathBuf, ShardPart)]) -> Result<(), MergeError> {
+    let Some((_, first)) = parts.first() else {
+        return Err(MergeError::Nothing);
+    };
+    for (file, part) in parts {
+        if part.format != PART_FORMAT {
+            return Err(MergeError::Malformed {
+                file: file.clone(),
+                what: format!(
+                    "a shard.json of format {}; this canif reads {PART_FORMAT}",
+                    part.format
+                ),
+            });
+        }
+    }
+    same_run(parts)?;
+    let count = first.shard.count;
+    let mut seen: Vec<Option<&PathBuf>> = vec![None; count as usize];
+    for (file, part) in parts {
+        if !(1..=count).contains(&part.shard.index) {
+            return Err(MergeError::Malformed {
+                file: file.clone(),
+                what: format!("shard {}: shards count from 1 to N", part.shard),
+            });
+        }
+        let slot = &mut seen[(part.shard.index - 1) as usize];
+        if let Some(earlier) = slot {
+            return Err(MergeError::Twice {
+                index: part.shard.index,
+                count,
+                first: (*earlier).clone(),
+                other: file.clone(),
+            });
+        }
+        *slot = Some(file);
+    }
+    if let Some(gap) = seen.iter().position(Option::is_none) {
+        return Err(MergeError::Missing {
+            index: gap as u32 + 1,
+            count,
+        });
+    }
+
+    Ok(())
+}
+
+/// Profile `n`'s checks from every shard, in the plan's order, each failure
+/// renumbered into the merged list, the reach of all of them together.
+fn merged_checks(
+    parts: &[(PathBuf, ShardPart)],
+    n: usize,
+    profile_part: &super::ProfilePart,
+) -> Result<ProfileChecks, MergeError> {
+    let name = &profile_part.profile;
+    let mut placed = Vec::new();
+    let mut checks = ProfileChecks {
+        reach: profile_part.checks.reach.clone(),
+        ..ProfileChecks::default()
+    };
+    for (file, part) in parts {
+        let mine = &part.profiles[n];
+        if mine.order.len() != mine.checks.checks.len() {
+            return Err(MergeError::Malformed {
+                file: file.clone(),
+                what: format!(
+                    "{name}: {} checks but {} places",
+                    mine.checks.checks.len(),
+                    mine.order.len()
+                ),
+            });
+        }
+        checks.tally += mine.checks.tally;
+        checks.advisories.add(&mine.checks.advisories);
+        let reach = &mut checks.reach;
+        reach.here.extend(mine.checks.reach.here.iter().cloned());
+        for (id, why) in &mine.checks.reach.unobserved {
+            reach
+                .unobserved
+                .entry(id.clone())
+                .or_insert_with(|| why.clone());
+        }
+        for (id, why) in &mine.checks.reach.not_applicable {
+            reach
+                .not_applicable
+                .entry(id.clone())
+                .or_insert_with(|| why.clone());
+        }
+        for (place, check) in mine.order.iter().zip(&mine.checks.checks) {
+            let failure =
+                match &check.result {
+                    crate::verdict::CheckResult::Fail(finding) => match finding.failure {
+                        Some(i) => Some(mine.checks.failures.get(i).ok_or_else(|| {
+                            MergeError::Malformed {
+                                file: file.clone(),
+                                what: format!(
+                                    "{name}: a check names failure {i}, which is not there"
+                                ),
+                            }
+                        })?),
+                        None => None,
+                    },
+                    _ => None,
+                };
+            placed.push((*place, check, failure));
+        }
+    }
+    // The plan's order; the checks of one case stay in their shard's order.
+    placed.sort_by_key(|(place, _, _)| *place);
+    for (_, check, failure) in placed {
+        let mut check = check.clone();
+        if let (crate::verdict::CheckResult::Fail(finding), Some(failure)) =
+            (&mut check.result, failure)
+        {
+            finding.failure = Some(checks.failures.len());
+            checks.failures.push(failure.clone());
+        }
+        checks.checks.push(check);
+    }
+    Ok(checks)
 }
 
 /// Appends each of `items` that `into` does not hold yet, in order.

@@ -61,5 +61,5 @@ fn slots(members: &[Member]) -> Vec<Slot<'_>> {
 
 /// An array's element count (bounds as declared).
 fn count(low: i64, high: i64) -> usize {
-    crate::parse::element_count(low, high)
+    crate::types::element_count(low, high)
 }
