@@ -9,6 +9,7 @@ use canif_harness::client::application;
 use canif_harness::client::master::Master;
 use canif_harness::client::rig;
 use canif_harness::client::suite::{ClientKind, ClientOptions};
+use canif_harness::declare::Declaration;
 use canif_harness::door::Door;
 use canif_harness::run::run_profile;
 use canif_harness::{Outcome, RunError};

@@ -155,7 +155,7 @@ fn probe_finds_the_choice_and_run_takes_its_file() {
 fn a_declaration_that_cannot_be_read_is_a_usage_error_naming_it() {
     for (declare, says) in [
         ("wire-in-queue", "is not NAME=VALUE"),
-        ("queue=deep", "no choice is called `queue`"),
+        ("queue=deep", "`queue` is no choice"),
         (
             "tx-queue-accounting=maybe",
             "wire-outside-queue or wire-in-queue",

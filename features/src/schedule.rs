@@ -4,10 +4,10 @@
 
 use canif_harness::client::suite::ClientKind;
 use canif_harness::client::ClientDeclaration;
+use canif_harness::declare::choices::Declared;
+use canif_harness::declare::client::Application;
 use canif_harness::device::refusals::OFFERED_REFUSED;
 use canif_harness::device::{blame, IutKind};
-use canif_harness::door::declaration::choices::Declared;
-use canif_harness::door::declaration::client::Application;
 use canif_harness::verdict::{NotRunReason, Rest};
 use canif_harness::{GherkinOutcome, GherkinRun};
 use canif_model::config::{FrameFormat, QueueMode};

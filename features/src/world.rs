@@ -8,11 +8,11 @@
 use std::collections::VecDeque;
 
 use canif_harness::bus::sim::SimBus;
+use canif_harness::declare::choices::Declared;
 use canif_harness::device::bus::BusChoice;
 use canif_harness::device::lockstep::Lockstep;
 use canif_harness::device::scenario::{Judgement, Scenario, Step, Steps};
 use canif_harness::device::IutKind;
-use canif_harness::door::declaration::choices::Declared;
 use canif_harness::door::iut::BuildError;
 use canif_harness::error::{Refusal, RunError};
 use canif_harness::Outcome;

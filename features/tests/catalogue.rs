@@ -289,7 +289,7 @@ fn a_scenario_runs_only_where_some_requirement_it_names_applies() {
 #[test]
 fn a_gherkin_scenario_honours_the_command_lines_declaration() {
     use canif_features::schedule::{run, UnderTest};
-    use canif_harness::door::declaration::choices::Declared;
+    use canif_harness::declare::choices::Declared;
     let catalogue = Catalogue::embedded().unwrap();
     let profile = catalogue.profile("el6751-mdp").unwrap();
     let scenario = scenarios()

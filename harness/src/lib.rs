@@ -24,6 +24,7 @@ pub mod canopen;
 pub mod certificate;
 pub mod client;
 pub mod compare;
+pub mod declare;
 pub mod device;
 pub mod door;
 pub mod error;

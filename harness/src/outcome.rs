@@ -247,9 +247,9 @@ pub struct ScenarioRun {
     pub tolerated: u64,
     /// Wall time the scenario took.
     pub elapsed: std::time::Duration,
-    /// What the IUT itself declared where the documents leave a choice (its
-    /// `configure` answer), as `NAME=VALUE`: the run judged it by these.
-    pub iut_declares: Vec<String>,
+    /// What the IUT itself declared (a device's `configure` answer, a
+    /// client's `started`): the run judged it by this.
+    pub iut_declares: crate::declare::Declares,
     /// What the documents allow but an author wants to know (PLC side).
     pub advisories: crate::advisory::Advisories,
 }

@@ -2,6 +2,7 @@
 //! device pass every profile; every fault of the soft device is caught, on the
 //! requirement it breaks.
 
+use canif_harness::declare::Declaration;
 use canif_harness::device::kill_table::KILL_TABLE;
 use canif_harness::device::suite::{profile_for, Options};
 use canif_harness::device::IutKind;

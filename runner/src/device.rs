@@ -2,9 +2,11 @@
 //! the harness playing the PLC and the other nodes. Each profile's lockstep,
 //! then the Gherkin scenarios, judged once over all of them.
 
+use canif_harness::declare::Declaration;
 use canif_harness::device::bus::BusChoice;
 use canif_harness::device::{IutKind, Options};
 use canif_harness::report::{ChoiceEntry, ChoiceSource, RunMeta, RunReport, TerminalEntry};
+use canif_harness::run::ProfileRun;
 use canif_harness::{Outcome, RunError};
 use canif_spec::Catalogue;
 
@@ -64,7 +66,7 @@ impl Campaign for Options {
         );
         meta.terminals = survey_terminals(kind, plan, observer);
         let lockstep = plan.run_profiles(kind, Self::UNIT, observer);
-        meta.choices = judged_choices(options, kind);
+        meta.choices = judged_choices(options, kind, &lockstep);
         let iut_broke = lockstep.iter().flat_map(|p| &p.runs).any(|r| {
             matches!(
                 r.outcome,
@@ -131,41 +133,26 @@ fn survey_terminals(
     terminals
 }
 
-/// The choices the verdicts rest on: declared for the device (on the command
-/// line, by its kind, or by the IUT itself), or shown by a scenario on a
-/// profile where it declared none.
-fn judged_choices(options: &Options, kind: &IutKind) -> Vec<ChoiceEntry> {
-    let declared = options
+/// The choices the verdicts rest on: declared for the device (on the
+/// command line or by its kind), then what each profile's run learned (what
+/// the IUT declared itself, what a scenario showed where it declared
+/// nothing), each once.
+fn judged_choices(options: &Options, kind: &IutKind, runs: &[ProfileRun]) -> Vec<ChoiceEntry> {
+    let mut choices: Vec<ChoiceEntry> = options
         .declared_by(kind)
         .lines()
         .into_iter()
         .map(|choice| ChoiceEntry {
             choice,
             how: ChoiceSource::Declared,
-        });
-    let observed = options
-        .observed
-        .lock()
-        .map(|o| o.clone())
-        .unwrap_or_default();
-    let by_iut = options
-        .iut_declared
-        .lock()
-        .map(|d| d.clone())
-        .unwrap_or_default();
-    declared
-        .chain(by_iut.into_iter().map(|choice| ChoiceEntry {
-            choice,
-            how: ChoiceSource::DeclaredByIut,
-        }))
-        .chain(observed.into_iter().map(|o| ChoiceEntry {
-            choice: o.line(),
-            how: ChoiceSource::Observed {
-                profile: o.profile,
-                scenario: o.scenario,
-            },
-        }))
-        .collect()
+        })
+        .collect();
+    for learned in runs.iter().flat_map(|run| &run.choices) {
+        if !choices.contains(learned) {
+            choices.push(learned.clone());
+        }
+    }
+    choices
 }
 
 /// The bus as the report names it.

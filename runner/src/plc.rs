@@ -5,6 +5,7 @@
 use canif_features::schedule::declined_by_client;
 use canif_harness::client::master::Master;
 use canif_harness::client::suite::{ClientBus, ClientKind, ClientOptions};
+use canif_harness::declare::Declaration;
 use canif_harness::report::{ChoiceEntry, ChoiceSource, RunMeta, RunReport};
 use canif_spec::{Catalogue, Side};
 

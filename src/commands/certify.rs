@@ -14,7 +14,7 @@ use canif_spec::Catalogue;
 use canif_harness::client::suite::ClientOptions;
 
 use super::run::{finish, profiles, Progress};
-use super::{client_declaration, declared_choices, resolve_client, resolve_iut};
+use super::{declared, resolve_client, resolve_iut};
 use crate::cli::{CompareFormat, IutOptions, SideArg};
 use canif_runner::Plan;
 
@@ -61,7 +61,7 @@ pub(crate) fn certify(
         SideArg::Device => {
             let kind = resolve_iut(iut)?;
             // What the device declares on the command line: the certificate rests on it.
-            let declared = declared_choices(&iut.declare)?;
+            let declared = declared(&iut.declare)?;
             let options = Options {
                 seed,
                 declared,
@@ -73,7 +73,7 @@ pub(crate) fn certify(
         SideArg::Plc => {
             let kind = resolve_client(iut)?;
             // What the client declares, on the command line and of itself.
-            let declared = client_declaration(&iut.declare)?;
+            let declared = declared(&iut.declare)?;
             let options = ClientOptions {
                 declared: Ok(declared),
                 ..ClientOptions::new(seed)

@@ -28,12 +28,7 @@ pub(crate) fn device(
         choices: soft_device_choices(choices)?,
     };
     // Checked as `run --declare` checks them, then said as the protocol says them.
-    let mut declared = canif_harness::door::declaration::choices::Declared::default();
-    for text in declare {
-        if let Err(error) = declared.declare(text) {
-            return Err(stop!("--declare {text}: {error}"));
-        }
-    }
+    let declared: canif_harness::declare::choices::Declared = crate::commands::declared(declare)?;
     let build: &Build<'_> = &|caps, config| kind.build(caps, config);
     let served = match bus {
         None => server::serve(

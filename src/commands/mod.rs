@@ -13,8 +13,8 @@ use crate::stop::{stop, Stop};
 
 use canif_harness::client::faulty::{ClientFault, ClientShape};
 use canif_harness::client::suite::ClientKind;
+use canif_harness::declare::Declaration;
 use canif_harness::device::IutKind;
-use canif_harness::door::declaration::{self, choices::Declared};
 use canif_harness::door::{Door, LibHost, Role};
 use canif_softdevice::{Choice, Fault};
 
@@ -219,35 +219,11 @@ fn client_kind(iut: &IutOptions) -> Result<ClientKind, Stop> {
     }
 }
 
-/// What `--declare` says of a client (docs/plc-side.md), or the exit code
-/// of a usage error naming the argument, file and line that cannot be taken.
-pub(crate) fn client_declaration(
-    declare: &[String],
-) -> Result<canif_harness::client::ClientDeclaration, Stop> {
-    let mut declared = canif_harness::client::ClientDeclaration::default();
-    for line in declaration_lines(declare)? {
-        if let Err(error) = declared.declare(&line.text()) {
-            return Err(stop!("{}: {error}", line.origin));
-        }
-    }
-    Ok(declared)
-}
-
-/// The choices `--declare` names (docs/choices.md), or the exit code of a
-/// usage error naming the argument, file and line that cannot be taken.
-pub(crate) fn declared_choices(declare: &[String]) -> Result<Declared, Stop> {
-    let mut declared = Declared::default();
-    for line in declaration_lines(declare)? {
-        if let Err(error) = declared.declare(&line.text()) {
-            return Err(stop!("{}: `{}`: {error}", line.origin, line.text()));
-        }
-    }
-    Ok(declared)
-}
-
-/// `--declare` read the one way both sides read it.
-fn declaration_lines(declare: &[String]) -> Result<Vec<declaration::Line>, Stop> {
-    declaration::read_arguments(declare).map_err(|error| stop!("{error}"))
+/// What `--declare` says, read as either side's [`Declaration`] reads it
+/// (docs/choices.md, docs/plc-side.md), or the exit code of a usage error
+/// naming the argument, file and line that cannot be taken.
+pub(crate) fn declared<D: Declaration>(declare: &[String]) -> Result<D, Stop> {
+    D::read(declare).map_err(|error| stop!("{error}"))
 }
 
 /// Where a lib:PATH IUT runs: a `canif lib-host` of this executable, unless

@@ -150,8 +150,8 @@ pub(crate) fn probe(
     profiles: &[&canif_spec::Profile],
     out: &std::path::Path,
 ) -> Result<ExitCode, Stop> {
+    use canif_harness::declare::choices::Choice;
     use canif_harness::device::probe::{declaration, finding, probe, Finding};
-    use canif_harness::door::declaration::choices::Choice;
     let options = canif_harness::device::Options::quick(1);
     let mut probes = Vec::new();
     for profile in profiles {

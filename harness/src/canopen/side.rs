@@ -168,6 +168,12 @@ impl Side for CanopenSide {
     type Case = NodeCase;
     const UNDER_TEST: &'static str = "the node";
     const SIDE: canif_spec::Side = canif_spec::Side::Device;
+    /// Nothing carries from one case to the next: each starts afresh.
+    type Learned = ();
+
+    fn choices((): ()) -> Vec<crate::declare::ChoiceEntry> {
+        Vec::new()
+    }
     const SUITE: Suite = Suite::Canopen;
 
     fn cases(&self, _: &Profile) -> Vec<NodeCase> {
@@ -182,7 +188,7 @@ impl Side for CanopenSide {
         &case.covers
     }
 
-    fn run(&self, target: &NodeTarget, _: &Profile, case: NodeCase) -> ScenarioRun {
+    fn run(&self, target: &NodeTarget, _: &Profile, case: NodeCase, (): &mut ()) -> ScenarioRun {
         let outcome = match self.checks(target) {
             Err(error) => Outcome::Error(RunError::Iut(error)),
             Ok(checks) => match checks.iter().find(|check| check.name == case.name) {
@@ -218,7 +224,7 @@ impl Side for CanopenSide {
             frames_checked: 0,
             tolerated: 0,
             elapsed: std::time::Duration::ZERO,
-            iut_declares: Vec::new(),
+            iut_declares: Default::default(),
             advisories: Default::default(),
         }
     }

@@ -12,7 +12,7 @@ use canif_model::timing::BitRates;
 use canif_spec::{req_ids, ReqId};
 
 use super::master::Master;
-use crate::door::declaration::client::{Application, ClientDeclaration};
+use crate::declare::client::{Application, ClientDeclaration};
 use crate::run::Rng;
 
 /// Something that happens at the start of a CAN interface cycle.

@@ -22,8 +22,8 @@ pub mod suite;
 use canif_model::client::PlcClient;
 use canif_model::image::ImageLayout;
 
+pub use crate::declare::client::ClientDeclaration;
 pub use crate::door::client::{Client, TaskAnswer, TaskIo};
-pub use crate::door::declaration::client::ClientDeclaration;
 pub use crate::error::IutError;
 
 /// The reference client of 001 §6 (ruling R5) as a client under test: it

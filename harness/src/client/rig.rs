@@ -17,6 +17,7 @@ use super::judge::{self, Breach, Judge, TaskSeen, SENT_REPORTS, TRANSACTION_NUMB
 use super::master::{Master, MasterRun};
 use super::{Client, ClientDeclaration, IutError, TaskIo};
 use crate::client::played_device::{DeviceSide, Ended, PlayedDevice};
+use crate::declare::Declares;
 use crate::door::iut::BuildError;
 use crate::error::{HarnessError, IutCause, Refusal, RunError};
 use crate::outcome::{BusFrame, Failure, Outcome, ScenarioRun, TaskView, Timeline};
@@ -300,7 +301,7 @@ fn run_with(
         .filter(|id| record.declared.tells_sent != Some(false) || !TRANSACTION_NUMBERS.contains(id))
         .cloned()
         .collect();
-    let iut_declares = record.declared.lines();
+    let iut_declares = Declares::Client(record.declared.clone());
     let run = ScenarioRun {
         iut_declares,
         advisories: record.advisories,

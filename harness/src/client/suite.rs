@@ -14,7 +14,8 @@ use super::faulty::{ClientFault, ClientShape, FaultyClient};
 use super::master::Master;
 use super::{judge, rig, Client, ReferenceClient};
 use crate::client::played_device::PlayedDevice;
-use crate::door::declaration::client::ClientDeclaration;
+use crate::declare::client::ClientDeclaration;
+use crate::declare::Declares;
 use crate::door::iut::BuildError;
 use crate::door::Door;
 use crate::error::{IutCause, IutError, Refusal, RunError};
@@ -334,6 +335,12 @@ impl RunSide for ClientOptions {
     type Case = ClientCase;
     const UNDER_TEST: &'static str = "the client";
     const SIDE: Side = Side::Plc;
+    /// Nothing carries from one case to the next: each starts afresh.
+    type Learned = ();
+
+    fn choices((): ()) -> Vec<crate::declare::ChoiceEntry> {
+        Vec::new()
+    }
 
     fn cases(&self, profile: &Profile) -> Vec<ClientCase> {
         scenarios(&profile.model_capabilities(), self)
@@ -350,10 +357,16 @@ impl RunSide for ClientOptions {
         &case.scenario.covers
     }
 
-    fn run(&self, kind: &ClientKind, profile: &Profile, case: ClientCase) -> ScenarioRun {
+    fn run(
+        &self,
+        kind: &ClientKind,
+        profile: &Profile,
+        case: ClientCase,
+        (): &mut (),
+    ) -> ScenarioRun {
         if let Err(error) = &self.declared {
             return ScenarioRun {
-                iut_declares: Vec::new(),
+                iut_declares: Default::default(),
                 advisories: Default::default(),
                 scenario: run_name(&case.scenario, case.master),
                 covers: case.scenario.covers.clone(),
@@ -387,9 +400,12 @@ impl RunSide for ClientOptions {
         let mut reach = reach(&profile.model_capabilities(), self);
         let declared = runs
             .iter()
-            .filter_map(|r| ClientDeclaration::parse(&r.iut_declares).ok())
+            .filter_map(|r| match &r.iut_declares {
+                Declares::Client(declared) => Some(declared),
+                _ => None,
+            })
             .fold(self.declaration(), |all, run| {
-                all.merged(&run).unwrap_or(all)
+                all.merged(run).unwrap_or(all)
             });
         let declared_nothing = declared.tells_sent == Some(false);
         if declared_nothing {

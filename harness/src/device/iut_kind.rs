@@ -5,8 +5,8 @@ use canif_model::config::{Capabilities, InterfaceConfig, TxQueueAccounting};
 use canif_model::device::Device;
 use canif_softdevice::{Choice, Fault, SoftDevice};
 
+use crate::declare::choices::Declared;
 use crate::door::adapter::protocol::OwnedBus;
-use crate::door::declaration::choices::Declared;
 use crate::door::ethercat::EthercatLink;
 use crate::door::iut::{soft_settings, BuildError, Iut, ModelIut, SoftDeviceIut};
 use crate::door::{Configurer, Door};

@@ -11,6 +11,7 @@ use canif_model::image::{InputImage, OutputImage};
 use canif_model::Nanos;
 use canif_spec::ReqId;
 
+use crate::declare::Declares;
 use crate::device::blame;
 use crate::device::bounds::Bounds;
 use crate::device::bus::Bus;
@@ -41,7 +42,7 @@ pub fn run_scenario(
         frames_checked: frames,
         tolerated,
         elapsed: std::time::Duration::ZERO,
-        iut_declares: Vec::new(),
+        iut_declares: Default::default(),
         advisories: Default::default(),
     };
     let bus = match scenario.bus.open(scenario.bit_rates, kind.owns_its_bus()) {
@@ -100,7 +101,7 @@ pub struct Lockstep<B: Bus + ?Sized = dyn Bus> {
     pub rules: Rules,
     pub bus: Box<B>,
     /// What the IUT itself declared and was judged by (`NAME=VALUE`).
-    pub iut_declares: Vec<String>,
+    pub iut_declares: Declares,
     cycle_time: Nanos,
     time_stamp_tolerance: Nanos,
 }
@@ -147,7 +148,7 @@ impl<B: Bus + ?Sized> Lockstep<B> {
         }
         let declared = told.or(own);
         let caps = &declared.apply(caps);
-        let iut_declares = own.except(&told).lines();
+        let iut_declares = Declares::Device(own.except(&told));
         let model = Device::new(caps, scenario.interface.clone())
             .map_err(|e| RunError::Configuration(Refusal::Model(e)))?;
         let trace = scenario.trace.as_ref().and_then(|(dir, name, epoch)| {

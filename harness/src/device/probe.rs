@@ -8,7 +8,8 @@ use canif_spec::Profile;
 use super::iut_kind::IutKind;
 use super::scenario::Scenario;
 use super::suite::{DeviceCase, Options};
-use crate::door::declaration::choices::{Choice, Declared};
+use crate::declare::choices::{Choice, Declared};
+use crate::declare::Declaration;
 use crate::error::RunError;
 use crate::outcome::Outcome;
 use crate::run::Side;
@@ -74,10 +75,11 @@ pub fn probe(kind: &IutKind, profile: &Profile, options: &Options) -> Vec<Probed
                     .expect("a choice's own value");
                 let under = Options {
                     declared,
-                    observed: Default::default(),
                     ..options.clone()
                 };
-                match under.run(kind, profile, case.clone()).outcome {
+                // Each value tried afresh: nothing learned under another.
+                let learned = &mut Default::default();
+                match under.run(kind, profile, case.clone(), learned).outcome {
                     Outcome::Pass => probed.passes.push(value),
                     Outcome::Fail(_) => {}
                     Outcome::Error(error) => {

@@ -107,7 +107,7 @@ impl Iut for Ordered {
     fn take_deviation(&mut self) -> Option<crate::door::iut::Deviation> {
         self.inner.take_deviation()
     }
-    fn declared(&self) -> crate::door::declaration::choices::Declared {
+    fn declared(&self) -> crate::declare::choices::Declared {
         self.inner.declared()
     }
 }

@@ -222,7 +222,7 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
         Outcome::Fail(Box::new(first))
     });
     ScenarioRun {
-        iut_declares: Vec::new(),
+        iut_declares: Default::default(),
         advisories: Default::default(),
         scenario: REFUSALS.into(),
         covers: REFUSAL_IDS.to_vec(),

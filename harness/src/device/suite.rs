@@ -2,8 +2,6 @@
 //! scenario of every interface the profile offers, each in lockstep with the
 //! model. The device side of [`crate::run::Side`].
 
-use std::sync::{Arc, Mutex};
-
 use canif_model::config::{Capabilities, TxQueueAccounting};
 use canif_model::freedoms::Named;
 use canif_model::Nanos;
@@ -14,10 +12,11 @@ use super::iut_kind::IutKind;
 use super::lockstep::run_scenario;
 use super::refusals::{check_refusals, refused, REFUSALS, REFUSAL_IDS};
 use super::scenario::{Judgement, Scenario};
-use crate::device::bus::BusChoice;
-use crate::door::declaration::choices::{
+use crate::declare::choices::{
     Choice, Declared, Observed, TX_QUEUE_ACCOUNTING_IDS, TX_QUEUE_ACCOUNTING_SETTLED_BY,
 };
+use crate::declare::{ChoiceEntry, ChoiceSource, Declaration};
+use crate::device::bus::BusChoice;
 use crate::error::{Refusal, RunError};
 use crate::outcome::{Outcome, ScenarioRun};
 use crate::run::{Selection, SelfCheck, Side};
@@ -50,11 +49,15 @@ pub struct Options {
     /// How a terminal over EtherCAT is surveyed before the run (behind
     /// another door, nothing is).
     pub survey: crate::door::ethercat::Pace,
-    /// What each profile's run saw an undeclared device choose (shared by
-    /// the clones a run makes, read when the report is written).
-    pub observed: Arc<Mutex<Vec<Observed>>>,
-    /// What the IUT declared itself in its `configured` answers (`NAME=VALUE`).
-    pub iut_declared: Arc<Mutex<std::collections::BTreeSet<String>>>,
+}
+
+/// What a profile's device run learns as its cases run: what an undeclared
+/// device showed of its Tx queue accounting (and where), what the IUT
+/// declared itself in its `configured` answers.
+#[derive(Debug, Clone, Default)]
+pub struct Learned {
+    pub observed: Option<Observed>,
+    pub by_iut: Declared,
 }
 
 impl Options {
@@ -82,8 +85,6 @@ impl Options {
             selection: Selection::default(),
             declared: Declared::default(),
             survey: Default::default(),
-            observed: Arc::default(),
-            iut_declared: Arc::default(),
         }
     }
 }
@@ -105,26 +106,6 @@ impl Options {
         self.declared.or(kind.declared())
     }
 
-    /// What an undeclared device was seen to choose on `profile` so far.
-    fn observed_on(&self, profile: &str) -> Option<TxQueueAccounting> {
-        let observed = self.observed.lock().unwrap_or_else(|e| e.into_inner());
-        observed
-            .iter()
-            .find(|o| o.profile == profile)
-            .map(|o| o.tx_queue_accounting)
-    }
-
-    fn observe(&self, profile: &str, tx_queue_accounting: TxQueueAccounting, scenario: &str) {
-        let mut observed = self.observed.lock().unwrap_or_else(|e| e.into_inner());
-        if !observed.iter().any(|o| o.profile == profile) {
-            observed.push(Observed {
-                profile: profile.to_string(),
-                tx_queue_accounting,
-                scenario: scenario.to_string(),
-            });
-        }
-    }
-
     /// One scenario, judged by the choice the device declared, or the one a
     /// scenario before showed; a device that declared none and has shown
     /// none yet passes under any documented choice, and the first scenario
@@ -134,7 +115,7 @@ impl Options {
         kind: &IutKind,
         mut caps: Capabilities,
         scenario: &Scenario,
-        profile: &str,
+        (profile, learned): (&str, &mut Learned),
     ) -> ScenarioRun {
         let declared = self.declared_by(kind);
         caps.sync1_output_delay = declared.sync1_output_delay;
@@ -144,18 +125,13 @@ impl Options {
         };
         let settled = declared
             .tx_queue_accounting
-            .or_else(|| self.observed_on(profile));
+            .or_else(|| learned.observed.as_ref().map(|o| o.tx_queue_accounting));
         caps.tx_queue_accounting = settled.unwrap_or_default();
         let run = run_scenario(kind, &caps, scenario, scenario.steps());
         let run = self.judged_as_declared(kind, &caps, scenario, run);
-        if !run.iut_declares.is_empty() {
-            let mut said = self.iut_declared.lock().unwrap_or_else(|e| e.into_inner());
-            said.extend(run.iut_declares.iter().cloned());
-        }
+        learned.by_iut = run.iut_declares.device().or(learned.by_iut);
         // The IUT declared its accounting itself: judged by that, nothing to find out.
-        let self_declared = Declared::from_lines(&run.iut_declares)
-            .tx_queue_accounting
-            .is_some();
+        let self_declared = run.iut_declares.device().tx_queue_accounting.is_some();
         if settled.is_some() || self_declared {
             return run;
         }
@@ -175,7 +151,11 @@ impl Options {
                     caps.tx_queue_accounting = other;
                     let again = run_scenario(kind, &caps, scenario, scenario.steps());
                     if matches!(again.outcome, Outcome::Pass) {
-                        self.observe(profile, other, &scenario.name);
+                        learned.observed = Some(Observed {
+                            profile: profile.to_string(),
+                            tx_queue_accounting: other,
+                            scenario: scenario.name.clone(),
+                        });
                         return again;
                     }
                 }
@@ -197,7 +177,11 @@ impl Options {
                         matches!(again.outcome, Outcome::Fail(_))
                     });
                 if told_apart {
-                    self.observe(profile, passed_under, &scenario.name);
+                    learned.observed = Some(Observed {
+                        profile: profile.to_string(),
+                        tx_queue_accounting: passed_under,
+                        scenario: scenario.name.clone(),
+                    });
                 }
                 run
             }
@@ -224,9 +208,7 @@ impl Options {
         let Judgement::Bounds { decided_by } = scenario.judgement else {
             return run;
         };
-        let declared = scenario
-            .declared
-            .or(Declared::from_lines(&run.iut_declares));
+        let declared = scenario.declared.or(run.iut_declares.device());
         let exact = decided_by.iter().all(|c| declared.value(*c).is_some());
         if !exact || !matches!(run.outcome, Outcome::Fail(_)) {
             return run;
@@ -282,6 +264,7 @@ impl Side for Options {
     type Case = DeviceCase;
     const UNDER_TEST: &'static str = "the IUT";
     const SIDE: SideName = SideName::Device;
+    type Learned = Learned;
 
     fn cases(&self, profile: &Profile) -> Vec<DeviceCase> {
         let scenarios = scenarios(&profile.model_capabilities(), &self.generation());
@@ -308,7 +291,13 @@ impl Side for Options {
         }
     }
 
-    fn run(&self, kind: &IutKind, profile: &Profile, case: DeviceCase) -> ScenarioRun {
+    fn run(
+        &self,
+        kind: &IutKind,
+        profile: &Profile,
+        case: DeviceCase,
+        learned: &mut Learned,
+    ) -> ScenarioRun {
         let kind = &kind.for_profile(profile);
         let caps = profile.model_capabilities();
         let mut scenario = match case {
@@ -331,7 +320,7 @@ impl Side for Options {
                 .collect();
             scenario.trace = Some((dir.join(&profile.name), name, self.trace_epoch));
         }
-        let mut run = self.run_judged_by_choice(kind, caps, &scenario, &profile.name);
+        let mut run = self.run_judged_by_choice(kind, caps, &scenario, (&profile.name, learned));
         // Refusing an interface the profile offers is the device's failure,
         // not a broken exchange; what the scenario needed it for is not run.
         if let Outcome::Error(RunError::Configuration(Refusal::Iut(reason))) = &run.outcome {
@@ -339,6 +328,25 @@ impl Side for Options {
             run.outcome = Outcome::Fail(Box::new(failure));
         }
         run
+    }
+
+    fn choices(learned: Learned) -> Vec<ChoiceEntry> {
+        let by_iut = learned
+            .by_iut
+            .lines()
+            .into_iter()
+            .map(|choice| ChoiceEntry {
+                choice,
+                how: ChoiceSource::DeclaredByIut,
+            });
+        let observed = learned.observed.map(|o| ChoiceEntry {
+            choice: o.line(),
+            how: ChoiceSource::Observed {
+                profile: o.profile,
+                scenario: o.scenario,
+            },
+        });
+        by_iut.chain(observed).collect()
     }
 
     fn selection(&self) -> &Selection {
@@ -429,9 +437,6 @@ impl SelfCheck for Options {
     fn with_fault(&self, fault: Self::Fault) -> (Self, IutKind) {
         let options = Options {
             counter_wrap: fault == canif_softdevice::Fault::CounterDoesNotWrap,
-            // Each fault's run sees its own device's choices, not another's.
-            observed: Arc::default(),
-            iut_declared: Arc::default(),
             ..self.clone()
         };
         let kind = IutKind::SoftDevice {

@@ -4,7 +4,7 @@
 
 use canif_model::image::MessageRepr;
 
-use super::declaration::client::ClientDeclaration;
+use crate::declare::client::ClientDeclaration;
 use crate::error::IutError;
 
 /// What a client sees in one PLC task.

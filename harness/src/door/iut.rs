@@ -68,8 +68,8 @@ pub trait Iut {
     }
     /// What the device itself declares where the documents leave a choice
     /// (the adapter protocol's `configured` answer).
-    fn declared(&self) -> crate::door::declaration::choices::Declared {
-        crate::door::declaration::choices::Declared::default()
+    fn declared(&self) -> crate::declare::choices::Declared {
+        crate::declare::choices::Declared::default()
     }
 }
 

@@ -8,8 +8,6 @@
 //! each other; no door imports a side.
 //!
 //! - [`iut`], [`client`]: the two roles' traits, and the in-process devices.
-//! - [`declaration`]: what an implementation declares (the choices the
-//!   documents leave, what a client serves), read one way for both roles.
 //! - [`adapter`]: the adapter protocol and the process that speaks it.
 //! - [`exec`], `lib`, [`ethercat`]: one module per transport, each with
 //!   both roles it serves.
@@ -20,7 +18,6 @@
 
 pub mod adapter;
 pub mod client;
-pub mod declaration;
 pub mod ethercat;
 pub mod exec;
 pub mod iut;
@@ -35,10 +32,10 @@ use std::path::{Path, PathBuf};
 use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_model::image::ImageLayout;
 
+use crate::declare::client::ClientDeclaration;
 use adapter::process::Channel;
 use adapter::protocol::OwnedBus;
 use client::Client;
-use declaration::client::ClientDeclaration;
 use ethercat::EthercatLink;
 use exec::{Configured, ExecIut};
 use iut::{BuildError, Iut};

@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 use canif_spec::{Catalogue, Profile, ReqId};
 
 use super::Selection;
+use crate::declare::ChoiceEntry;
 use crate::error::{Broke, RunError};
 use crate::outcome::{Failure, Outcome, ScenarioRun};
 use crate::verdict::{self, Check, CheckResult, Evidence, Finding, Reach, Verdict, VerdictKind};
@@ -26,6 +27,10 @@ pub trait Side {
     /// Which suite: the CAN interface's (with its Gherkin scenarios), or the
     /// CANopen node checks'.
     const SUITE: canif_spec::Suite = canif_spec::Suite::Interface;
+    /// What a profile's run learns of what is under test as its cases run
+    /// (what an undeclared device chose, what it declared itself), handed
+    /// from each case to the next and returned with the [`ProfileRun`].
+    type Learned: Default;
 
     /// Every case a profile's run has, in the order they run.
     fn cases(&self, profile: &Profile) -> Vec<Self::Case>;
@@ -33,9 +38,17 @@ pub trait Side {
     fn name(case: &Self::Case) -> String;
     /// The requirements a case exercises.
     fn covers(case: &Self::Case) -> &[ReqId];
-    /// Runs one case against a fresh instance of what is under test.
-    fn run(&self, under_test: &Self::UnderTest, profile: &Profile, case: Self::Case)
-        -> ScenarioRun;
+    /// Runs one case against a fresh instance of what is under test, with
+    /// what the profile's cases before it learned.
+    fn run(
+        &self,
+        under_test: &Self::UnderTest,
+        profile: &Profile,
+        case: Self::Case,
+        learned: &mut Self::Learned,
+    ) -> ScenarioRun;
+    /// The choices a profile's run learned, as its report lists them.
+    fn choices(learned: Self::Learned) -> Vec<ChoiceEntry>;
     fn selection(&self) -> &Selection;
     /// After what is under test broke, skip the profile's remaining cases
     /// instead of starting it again and again.
@@ -52,6 +65,9 @@ pub struct ProfileRun {
     pub failures: Vec<Failure>,
     /// What the verdicts over these runs rest on besides the runs.
     pub reach: Reach,
+    /// The choices the run learned of what is under test (what it declared
+    /// itself, what an undeclared device showed).
+    pub choices: Vec<ChoiceEntry>,
 }
 
 impl ProfileRun {
@@ -70,6 +86,7 @@ impl ProfileRun {
             runs,
             failures,
             reach,
+            choices: Vec::new(),
         }
     }
 
@@ -160,6 +177,7 @@ pub fn run_profile<S: Side>(
 ) -> ProfileRun {
     let mut runs = Vec::new();
     let mut broken: Option<Broke> = None;
+    let mut learned = S::Learned::default();
     for case in side.cases(profile) {
         let name = S::name(&case);
         if !side.selection().admits(
@@ -174,7 +192,7 @@ pub fn run_profile<S: Side>(
         }
         let run = match &broken {
             Some(after) => ScenarioRun {
-                iut_declares: Vec::new(),
+                iut_declares: Default::default(),
                 advisories: Default::default(),
                 scenario: name,
                 covers: S::covers(&case).to_vec(),
@@ -186,7 +204,7 @@ pub fn run_profile<S: Side>(
             },
             None => {
                 let started = Instant::now();
-                let mut run = side.run(under_test, profile, case);
+                let mut run = side.run(under_test, profile, case, &mut learned);
                 run.elapsed = started.elapsed();
                 run
             }
@@ -198,7 +216,10 @@ pub fn run_profile<S: Side>(
         runs.push(run);
     }
     let reach = side.reach(profile, &runs);
-    ProfileRun::new(&profile.name, runs, reach)
+    ProfileRun {
+        choices: S::choices(learned),
+        ..ProfileRun::new(&profile.name, runs, reach)
+    }
 }
 
 /// Where and how what is under test broke in `run`, if it did: what the

@@ -14,7 +14,7 @@ use canif_spec::Catalogue;
 
 use super::{campaign_plan, one_at_a_time, profiles, run_and_finish, selected};
 use crate::cli::{BusArg, DeviceRunArgs, RealTimeOptions};
-use crate::commands::{declared_choices, resolve_iut};
+use crate::commands::{declared, resolve_iut};
 
 pub(crate) fn command(catalogue: &Catalogue, args: DeviceRunArgs) -> Result<ExitCode, Stop> {
     let DeviceRunArgs {
@@ -82,9 +82,8 @@ pub(crate) fn command(catalogue: &Catalogue, args: DeviceRunArgs) -> Result<Exit
         bus,
         selection: selected.selection,
         fail_fast: !no_fail_fast,
-        declared: declared_choices(&iut.declare)?,
+        declared: declared(&iut.declare)?,
         survey: pace(&real_time),
-        ..Options::default()
     };
     let plan = campaign_plan(profiles, options, &common, &campaign, selected.rerun)?;
     let kind = resolve_iut(&iut)?;

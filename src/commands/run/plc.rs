@@ -10,7 +10,7 @@ use canif_spec::Catalogue;
 
 use super::{campaign_plan, one_at_a_time, profiles, run_and_finish, selected};
 use crate::cli::{BusArg, PlcRunArgs};
-use crate::commands::{client_declaration, resolve_client};
+use crate::commands::{declared, resolve_client};
 
 pub(crate) fn command(catalogue: &Catalogue, args: PlcRunArgs) -> Result<ExitCode, Stop> {
     let PlcRunArgs {
@@ -37,7 +37,7 @@ pub(crate) fn command(catalogue: &Catalogue, args: PlcRunArgs) -> Result<ExitCod
         counter_wrap: !campaign.no_counter_wrap,
         masters: masters(&master)?,
         selection: selected.selection,
-        declared: Ok(client_declaration(&iut.declare)?),
+        declared: Ok(declared(&iut.declare)?),
     };
     // What the client declares of itself, asked once.
     let options = options.declared_by(&kind);

@@ -13,7 +13,7 @@ use canif_model::image::{ImageLayout, InputImage, MessageRepr, OutputImage};
 use canif_spec::{req_ids, ReqId};
 
 use super::master::NEIGHBOUR_PATTERN;
-use crate::door::declaration::client::{Application, ClientDeclaration, RestartChoice};
+use crate::declare::client::{Application, ClientDeclaration, RestartChoice};
 
 mod rx;
 mod tx;

@@ -56,7 +56,7 @@ pub enum Judgement {
     /// Where the device declared each of `decided_by` (and there is one),
     /// the model judges it taking those choices, exactly.
     Bounds {
-        decided_by: &'static [crate::door::declaration::choices::Choice],
+        decided_by: &'static [crate::declare::choices::Choice],
     },
 }
 
@@ -100,7 +100,7 @@ pub struct Scenario {
     pub judgement: Judgement,
     /// What the command line or the IUT's kind declared of the device's
     /// choices; where it says nothing, the IUT's own declaration counts.
-    pub declared: crate::door::declaration::choices::Declared,
+    pub declared: crate::declare::choices::Declared,
     pub steps: Steps,
 }
 

@@ -10,7 +10,7 @@ use canif_model::frame::{CanId, Frame};
 use canif_model::image::{flag, ImageLayout, MessageRepr};
 use canif_spec::ReqId;
 
-use crate::door::declaration::choices::Choice;
+use crate::declare::choices::Choice;
 
 use super::generated::random_frame;
 use super::scripted::{idle, message, std};

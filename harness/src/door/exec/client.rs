@@ -6,10 +6,10 @@
 use canif_model::config::InterfaceConfig;
 use canif_model::image::{ImageLayout, MessageRepr};
 
+use crate::declare::client::ClientDeclaration;
 use crate::door::adapter::process::{AdapterProcess, Channel};
 use crate::door::adapter::protocol::{Answer, Config, Hex, Request, Tasked, WireMessage};
 use crate::door::client::{Client, TaskAnswer, TaskIo};
-use crate::door::declaration::client::ClientDeclaration;
 use crate::door::Timeouts;
 use crate::error::IutCause;
 use crate::error::IutError;

@@ -11,12 +11,13 @@ use canif_model::image::ImageLayout;
 use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 
+use crate::declare::choices::Declared;
+use crate::declare::Declaration;
 use crate::door::adapter::process::{AdapterProcess, Channel};
 use crate::door::adapter::protocol::{
     Answer, BusEvent, Caps, Config, Expected, Hex, OwnedBus, PlannedFrame, Request, SteppedLine,
     Transmitted, WireFrame, PROTOCOL_VERSION,
 };
-use crate::door::declaration::choices::Declared;
 use crate::door::iut::{InvalidFrame, Iut, Planned, Transmit};
 use crate::door::Timeouts;
 use crate::error::{IutCause, IutError};

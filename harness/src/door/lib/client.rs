@@ -11,8 +11,8 @@ use canif_cabi::{CMessage, ClientLibrary, ClientProgram};
 use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_model::image::{ImageLayout, MessageRepr};
 
+use crate::declare::client::ClientDeclaration;
 use crate::door::client::{Client, TaskAnswer, TaskIo};
-use crate::door::declaration::client::ClientDeclaration;
 use crate::door::lib::{c_config, from_c, to_c};
 use crate::error::IutCause;
 use crate::error::IutError;

@@ -11,7 +11,8 @@ use canif_model::image::ImageLayout;
 use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 
-use crate::door::declaration::choices::Declared;
+use crate::declare::choices::Declared;
+use crate::declare::Declaration;
 use canif_cabi::guard::GuardedImage;
 
 use crate::door::iut::{BuildError, InvalidFrame, Iut, Planned, Transmit};

@@ -9,11 +9,12 @@ use std::path::Path;
 use canif_model::image::{ImageLayout, MessageRepr};
 
 use super::session::{self, Serves, Switch};
+use crate::declare::client::ClientDeclaration;
+use crate::declare::Declaration;
 use crate::door::adapter::protocol::{
     Answer, Config, FrameData, Hex, Request, SharedOffer, WireFrame, WireMessage,
 };
 use crate::door::client::{Client, TaskIo};
-use crate::door::declaration::client::ClientDeclaration;
 use crate::door::lib::client::LibClient;
 
 /// The layout the sizes of `config` name (with InfoData or without).

@@ -7,6 +7,8 @@
 
 use std::fmt;
 
+use super::{Declaration, DeclarationError};
+
 use canif_model::config::{Capabilities, TxQueueAccounting};
 use canif_model::exchange::SYNC1_TX_JITTER;
 use canif_model::freedoms::{BadTxLength, Named, OversizeBatch, RxIdleCount, StaleRxSlots};
@@ -157,54 +159,25 @@ pub(crate) const TX_QUEUE_ACCOUNTING_IDS: &[ReqId] =
 /// The requirement whose scenarios tell the accountings apart.
 pub(crate) const TX_QUEUE_ACCOUNTING_SETTLED_BY: ReqId = ReqId::new("HS-TX-012");
 
-/// A declaration that cannot be read.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum DeclareError {
-    /// Not `NAME=VALUE`.
-    Form(String),
-    UnknownChoice(String),
-    UnknownValue {
-        choice: Choice,
-        value: String,
-    },
-}
-
-impl fmt::Display for DeclareError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            DeclareError::Form(text) => write!(f, "`{text}` is not NAME=VALUE"),
-            DeclareError::UnknownChoice(name) => {
-                let names: Vec<&str> = Choice::ALL.iter().map(|c| c.name()).collect();
-                write!(
-                    f,
-                    "no choice is called `{name}`; the choices are {}",
-                    names.join(", ")
-                )
-            }
-            DeclareError::UnknownValue { choice, value } => write!(
-                f,
-                "{choice} cannot be `{value}`; it is {}",
-                choice.expects()
-            ),
-        }
-    }
-}
-
-impl std::error::Error for DeclareError {}
-
-impl Declared {
+impl Declaration for Declared {
     /// Adds one `NAME=VALUE` (the command line's `--declare`, a line of a
     /// probe's file).
-    pub fn declare(&mut self, text: &str) -> Result<(), DeclareError> {
+    fn declare(&mut self, text: &str) -> Result<(), DeclarationError> {
         let (name, value) = text
             .split_once('=')
             .map(|(n, v)| (n.trim(), v.trim()))
-            .ok_or_else(|| DeclareError::Form(text.to_string()))?;
-        let choice =
-            Choice::from_name(name).ok_or_else(|| DeclareError::UnknownChoice(name.to_string()))?;
-        let unknown = || DeclareError::UnknownValue {
-            choice,
+            .ok_or_else(|| DeclarationError::Malformed {
+                line: text.to_string(),
+            })?;
+        let choice = Choice::from_name(name).ok_or_else(|| DeclarationError::UnknownName {
+            name: name.to_string(),
+            what: "choice",
+            known: Choice::ALL.iter().map(|c| c.name()).collect(),
+        })?;
+        let unknown = || DeclarationError::BadValue {
+            name: choice.name(),
             value: value.to_string(),
+            expected: choice.expects(),
         };
         let number = || value.parse::<u64>().ok();
         match choice {
@@ -230,6 +203,16 @@ impl Declared {
         Ok(())
     }
 
+    /// Each declared choice as `NAME=VALUE`.
+    fn lines(&self) -> Vec<String> {
+        Choice::ALL
+            .into_iter()
+            .filter_map(|c| Some(format!("{}={}", c.name(), self.value(c)?)))
+            .collect()
+    }
+}
+
+impl Declared {
     /// The declared value of `choice`, as it is written.
     pub fn value(&self, choice: Choice) -> Option<String> {
         let name = |v: Option<&'static str>| v.map(str::to_string);
@@ -306,30 +289,12 @@ impl Declared {
         }
     }
 
-    /// What these `NAME=VALUE` lines declare (as [`Declared::lines`] gave them;
-    /// a line that is none is left out).
-    pub fn from_lines(lines: &[String]) -> Declared {
-        let mut declared = Declared::default();
-        for line in lines {
-            let _ = declared.declare(line);
-        }
-        declared
-    }
-
     /// Each declared choice by name, as a probe's file and the protocol's
     /// `declares` carry them.
     pub fn entries(&self) -> std::collections::BTreeMap<String, String> {
         Choice::ALL
             .into_iter()
             .filter_map(|c| Some((c.name().to_string(), self.value(c)?)))
-            .collect()
-    }
-
-    /// Each declared choice as `NAME=VALUE`.
-    pub fn lines(&self) -> Vec<String> {
-        Choice::ALL
-            .into_iter()
-            .filter_map(|c| Some(format!("{}={}", c.name(), self.value(c)?)))
             .collect()
     }
 }

@@ -11,10 +11,83 @@
 
 pub mod choices;
 pub mod client;
+mod error;
+mod judged;
 
 use std::fmt;
 use std::io::Read as _;
 use std::path::{Path, PathBuf};
+
+pub use error::{DeclarationError, ReadError};
+pub use judged::{ChoiceEntry, ChoiceSource};
+
+/// What an implementation declares of itself, one `NAME=VALUE` line at a
+/// time: a device's choices ([`choices::Declared`]) or what a client is
+/// ([`client::ClientDeclaration`]). Both are read the one way this module
+/// reads them, and refused with the one [`DeclarationError`].
+pub trait Declaration: Default + Clone + fmt::Debug {
+    /// Takes one `NAME=VALUE` line.
+    fn declare(&mut self, line: &str) -> Result<(), DeclarationError>;
+
+    /// Each declared name as `NAME=VALUE`, in a fixed order.
+    fn lines(&self) -> Vec<String>;
+
+    /// What `--declare` arguments declare (`NAME=VALUE` or `@FILE` each):
+    /// a line that cannot be taken is refused, naming where it was made.
+    fn read(arguments: &[String]) -> Result<Self, DeclarationError> {
+        let mut declared = Self::default();
+        for line in read_arguments(arguments)? {
+            declared
+                .declare(&line.text())
+                .map_err(|error| DeclarationError::At {
+                    origin: line.origin.clone(),
+                    error: Box::new(error),
+                })?;
+        }
+        Ok(declared)
+    }
+
+    /// What these lines declare, a line that declares nothing known left out.
+    fn from_lines<S: AsRef<str>>(lines: &[S]) -> Self {
+        let mut declared = Self::default();
+        for line in lines {
+            let _ = declared.declare(line.as_ref());
+        }
+        declared
+    }
+}
+
+/// What the implementation under test declared of itself in one scenario
+/// run, as the side that ran it reads declarations.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub enum Declares {
+    /// Nothing, or nothing it can declare (a built-in implementation).
+    #[default]
+    Nothing,
+    /// A device's choices (the protocol's `configured` answer).
+    Device(choices::Declared),
+    /// What a client is (its `started` answer, a library's function).
+    Client(client::ClientDeclaration),
+}
+
+impl Declares {
+    /// Each declared name as `NAME=VALUE`.
+    pub fn lines(&self) -> Vec<String> {
+        match self {
+            Declares::Nothing => Vec::new(),
+            Declares::Device(declared) => declared.lines(),
+            Declares::Client(declared) => declared.lines(),
+        }
+    }
+
+    /// The device's choices it declared (none from a client or nothing).
+    pub fn device(&self) -> choices::Declared {
+        match self {
+            Declares::Device(declared) => *declared,
+            _ => choices::Declared::default(),
+        }
+    }
+}
 
 /// The largest declaration file read: far above any declaration (a few
 /// hundred bytes), far below what could fill memory (`@/dev/zero`).
@@ -55,81 +128,6 @@ impl Line {
         format!("{}={}", self.name, self.value)
     }
 }
-
-/// Why declarations cannot be read.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum ReadError {
-    /// Not `NAME=VALUE`.
-    Malformed {
-        origin: Origin,
-        text: String,
-    },
-    /// `@FILE` is no regular file (a FIFO would block, a device never end).
-    NotAFile {
-        path: PathBuf,
-        kind: &'static str,
-    },
-    TooLarge {
-        path: PathBuf,
-    },
-    Unreadable {
-        path: PathBuf,
-        error: String,
-    },
-    /// A JSON file that is no object of names and values.
-    NotAnObject {
-        path: PathBuf,
-        error: String,
-    },
-    /// One name, two values.
-    Contradiction {
-        name: String,
-        first: Box<Line>,
-        second: Box<Line>,
-    },
-}
-
-impl fmt::Display for ReadError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            ReadError::Malformed { origin, text } => {
-                write!(f, "{origin}: `{text}` is not NAME=VALUE")
-            }
-            ReadError::NotAFile { path, kind } => write!(
-                f,
-                "--declare @{}: is {kind}, not a file (declarations are read from regular files only)",
-                path.display()
-            ),
-            ReadError::TooLarge { path } => write!(
-                f,
-                "--declare @{}: larger than {MAX_FILE} bytes; a declaration is a few lines",
-                path.display()
-            ),
-            ReadError::Unreadable { path, error } => {
-                write!(f, "--declare @{}: {error}", path.display())
-            }
-            ReadError::NotAnObject { path, error } => write!(
-                f,
-                "--declare @{}: not NAME=VALUE lines, nor a JSON object of names and values: {error}",
-                path.display()
-            ),
-            ReadError::Contradiction {
-                name,
-                first,
-                second,
-            } => write!(
-                f,
-                "`{name}` is declared twice, two ways: `{}` ({}) and `{}` ({})",
-                first.text(),
-                first.origin,
-                second.text(),
-                second.origin
-            ),
-        }
-    }
-}
-
-impl std::error::Error for ReadError {}
 
 /// The declarations of `--declare` arguments, in order, each `NAME=VALUE`
 /// or `@FILE`; a name declared again with another value is refused.

@@ -11,6 +11,9 @@
 
 use std::fmt;
 
+use super::Declaration;
+pub use super::DeclarationError;
+
 use canif_model::config::{FrameFormat, InterfaceConfig, QueueMode};
 use canif_model::freedoms::Named;
 
@@ -129,56 +132,6 @@ pub struct ClientDeclaration {
     /// Whether it tells its application which Tx messages were sent (CL-TN-*).
     pub tells_sent: Option<bool>,
 }
-
-/// A declaration's line that cannot be taken.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum DeclarationError {
-    /// Not `name=value`.
-    Malformed {
-        line: String,
-    },
-    UnknownName {
-        name: String,
-    },
-    BadValue {
-        name: &'static str,
-        value: String,
-        expected: &'static str,
-    },
-    /// Declared twice, two ways (say, on the command line and by the client).
-    Conflict {
-        name: &'static str,
-        first: String,
-        second: String,
-    },
-}
-
-impl fmt::Display for DeclarationError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            DeclarationError::Malformed { line } => {
-                write!(f, "`{line}` is not a declaration `name=value`")
-            }
-            DeclarationError::UnknownName { name } => write!(
-                f,
-                "`{name}` is no client declaration; known: {}",
-                Item::ALL.map(Item::name).join(", ")
-            ),
-            DeclarationError::BadValue {
-                name,
-                value,
-                expected,
-            } => write!(f, "{name}={value}: expected {expected}"),
-            DeclarationError::Conflict {
-                name,
-                first,
-                second,
-            } => write!(f, "{name} is declared twice: {first} and {second}"),
-        }
-    }
-}
-
-impl std::error::Error for DeclarationError {}
 
 /// What can be declared, by name.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -340,7 +293,7 @@ fn bad_value(item: Item, value: &str) -> DeclarationError {
     DeclarationError::BadValue {
         name: item.name(),
         value: value.into(),
-        expected: item.expected(),
+        expected: item.expected().to_string(),
     }
 }
 
@@ -354,64 +307,6 @@ impl ClientDeclaration {
         Ok(declaration)
     }
 
-    /// Takes one `name=value` line; the same value twice is no conflict.
-    pub fn declare(&mut self, line: &str) -> Result<(), DeclarationError> {
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') {
-            return Ok(());
-        }
-        let Some((name, value)) = line.split_once('=') else {
-            return Err(DeclarationError::Malformed { line: line.into() });
-        };
-        let (name, value) = (name.trim(), value.trim());
-        let item = Item::ALL
-            .into_iter()
-            .find(|i| i.name() == name)
-            .ok_or_else(|| DeclarationError::UnknownName { name: name.into() })?;
-        let bad = || bad_value(item, value);
-        let line = format!("{name}={value}");
-        match item {
-            Item::Formats => {
-                let formats = [
-                    FrameFormat::Base11,
-                    FrameFormat::Extended29,
-                    FrameFormat::Fd,
-                ];
-                listed(
-                    &mut self.formats,
-                    value,
-                    item,
-                    &line,
-                    (&formats, format_name),
-                )
-            }
-            Item::Queues => {
-                let queues = [QueueMode::Standard, QueueMode::Optimized, QueueMode::Fast];
-                listed(&mut self.queues, value, item, &line, (&queues, queue_name))
-            }
-            Item::TransactionNumbers => {
-                yes_or_no(&mut self.transaction_numbers, value, item, &line)
-            }
-            Item::TimeStamps => yes_or_no(&mut self.time_stamps, value, item, &line),
-            Item::TellsSent => yes_or_no(&mut self.tells_sent, value, item, &line),
-            // `slots` is both directions at once: it conflicts with a
-            // `tx-slots` or `rx-slots` that says otherwise.
-            Item::Slots | Item::TxSlots | Item::RxSlots => {
-                let range = SlotRange::parse(value).ok_or_else(bad)?;
-                if item != Item::RxSlots {
-                    set(&mut self.tx_slots, range, item, &line, SlotRange::to_string)?;
-                }
-                if item != Item::TxSlots {
-                    set(&mut self.rx_slots, range, item, &line, SlotRange::to_string)?;
-                }
-                Ok(())
-            }
-            Item::Direction => named(&mut self.direction, value, item, &line),
-            Item::Application => named(&mut self.application, value, item, &line),
-            Item::Restart => named(&mut self.restart, value, item, &line),
-        }
-    }
-
     /// This declaration and `other`'s lines together; a value declared two
     /// ways is an error naming both.
     pub fn merged(&self, other: &ClientDeclaration) -> Result<Self, DeclarationError> {
@@ -420,41 +315,6 @@ impl ClientDeclaration {
             merged.declare(&line)?;
         }
         Ok(merged)
-    }
-
-    /// The declaration as `name=value` lines, in a fixed order.
-    pub fn lines(&self) -> Vec<String> {
-        let mut lines = Vec::new();
-        let mut line = |item: Item, value: Option<String>| {
-            if let Some(value) = value {
-                lines.push(format!("{}={value}", item.name()));
-            }
-        };
-        line(
-            Item::Formats,
-            self.formats.as_deref().map(|f| joined(f, format_name)),
-        );
-        line(
-            Item::Queues,
-            self.queues.as_deref().map(|q| joined(q, queue_name)),
-        );
-        line(
-            Item::TransactionNumbers,
-            self.transaction_numbers.as_ref().map(yes_no_name),
-        );
-        line(Item::TimeStamps, self.time_stamps.as_ref().map(yes_no_name));
-        match (self.tx_slots, self.rx_slots) {
-            (Some(tx), Some(rx)) if tx == rx => line(Item::Slots, Some(tx.to_string())),
-            (tx, rx) => {
-                line(Item::TxSlots, tx.map(|s| s.to_string()));
-                line(Item::RxSlots, rx.map(|s| s.to_string()));
-            }
-        }
-        line(Item::Direction, self.direction.map(|d| d.name().into()));
-        line(Item::Application, self.application.map(|a| a.name().into()));
-        line(Item::Restart, self.restart.map(|c| c.name().into()));
-        line(Item::TellsSent, self.tells_sent.as_ref().map(yes_no_name));
-        lines
     }
 
     pub fn direction(&self) -> Direction {
@@ -594,6 +454,105 @@ fn yes_no_name(v: &bool) -> String {
 
 mod slots;
 pub use slots::{SlotRange, MAX_SLOTS};
+
+impl Declaration for ClientDeclaration {
+    /// Takes one `name=value` line; the same value twice is no conflict.
+    fn declare(&mut self, line: &str) -> Result<(), DeclarationError> {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            return Ok(());
+        }
+        let Some((name, value)) = line.split_once('=') else {
+            return Err(DeclarationError::Malformed { line: line.into() });
+        };
+        let (name, value) = (name.trim(), value.trim());
+        let item = Item::ALL
+            .into_iter()
+            .find(|i| i.name() == name)
+            .ok_or_else(|| DeclarationError::UnknownName {
+                name: name.into(),
+                what: "client declaration",
+                known: Item::ALL.map(Item::name).to_vec(),
+            })?;
+        let bad = || bad_value(item, value);
+        let line = format!("{name}={value}");
+        match item {
+            Item::Formats => {
+                let formats = [
+                    FrameFormat::Base11,
+                    FrameFormat::Extended29,
+                    FrameFormat::Fd,
+                ];
+                listed(
+                    &mut self.formats,
+                    value,
+                    item,
+                    &line,
+                    (&formats, format_name),
+                )
+            }
+            Item::Queues => {
+                let queues = [QueueMode::Standard, QueueMode::Optimized, QueueMode::Fast];
+                listed(&mut self.queues, value, item, &line, (&queues, queue_name))
+            }
+            Item::TransactionNumbers => {
+                yes_or_no(&mut self.transaction_numbers, value, item, &line)
+            }
+            Item::TimeStamps => yes_or_no(&mut self.time_stamps, value, item, &line),
+            Item::TellsSent => yes_or_no(&mut self.tells_sent, value, item, &line),
+            // `slots` is both directions at once: it conflicts with a
+            // `tx-slots` or `rx-slots` that says otherwise.
+            Item::Slots | Item::TxSlots | Item::RxSlots => {
+                let range = SlotRange::parse(value).ok_or_else(bad)?;
+                if item != Item::RxSlots {
+                    set(&mut self.tx_slots, range, item, &line, SlotRange::to_string)?;
+                }
+                if item != Item::TxSlots {
+                    set(&mut self.rx_slots, range, item, &line, SlotRange::to_string)?;
+                }
+                Ok(())
+            }
+            Item::Direction => named(&mut self.direction, value, item, &line),
+            Item::Application => named(&mut self.application, value, item, &line),
+            Item::Restart => named(&mut self.restart, value, item, &line),
+        }
+    }
+
+    /// The declaration as `name=value` lines, in a fixed order.
+    fn lines(&self) -> Vec<String> {
+        let mut lines = Vec::new();
+        let mut line = |item: Item, value: Option<String>| {
+            if let Some(value) = value {
+                lines.push(format!("{}={value}", item.name()));
+            }
+        };
+        line(
+            Item::Formats,
+            self.formats.as_deref().map(|f| joined(f, format_name)),
+        );
+        line(
+            Item::Queues,
+            self.queues.as_deref().map(|q| joined(q, queue_name)),
+        );
+        line(
+            Item::TransactionNumbers,
+            self.transaction_numbers.as_ref().map(yes_no_name),
+        );
+        line(Item::TimeStamps, self.time_stamps.as_ref().map(yes_no_name));
+        match (self.tx_slots, self.rx_slots) {
+            (Some(tx), Some(rx)) if tx == rx => line(Item::Slots, Some(tx.to_string())),
+            (tx, rx) => {
+                line(Item::TxSlots, tx.map(|s| s.to_string()));
+                line(Item::RxSlots, rx.map(|s| s.to_string()));
+            }
+        }
+        line(Item::Direction, self.direction.map(|d| d.name().into()));
+        line(Item::Application, self.application.map(|a| a.name().into()));
+        line(Item::Restart, self.restart.map(|c| c.name().into()));
+        line(Item::TellsSent, self.tells_sent.as_ref().map(yes_no_name));
+        lines
+    }
+}
 
 #[cfg(test)]
 mod tests;
