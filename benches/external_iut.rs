@@ -38,11 +38,11 @@ fn main() {
     let polled = c_example(&["-Dcanif_transmit_plan=example_transmit_plan"]);
     // `canif device --stdio` over protocol `version`, on the harness's CPU or any.
     let stdio = |version: u8, same_cpu: bool| {
-        IutKind::Door(Door::Exec {
+        IutKind::Door(Door::Exec(canif_harness::door::ExecDoor {
             command: format!("{device} device --stdio --protocol {version}"),
             timeouts: Timeouts::with_request(std::time::Duration::from_millis(10_000)),
             same_cpu,
-        })
+        }))
     };
     let iuts = [
         (
@@ -54,30 +54,30 @@ fn main() {
         ),
         (
             "examples/c over lib:, in process",
-            IutKind::Door(Door::Lib {
+            IutKind::Door(Door::Lib(canif_harness::door::LibDoor {
                 path: library.clone(),
                 host: None,
-            }),
+            })),
         ),
         (
             "examples/c over lib:, canif lib-host",
-            IutKind::Door(Door::Lib {
+            IutKind::Door(Door::Lib(canif_harness::door::LibDoor {
                 path: library.clone(),
                 host: Some(LibHost {
                     canif: device.into(),
                     timeouts: Timeouts::with_request(std::time::Duration::from_millis(10_000)),
                 }),
-            }),
+            })),
         ),
         (
             "the same without its plan (polled)",
-            IutKind::Door(Door::Lib {
+            IutKind::Door(Door::Lib(canif_harness::door::LibDoor {
                 path: polled,
                 host: Some(LibHost {
                     canif: device.into(),
                     timeouts: Timeouts::with_request(std::time::Duration::from_millis(10_000)),
                 }),
-            }),
+            })),
         ),
         ("canif device --stdio, protocol 3", stdio(3, false)),
         ("the same, IUT on the harness's CPU", stdio(3, true)),

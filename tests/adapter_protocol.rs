@@ -21,13 +21,13 @@ fn quick() -> Options {
 }
 
 fn exec(command: &str, timeout_ms: u64) -> IutKind {
-    IutKind::Door(Door::Exec {
+    IutKind::Door(Door::Exec(canif_harness::door::ExecDoor {
         command: command.to_string(),
         timeouts: canif_harness::door::Timeouts::with_request(std::time::Duration::from_millis(
             timeout_ms,
         )),
         same_cpu: false,
-    })
+    }))
 }
 
 fn soft_device(args: &str) -> IutKind {

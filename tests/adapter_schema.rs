@@ -36,11 +36,11 @@ fn session(version: u64) -> Vec<Value> {
         "tee {} | {CANIF} device --stdio --protocol {version}",
         requests.display()
     );
-    let kind = IutKind::Door(Door::Exec {
+    let kind = IutKind::Door(Door::Exec(canif_harness::door::ExecDoor {
         command,
         timeouts: Timeouts::default(),
         same_cpu: false,
-    });
+    }));
     let mut config = InterfaceConfig::new(FrameFormat::Fd, 4);
     config.transaction_number = true;
     config.time_stamp = true;

@@ -86,10 +86,10 @@ fn the_c_example_is_certified_in_process() {
     let profile = catalogue.profile("fc510x-before-fw2.14").unwrap();
     let run = run_profile(
         profile,
-        &IutKind::Door(Door::Lib {
+        &IutKind::Door(Door::Lib(canif_harness::door::LibDoor {
             path: library,
             host: None,
-        }),
+        })),
         &Options::quick(3),
         |_| {},
     );
@@ -305,10 +305,10 @@ fn a_library_of_another_version_or_without_a_function_is_an_error() {
         (v2, "speaks canif ABI version 2"),
         (no_destroy, "has no `canif_destroy`"),
     ] {
-        match (IutKind::Door(Door::Lib {
+        match (IutKind::Door(Door::Lib(canif_harness::door::LibDoor {
             path: library,
             host: None,
-        }))
+        })))
         .build(&caps, &config)
         {
             Err(canif_harness::door::iut::BuildError::Failed(broke)) => {

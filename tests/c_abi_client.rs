@@ -74,10 +74,10 @@ fn canif_run(
 #[test]
 fn the_c_example_client_conforms_in_process() {
     let catalogue = Catalogue::embedded().unwrap();
-    let kind = ClientKind::Door(Door::Lib {
+    let kind = ClientKind::Door(Door::Lib(canif_harness::door::LibDoor {
         path: build("minimal_client", &[]),
         host: None,
-    });
+    }));
     for profile in ["fc532x", "el6751-mdp"] {
         let profile = catalogue.profile(profile).unwrap();
         let run = run_profile(profile, &kind, &options(), |_| {});
@@ -108,10 +108,10 @@ fn the_c_example_client_conforms_in_process() {
 #[test]
 fn a_c_client_that_tells_nothing_sent_is_not_judged_on_it() {
     let catalogue = Catalogue::embedded().unwrap();
-    let kind = ClientKind::Door(Door::Lib {
+    let kind = ClientKind::Door(Door::Lib(canif_harness::door::LibDoor {
         path: build("without_sent", &["-DCANIF_WITHOUT_SENT"]),
         host: None,
-    });
+    }));
     let profile = catalogue.profile("fc532x").unwrap();
     let run = run_profile(profile, &kind, &options(), |_| {});
     assert!(run.failed_requirements(&catalogue, profile).is_empty());
@@ -135,13 +135,13 @@ fn a_c_client_that_tells_nothing_sent_is_not_judged_on_it() {
 fn zero_transaction_numbers_are_a_fault_only_of_a_client_that_tells_what_was_sent() {
     let catalogue = Catalogue::embedded().unwrap();
     let profile = catalogue.profile("el6751-mdp").unwrap();
-    let silent = ClientKind::Door(Door::Lib {
+    let silent = ClientKind::Door(Door::Lib(canif_harness::door::LibDoor {
         path: build(
             "zero_numbers_silent",
             &["-DCANIF_ZERO_NUMBERS", "-DCANIF_WITHOUT_SENT"],
         ),
         host: None,
-    });
+    }));
     let run = run_profile(profile, &silent, &options(), |_| {});
     assert_eq!(
         run.failed_requirements(&catalogue, profile),
@@ -151,10 +151,10 @@ fn zero_transaction_numbers_are_a_fault_only_of_a_client_that_tells_what_was_sen
         run.verdicts(&catalogue, profile)["CL-TN-001"].kind(),
         VerdictKind::NotApplicable
     );
-    let telling = ClientKind::Door(Door::Lib {
+    let telling = ClientKind::Door(Door::Lib(canif_harness::door::LibDoor {
         path: build("zero_numbers_telling", &["-DCANIF_ZERO_NUMBERS"]),
         host: None,
-    });
+    }));
     let run = run_profile(profile, &telling, &options(), |_| {});
     assert!(
         run.failed_requirements(&catalogue, profile)
@@ -186,10 +186,10 @@ fn the_reason_a_client_is_not_judged_on_sent_messages_reaches_report_json() {
 #[test]
 fn a_c_client_that_reads_past_its_image_is_caught() {
     let catalogue = Catalogue::embedded().unwrap();
-    let kind = ClientKind::Door(Door::Lib {
+    let kind = ClientKind::Door(Door::Lib(canif_harness::door::LibDoor {
         path: build("no_bound", &["-DCANIF_FAULT_NO_BOUND"]),
         host: None,
-    });
+    }));
     let profile = catalogue.profile("fc510x").unwrap();
     let run = run_profile(profile, &kind, &options(), |_| {});
     // What it reads past the slots it delivers: messages the device never
@@ -222,10 +222,10 @@ fn a_library_without_the_client_role_is_an_error_naming_the_symbol() {
     let catalogue = Catalogue::embedded().unwrap();
     let run = run_profile(
         catalogue.profile("fc510x").unwrap(),
-        &ClientKind::Door(Door::Lib {
+        &ClientKind::Door(Door::Lib(canif_harness::door::LibDoor {
             path: device,
             host: None,
-        }),
+        })),
         &options(),
         |_| {},
     );
@@ -281,13 +281,13 @@ fn the_c_example_client_conforms_in_its_host_as_in_process() {
 fn a_client_with_two_defects_in_one_scenario_shows_both() {
     let catalogue = Catalogue::embedded().unwrap();
     let profile = catalogue.profile("el6751-mdp").unwrap();
-    let kind = ClientKind::Door(Door::Lib {
+    let kind = ClientKind::Door(Door::Lib(canif_harness::door::LibDoor {
         path: build(
             "two_defects",
             &["-DCANIF_FAULT_SKIPS_LAST_RX", "-DCANIF_ZERO_NUMBERS"],
         ),
         host: None,
-    });
+    }));
     let run = run_profile(profile, &kind, &options(), |_| {});
     let both = run.runs.iter().find_map(|r| match &r.outcome {
         Outcome::Fail(failure) => {
@@ -357,10 +357,10 @@ fn a_tx_only_library_is_certified_on_what_it_declares() {
     let catalogue = Catalogue::embedded().unwrap();
     let profile = catalogue.profile("el6751-mdp").unwrap();
     let verdicts = |name: &str, flags: &[&str]| {
-        let kind = ClientKind::Door(Door::Lib {
+        let kind = ClientKind::Door(Door::Lib(canif_harness::door::LibDoor {
             path: build(name, flags),
             host: None,
-        });
+        }));
         let options = ClientOptions {
             counter_wrap: false,
             ..ClientOptions::new(1)
@@ -396,10 +396,10 @@ fn a_library_declares_before_it_is_started() {
     let catalogue = Catalogue::embedded().unwrap();
     let profile = catalogue.profile("ccat").unwrap();
     let path = build("ext29_without_tn", &["-DCANIF_29BIT_NO_TN"]);
-    let kind = ClientKind::Door(Door::Lib {
+    let kind = ClientKind::Door(Door::Lib(canif_harness::door::LibDoor {
         path: path.clone(),
         host: None,
-    });
+    }));
     let run = run_profile(profile, &kind, &options().declared_by(&kind), |_| {});
     let verdicts = run.verdicts(&catalogue, profile);
     let broken: Vec<_> = verdicts

@@ -22,13 +22,13 @@ const SCRIPT: &str = concat!(
 );
 
 fn exec(command: &str, timeout_ms: u64) -> ClientKind {
-    ClientKind::Door(Door::Exec {
+    ClientKind::Door(Door::Exec(canif_harness::door::ExecDoor {
         command: command.to_string(),
         timeouts: canif_harness::door::Timeouts::with_request(std::time::Duration::from_millis(
             timeout_ms,
         )),
         same_cpu: true,
-    })
+    }))
 }
 
 /// Covers: CL-TX-001, CL-TX-003, CL-RX-001, CL-RX-002, CL-FQ-001, CL-RST-001, CL-RST-002, CL-TN-002

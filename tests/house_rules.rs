@@ -149,6 +149,48 @@ fn no_source_file_is_over_600_lines() {
     assert!(long.is_empty(), "split by job: {long:#?}");
 }
 
+/// A transport is one module below both sides and one arm of `Door`: no
+/// code outside `harness/src/door/` names a transport's types or modules,
+/// so the next transport is added without touching the runner, the sides
+/// or the command line (CONTRIBUTING.md, "Adding a transport").
+#[test]
+fn a_transport_is_named_only_inside_its_door_module() {
+    const NAMES: [&str; 10] = [
+        "Door::Exec",
+        "Door::Lib",
+        "Door::Ethercat",
+        "ExecDoor",
+        "LibDoor",
+        "EthercatDoor",
+        "EthercatLink",
+        "door::exec::",
+        "door::lib::",
+        "door::ethercat::",
+    ];
+    // EtherCAT's own commands, which are no run through a door: `canif
+    // device --ethercat` serves canif's terminal, `canif esi` writes its ESI.
+    const OWN_COMMANDS: [&str; 2] = ["src/commands/device.rs", "src/commands/tools.rs"];
+    let mut named = Vec::new();
+    for dir in &source_dirs() {
+        for file in rust_files(&root().join(dir)) {
+            let path = file.strip_prefix(root()).unwrap().display().to_string();
+            if path.starts_with("harness/src/door/") || OWN_COMMANDS.contains(&path.as_str()) {
+                continue;
+            }
+            let text = std::fs::read_to_string(&file).unwrap();
+            for (n, line) in text.lines().enumerate() {
+                if let Some(name) = NAMES.iter().find(|name| line.contains(*name)) {
+                    named.push(format!("{path}:{}: {name}", n + 1));
+                }
+            }
+        }
+    }
+    assert!(
+        named.is_empty(),
+        "dispatch through Door::transport(): {named:#?}"
+    );
+}
+
 /// The functions of `text` with their first line and length: from a line
 /// that opens `fn NAME` to the closing brace at its own indentation.
 fn functions(text: &str) -> Vec<(String, usize, usize)> {

@@ -173,7 +173,7 @@ fn a_broken_iut_makes_a_scenario_an_error() {
         .find(|s| s.file.ends_with("tx-handshake.feature"))
         .unwrap();
     let target = Target::new(
-        IutKind::Door(Door::Exec {
+        IutKind::Door(Door::Exec(canif_harness::door::ExecDoor {
             command: "echo stuck >&2; sleep 30".into(),
             // It never answers, so a short start limit judges it the same
             // on any machine, and the test need not wait out the default.
@@ -182,7 +182,7 @@ fn a_broken_iut_makes_a_scenario_an_error() {
                 request: std::time::Duration::from_millis(200),
             },
             same_cpu: false,
-        }),
+        })),
         "el6751-mdp",
         canif_model::config::Capabilities::everything(),
     );
@@ -209,14 +209,14 @@ fn a_babbling_iut_ends_a_scenario_in_bounded_time() {
         .unwrap();
     for mode in ["babble", "stuck-time"] {
         let target = Target::new(
-            IutKind::Door(Door::Exec {
+            IutKind::Door(Door::Exec(canif_harness::door::ExecDoor {
                 command: format!(
                     "python3 {}/../tests/iuts/misbehave.py {mode}",
                     env!("CARGO_MANIFEST_DIR")
                 ),
                 timeouts: Timeouts::with_request(std::time::Duration::from_millis(2_000)),
                 same_cpu: false,
-            }),
+            })),
             "el6751-mdp",
             canif_model::config::Capabilities::everything(),
         );

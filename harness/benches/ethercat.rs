@@ -40,7 +40,7 @@ fn measure(name: &str, iut: &IutKind) -> (f64, f64) {
         run.failures.is_empty() && errors == 0,
         "{name} did not conform: {errors} errors, first {first_error:?}"
     );
-    if let IutKind::Door(Door::Ethercat { link, .. }) = iut {
+    if let IutKind::Door(Door::Ethercat(canif_harness::door::EthercatDoor { link, .. })) = iut {
         let idle = canif_harness::door::ethercat::survey(
             profile,
             link,
@@ -92,10 +92,10 @@ fn main() {
     );
     let memory = measure(
         "EtherCAT, in-memory link",
-        &IutKind::Door(Door::Ethercat {
+        &IutKind::Door(Door::Ethercat(canif_harness::door::EthercatDoor {
             identity: None,
             link: EthercatLink::Emulated(emulated()),
-        }),
+        })),
     );
     println!(
         "in process runs {:.1}x the checked frames/s of the in-memory EtherCAT run",
@@ -105,14 +105,14 @@ fn main() {
         Some((master, terminal)) => {
             let over_veth = measure(
                 "EtherCAT, veth pair",
-                &IutKind::Door(Door::Ethercat {
+                &IutKind::Door(Door::Ethercat(canif_harness::door::EthercatDoor {
                     identity: None,
                     link: EthercatLink::Veth {
                         master: master.clone(),
                         terminal,
                         emulated: emulated(),
                     },
-                }),
+                })),
             );
             println!(
                 "the in-memory EtherCAT run checks {:.1}x the frames/s of the veth run",

@@ -22,14 +22,14 @@ fn terminals(catalogue: &Catalogue) -> Vec<&Profile> {
 }
 
 fn run(profile: &Profile, faults: Vec<Fault>, link_fault: Option<LinkFault>) -> ProfileRun {
-    let iut = IutKind::Door(Door::Ethercat {
+    let iut = IutKind::Door(Door::Ethercat(canif_harness::door::EthercatDoor {
         identity: None, // the suite takes it from the profile
         link: EthercatLink::Emulated(Emulated {
             faults,
             link_fault,
             ..Emulated::default()
         }),
-    });
+    }));
     run_profile(profile, &iut, &Options::quick(7), |_| {})
 }
 
@@ -213,10 +213,10 @@ fn canif_s_master_takes_the_layout_the_terminal_advertises() {
         facts.sync_managers.iter().map(|s| s[0]).collect::<Vec<_>>(),
         [0x1000, 0x1080, 0x1100, 0x1D00]
     );
-    let iut = IutKind::Door(Door::Ethercat {
+    let iut = IutKind::Door(Door::Ethercat(canif_harness::door::EthercatDoor {
         identity: None,
         link: EthercatLink::Emulated(emulated),
-    });
+    }));
     let run = run_profile(profile, &iut, &Options::quick(7), |_| {});
     assert!(run.failures.is_empty(), "{:#?}", run.failures.first());
     assert_eq!(errors(&run), Vec::<String>::new());

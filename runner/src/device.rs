@@ -26,12 +26,13 @@ impl Campaign for Options {
             rerun.same_iut(&kind.name())?;
         }
         if let IutKind::Door(door) = kind {
-            door.preflight(
-                &plan.profiles,
-                plan.options.bus.is_sim(),
-                &catalogue.terminal_names(),
-            )
-            .map_err(PlanError::Preflight)?;
+            door.transport()
+                .preflight(
+                    &plan.profiles,
+                    plan.options.bus.is_sim(),
+                    &catalogue.terminal_names(),
+                )
+                .map_err(PlanError::Preflight)?;
         }
         #[cfg(feature = "socketcan")]
         if let BusChoice::SocketCan(kernel) = &plan.options.bus {
@@ -115,7 +116,7 @@ fn survey_terminals(
     };
     let mut terminals = Vec::new();
     for profile in &plan.profiles {
-        match door.survey(profile, plan.options.survey) {
+        match door.transport().survey(profile, plan.options.survey) {
             None => {}
             Some(Ok(facts)) => {
                 observer.event(Event::TerminalSurveyed {

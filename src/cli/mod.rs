@@ -51,14 +51,10 @@ pub(crate) enum IutArg {
     Reference,
     /// The independent soft client, with `--fault` its client faults (`canif run plc`).
     SoftClient,
-    /// `exec:COMMAND`: a process speaking the adapter protocol.
-    Exec(String),
-    /// `lib:PATH`: a shared library built against include/canif.h.
-    Lib(PathBuf),
-    /// `ethercat:emulated` (the soft device behind an emulated terminal, in
-    /// memory) or `ethercat:IFACE[@POSITION]` (a terminal on a network
-    /// interface), reached by canif's EtherCAT master through real frames.
-    Ethercat(canif_harness::door::ethercat::EthercatLink),
+    /// Behind a door (`exec:COMMAND`, `lib:PATH`, `ethercat:LINK`; see
+    /// `canif_harness::door`), with the default settings until the other
+    /// flags are read.
+    Door(canif_harness::door::Door),
 }
 
 fn iut_arg(text: &str) -> Result<IutArg, String> {
@@ -67,18 +63,9 @@ fn iut_arg(text: &str) -> Result<IutArg, String> {
         "model" => Ok(IutArg::Model),
         "reference" => Ok(IutArg::Reference),
         "softclient" => Ok(IutArg::SoftClient),
-        other if other.starts_with("ethercat:") => {
-            canif_harness::door::ethercat::EthercatLink::parse(&other["ethercat:".len()..])
-                .map(IutArg::Ethercat)
-        }
-        _ => match (text.strip_prefix("exec:"), text.strip_prefix("lib:")) {
-            (Some(command), _) if !command.trim().is_empty() => {
-                Ok(IutArg::Exec(command.to_string()))
-            }
-            (Some(_), _) => Err("exec: needs a command, e.g. exec:'python3 my_iut.py'".into()),
-            (_, Some(path)) if !path.is_empty() => Ok(IutArg::Lib(PathBuf::from(path))),
-            (_, Some(_)) => Err("lib: needs a path, e.g. lib:./libdevice.so".into()),
-            _ => Err(
+        _ => match canif_harness::door::Door::parse(text) {
+            Some(door) => door.map(IutArg::Door),
+            None => Err(
                 "use softdevice, model, exec:'COMMAND', lib:PATH or ethercat:emulated (device side), \
                  reference or softclient (canif run plc)"
                     .into(),

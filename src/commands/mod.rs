@@ -15,7 +15,7 @@ use canif_harness::client::faulty::{ClientFault, ClientShape};
 use canif_harness::client::suite::ClientKind;
 use canif_harness::declare::Declaration;
 use canif_harness::device::IutKind;
-use canif_harness::door::{Door, LibHost, Role};
+use canif_harness::door::{Door, Role, Settings};
 use canif_softdevice::{Choice, Fault};
 
 use crate::cli::{IutArg, IutOptions};
@@ -66,10 +66,16 @@ fn soft_device_choices(names: &[String]) -> Result<Vec<Choice>, Stop> {
 /// start, or the exit code of a usage error.
 pub(crate) fn resolve_iut(iut: &IutOptions) -> Result<IutKind, Stop> {
     let kind = iut_kind(iut)?;
-    if let IutKind::Door(door) = &kind {
-        starts(door, Role::Device)?;
-    }
+    starts(&kind)?;
     Ok(kind)
+}
+
+/// One line and exit 2 for a device behind a door that cannot start at all.
+pub(crate) fn starts(kind: &IutKind) -> Result<(), Stop> {
+    match kind {
+        IutKind::Door(door) => door_starts(door, Role::Device),
+        _ => Ok(()),
+    }
 }
 
 /// The client named on the command line for `canif run plc`, started once to
@@ -77,72 +83,40 @@ pub(crate) fn resolve_iut(iut: &IutOptions) -> Result<IutKind, Stop> {
 pub(crate) fn resolve_client(iut: &IutOptions) -> Result<ClientKind, Stop> {
     let kind = client_kind(iut)?;
     if let ClientKind::Door(door) = &kind {
-        starts(door, Role::Client)?;
+        door_starts(door, Role::Client)?;
     }
     Ok(kind)
 }
 
 /// One line and exit 2 for an implementation that cannot start at all: a
 /// run of it would only repeat the shell's words for every requirement.
-fn starts(door: &Door, role: Role) -> Result<(), Stop> {
+fn door_starts(door: &Door, role: Role) -> Result<(), Stop> {
     door.starts(role)
         .map_err(|error| stop!("canif: {}", error.what))
 }
 
 /// The device `--iut` names.
-fn iut_kind(iut: &IutOptions) -> Result<IutKind, Stop> {
+pub(crate) fn iut_kind(iut: &IutOptions) -> Result<IutKind, Stop> {
     let choices = soft_device_choices(&iut.choice)?;
-    let arg = iut.iut.clone().unwrap_or(IutArg::SoftDevice);
-    if !choices.is_empty() && !matches!(arg, IutArg::SoftDevice | IutArg::Ethercat(_)) {
-        return Err(stop!("--choice applies to the soft device only"));
-    }
-    let chosen = soft_device_faults(&iut.fault)?;
-    let only_soft = |chosen: &[Fault]| {
-        if chosen.is_empty() {
-            Ok(())
-        } else {
-            Err(stop!(
-                "--fault applies to the soft device only (pass it to the IUT's own command)"
-            ))
+    let faults = soft_device_faults(&iut.fault)?;
+    let not_soft = |what: &str| -> Result<(), Stop> {
+        match (faults.is_empty(), choices.is_empty()) {
+            (true, true) => Ok(()),
+            (false, _) => Err(stop!(
+                "--fault applies to the soft device only (pass it to {what})"
+            )),
+            (_, false) => Err(stop!("--choice applies to the soft device only")),
         }
     };
-    Ok(match &arg {
-        IutArg::Exec(command) => {
-            only_soft(&chosen)?;
-            IutKind::Door(Door::Exec {
-                command: command.clone(),
-                timeouts: iut.timeouts(),
-                same_cpu: !iut.iut_cpu_free,
-            })
-        }
-        IutArg::Lib(path) => {
-            only_soft(&chosen)?;
-            IutKind::Door(Door::Lib {
-                path: path.clone(),
-                host: lib_host(iut),
-            })
-        }
-        IutArg::SoftDevice => IutKind::SoftDevice {
-            faults: chosen,
-            choices,
-        },
-        IutArg::Ethercat(link) => {
-            let mut link = link.clone();
-            match link.emulated_mut() {
-                Some(emulated) => {
-                    emulated.faults = chosen;
-                    emulated.choices = choices;
-                }
-                None => only_soft(&chosen)?,
-            }
-            IutKind::Door(Door::Ethercat {
-                identity: None,
-                link,
-            })
-        }
+    Ok(match iut.iut.clone().unwrap_or(IutArg::SoftDevice) {
+        IutArg::SoftDevice => IutKind::SoftDevice { faults, choices },
         IutArg::Model => {
-            only_soft(&chosen)?;
+            not_soft("the IUT's own command")?;
             IutKind::Model
+        }
+        IutArg::Door(door) => {
+            let settings = settings(iut, faults, choices);
+            IutKind::Door(door.settled(&settings).map_err(|why| stop!("{why}"))?)
         }
         IutArg::Reference | IutArg::SoftClient => {
             return Err(stop!(
@@ -150,6 +124,17 @@ fn iut_kind(iut: &IutOptions) -> Result<IutKind, Stop> {
             ));
         }
     })
+}
+
+/// How the command line asks a door's implementation to be run.
+fn settings(iut: &IutOptions, faults: Vec<Fault>, choices: Vec<Choice>) -> Settings {
+    Settings {
+        timeouts: iut.timeouts(),
+        same_cpu: !iut.iut_cpu_free,
+        host: lib_host(iut),
+        faults,
+        choices,
+    }
 }
 
 /// The values `names` name, or the exit code of a usage error naming the
@@ -198,16 +183,22 @@ fn client_kind(iut: &IutOptions) -> Result<ClientKind, Stop> {
         (Some(IutArg::Reference), Some(_)) => {
             Err(stop!("--fault applies to the soft client (--iut softclient), not the reference"))
         }
-        (Some(IutArg::Exec(command)), None) => Ok(ClientKind::Door(Door::Exec {
-            command: command.clone(),
-            timeouts: iut.timeouts(),
-            same_cpu: true,
-        })),
-        (Some(IutArg::Lib(path)), None) => Ok(ClientKind::Door(Door::Lib {
-            path: path.clone(),
-            host: lib_host(iut),
-        })),
-        (Some(IutArg::Exec(_) | IutArg::Lib(_)), Some(_)) => {
+        (Some(IutArg::Door(door)), None) => {
+            // A client process is not pinned: it waits for the harness.
+            let settings = Settings {
+                same_cpu: true,
+                ..settings(iut, Vec::new(), Vec::new())
+            };
+            let door = door.clone().settled(&settings).map_err(|why| stop!("{why}"))?;
+            match door.transport().serves_clients() {
+                true => Ok(ClientKind::Door(door)),
+                false => Err(stop!(
+                    "the PLC side runs a client: --iut reference, softclient, exec:'COMMAND' or lib:PATH, not {}",
+                    door.name()
+                )),
+            }
+        }
+        (Some(IutArg::Door(_)), Some(_)) => {
             Err(stop!("--fault applies to the soft client (pass it to the client's own command)"))
         }
         (Some(other), _) => {
@@ -229,15 +220,12 @@ pub(crate) fn declared<D: Declaration>(declare: &[String]) -> Result<D, Stop> {
 /// Where a lib:PATH IUT runs: a `canif lib-host` of this executable, unless
 /// `--lib-in-process` (or this executable cannot be found: then in process,
 /// said on stderr).
-fn lib_host(iut: &crate::cli::IutOptions) -> Option<LibHost> {
+fn lib_host(iut: &crate::cli::IutOptions) -> Option<std::path::PathBuf> {
     if iut.lib_in_process {
         return None;
     }
     match std::env::current_exe() {
-        Ok(canif) => Some(LibHost {
-            canif,
-            timeouts: iut.timeouts(),
-        }),
+        Ok(canif) => Some(canif),
         Err(error) => {
             errln!("canif: cannot find its own executable ({error}); the library runs in canif's process");
             None

@@ -7,7 +7,6 @@ use canif_softdevice::{Choice, Fault, SoftDevice};
 
 use crate::declare::choices::Declared;
 use crate::door::adapter::protocol::OwnedBus;
-use crate::door::ethercat::EthercatLink;
 use crate::door::iut::{soft_settings, BuildError, Iut, ModelIut, SoftDeviceIut};
 use crate::door::{Configurer, Door};
 use canif_model::freedoms::{BadTxLength, OversizeBatch, RxIdleCount, StaleRxSlots};
@@ -129,21 +128,17 @@ impl IutKind {
         match self {
             IutKind::Model => soft(&[]),
             IutKind::SoftDevice { choices, .. } => soft(choices),
-            IutKind::Door(Door::Ethercat {
-                link: EthercatLink::Emulated(emulated) | EthercatLink::Veth { emulated, .. },
-                ..
-            }) => soft(&emulated.choices),
-            IutKind::Door(_) => Declared::default(),
+            IutKind::Door(door) => match door.transport().soft_device_choices() {
+                Some(choices) => soft(choices),
+                None => Declared::default(),
+            },
         }
     }
 
-    /// This IUT for `profile`: an EtherCAT terminal is checked against the profile's identity.
+    /// This IUT for `profile` (a terminal is checked against the profile's identity).
     pub fn for_profile(&self, profile: &canif_spec::Profile) -> IutKind {
         match self {
-            IutKind::Door(Door::Ethercat { link, .. }) => IutKind::Door(Door::Ethercat {
-                identity: profile.ethercat,
-                link: link.clone(),
-            }),
+            IutKind::Door(door) => IutKind::Door(door.transport().for_profile(profile)),
             other => other.clone(),
         }
     }

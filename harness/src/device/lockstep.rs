@@ -121,7 +121,9 @@ impl<B: Bus + ?Sized> Lockstep<B> {
         let built = kind
             .build_on(caps, &scenario.interface, bus.owned_bus().as_ref())
             .map(|mut iut| {
-                iut.exchange_with(scenario.exchange);
+                if let Some(telegrams) = iut.telegrams() {
+                    telegrams.exchange_with(scenario.exchange);
+                }
                 iut
             });
         let iut = match built {
@@ -321,7 +323,8 @@ impl<B: Bus + ?Sized> Lockstep<B> {
             }
             Err(e) => return Err(Outcome::Error(e.into())),
         };
-        if let Some(deviation) = self.pair.iut.take_deviation() {
+        let deviation = self.pair.iut.telegrams().and_then(|t| t.take_deviation());
+        if let Some(deviation) = deviation {
             return Err(self.pair.fail(Difference {
                 frames: None,
                 candidates: blame::deviated(deviation.kind),

@@ -101,11 +101,8 @@ impl Iut for Ordered {
     fn transmit_plan(&self, now: Nanos, most: usize) -> Option<Vec<Planned>> {
         self.inner.transmit_plan(now, most)
     }
-    fn exchange_with(&mut self, mode: canif_model::exchange::ExchangeMode) {
-        self.inner.exchange_with(mode);
-    }
-    fn take_deviation(&mut self) -> Option<crate::door::iut::Deviation> {
-        self.inner.take_deviation()
+    fn telegrams(&mut self) -> Option<&mut dyn crate::door::iut::Telegrams> {
+        self.inner.telegrams()
     }
     fn declared(&self) -> crate::declare::choices::Declared {
         self.inner.declared()

@@ -48,7 +48,7 @@ pub struct Options {
     pub declared: Declared,
     /// How a terminal over EtherCAT is surveyed before the run (behind
     /// another door, nothing is).
-    pub survey: crate::door::ethercat::Pace,
+    pub survey: crate::door::Pace,
 }
 
 /// What a profile's device run learns as its cases run: what an undeclared

@@ -54,16 +54,9 @@ pub trait Iut {
         let _ = (now, most);
         None
     }
-    /// How the played master exchanges the process data (003): a device
-    /// reached through real telegrams is sent them that way (LRW, or LWR
-    /// then LRD); one reached otherwise sees no difference.
-    fn exchange_with(&mut self, mode: ExchangeMode) {
-        let _ = mode;
-    }
-    /// What the last cycle showed the device doing wrong below the image the
-    /// lockstep compares (the inputs an EtherCAT telegram carried): a
-    /// well-formed answer that breaks a requirement, judged as a failure.
-    fn take_deviation(&mut self) -> Option<Deviation> {
+    /// A device reached through real telegrams (an EtherCAT terminal): what
+    /// it offers besides its image. `None` for every other device.
+    fn telegrams(&mut self) -> Option<&mut dyn Telegrams> {
         None
     }
     /// What the device itself declares where the documents leave a choice
@@ -71,6 +64,18 @@ pub trait Iut {
     fn declared(&self) -> crate::declare::choices::Declared {
         crate::declare::choices::Declared::default()
     }
+}
+
+/// What a device reached through real telegrams offers besides its image:
+/// a capability of the EtherCAT door, asked for with [`Iut::telegrams`].
+pub trait Telegrams {
+    /// How the played master exchanges the process data (003): LRW, or
+    /// LWR then LRD.
+    fn exchange_with(&mut self, mode: ExchangeMode);
+    /// What the last cycle showed the device doing wrong below the image the
+    /// lockstep compares (the inputs an EtherCAT telegram carried): a
+    /// well-formed answer that breaks a requirement, judged as a failure.
+    fn take_deviation(&mut self) -> Option<Deviation>;
 }
 
 /// One frame of a [`Iut::transmit_plan`]: the frame (or what is no frame) and

@@ -67,7 +67,7 @@ pub struct RunMeta {
 }
 
 pub use crate::declare::{ChoiceEntry, ChoiceSource};
-pub use crate::door::ethercat::TerminalFacts as TerminalEntry;
+pub use crate::door::TerminalFacts as TerminalEntry;
 
 impl RunMeta {
     /// What the run left out (its lines, the selection first) and whether

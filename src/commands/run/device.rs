@@ -8,13 +8,13 @@ use crate::stop::{stop, Stop};
 #[cfg(feature = "socketcan")]
 use canif_harness::device::bus::kernel::KernelBusOptions;
 use canif_harness::device::bus::BusChoice;
-use canif_harness::device::Options;
-use canif_harness::door::ethercat::Pace;
+use canif_harness::device::{IutKind, Options};
+use canif_harness::door::Pace;
 use canif_spec::Catalogue;
 
 use super::{campaign_plan, one_at_a_time, profiles, run_and_finish, selected};
 use crate::cli::{BusArg, DeviceRunArgs, RealTimeOptions};
-use crate::commands::{declared, resolve_iut};
+use crate::commands::{declared, iut_kind, starts};
 
 pub(crate) fn command(catalogue: &Catalogue, args: DeviceRunArgs) -> Result<ExitCode, Stop> {
     let DeviceRunArgs {
@@ -33,21 +33,23 @@ pub(crate) fn command(catalogue: &Catalogue, args: DeviceRunArgs) -> Result<Exit
         return Ok(ExitCode::SUCCESS);
     };
     let bus = bus_choice(&bus, &real_time);
-    let shared = match &iut.iut {
-        Some(crate::cli::IutArg::Ethercat(_)) => Some("an EtherCAT terminal: one link"),
-        Some(crate::cli::IutArg::Lib(_)) if iut.lib_in_process => {
-            Some("--lib-in-process: one library in canif's process")
-        }
-        _ if bus != BusChoice::Sim => Some("a SocketCAN bus: one interface"),
+    let kind = iut_kind(&iut)?;
+    let door = match &kind {
+        IutKind::Door(door) => Some(door.transport()),
         _ => None,
+    };
+    let shared = match door.and_then(|door| door.shared_between_profiles()) {
+        Some(why) => Some(why),
+        None if bus != BusChoice::Sim => Some("a SocketCAN bus: one interface"),
+        None => None,
     };
     one_at_a_time(campaign.jobs, shared)?;
     let mut profiles = profiles(catalogue, &selected.profiles)?;
-    // A terminal over EtherCAT can only be one of the terminal profiles:
-    // `all` (the default) means all of those.
+    // A door that serves only some profiles (a terminal only terminal
+    // profiles): `all` (the default) means all of those.
     let every = selected.profiles.is_empty() || selected.profiles.iter().any(|p| p == "all");
-    if every && matches!(iut.iut, Some(crate::cli::IutArg::Ethercat(_))) {
-        profiles.retain(|p| p.ethercat.is_some());
+    if let Some(door) = door.filter(|_| every) {
+        profiles.retain(|p| door.serves(p));
     }
     if let Some(dir) = &trace {
         // A trace folder that cannot be written is said before the
@@ -86,7 +88,7 @@ pub(crate) fn command(catalogue: &Catalogue, args: DeviceRunArgs) -> Result<Exit
         survey: pace(&real_time),
     };
     let plan = campaign_plan(profiles, options, &common, &campaign, selected.rerun)?;
-    let kind = resolve_iut(&iut)?;
+    starts(&kind)?;
     run_and_finish(catalogue, &plan, &kind, &common.report)
 }
 

@@ -4,7 +4,7 @@
 //! the input SyncManager for what this cycle's event produced; or, for
 //! **separate input update**, an LWR of the outputs (the event) and an LRD of
 //! the inputs it produced (confirmed one task cycle later). The played PLC
-//! names the mode (`Iut::exchange_with`).
+//! names the mode (`Telegrams::exchange_with`).
 //!
 //! With Distributed Clocks SYNC0, not the telegram, starts the terminal's
 //! cycle (003, PDX-005), and the master plays the two patterns that tell the
@@ -256,6 +256,7 @@ pub(super) struct DcMaster {
 
 #[cfg(test)]
 mod tests {
+    use crate::door::iut::Telegrams;
     use canif_model::config::{FrameFormat, InterfaceConfig};
     use canif_model::exchange::ExchangeMode;
     use canif_model::image::ImageLayout;

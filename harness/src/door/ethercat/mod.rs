@@ -19,6 +19,7 @@ mod session;
 mod start_up;
 mod survey;
 mod timer;
+mod transport;
 #[cfg(feature = "socketcan")]
 mod veth;
 
@@ -35,7 +36,7 @@ use canif_spec::EthercatIdentity;
 use ethercrab::subdevice_group::Op;
 use ethercrab::{DefaultLock, SubDeviceGroup};
 
-use crate::door::iut::{soft_controller, soft_settings, Iut, Planned, Transmit};
+use crate::door::iut::{soft_controller, soft_settings, Iut, Planned, Telegrams, Transmit};
 use crate::error::{IutCause, IutError};
 pub use bring_up::build;
 use bring_up::{bring_up, open, Opened};
@@ -45,6 +46,7 @@ use link::{lock, InterfaceMaster, MemoryMaster, SharedTerminal};
 pub use session::Configurer;
 use start_up::SYNC0_CYCLE_NS;
 pub use survey::{preflight, survey, Pace, TerminalFacts};
+pub use transport::EthercatDoor;
 
 const MAX_SUBDEVICES: usize = 16;
 const MAX_PDI: usize = 4096;
@@ -379,6 +381,12 @@ impl Iut for EthercatIut {
             .map(|d| soft_controller::plan(d, now, most))
     }
 
+    fn telegrams(&mut self) -> Option<&mut dyn Telegrams> {
+        Some(self)
+    }
+}
+
+impl Telegrams for EthercatIut {
     fn exchange_with(&mut self, mode: ExchangeMode) {
         self.telegrams = mode;
     }

@@ -23,6 +23,48 @@ use crate::door::Timeouts;
 use crate::error::{IutCause, IutError};
 
 pub(crate) mod client;
+mod transport;
+
+pub use transport::ExecDoor;
+
+/// Offers a device process a configuration: a refusal is its answer, judged
+/// by the refusal grid; a broken exchange is a failure to build.
+pub(crate) fn offer(
+    iut: &mut ExecIut,
+    caps: &Capabilities,
+    config: &InterfaceConfig,
+    bus: Option<&OwnedBus>,
+) -> Result<(), crate::door::iut::BuildError> {
+    use crate::door::iut::BuildError;
+    match iut
+        .configure(caps, config, bus)
+        .map_err(BuildError::Failed)?
+    {
+        Configured::Accepted => Ok(()),
+        Configured::Refused(reason) => Err(BuildError::Refused(reason)),
+    }
+}
+
+/// One process that answers configuration after configuration (the
+/// refusal grid): started at the first, kept for the rest.
+pub(crate) fn configurer(
+    command: String,
+    timeouts: Timeouts,
+    same_cpu: bool,
+    channel: Channel,
+) -> crate::door::Configurer {
+    let mut process: Option<ExecIut> = None;
+    Box::new(move |caps, config| {
+        let iut = match process.as_mut() {
+            Some(iut) => iut,
+            None => process.insert(
+                ExecIut::spawn_on(&command, timeouts, same_cpu, channel)
+                    .map_err(crate::door::iut::BuildError::Failed)?,
+            ),
+        };
+        offer(iut, caps, config, None)
+    })
+}
 
 /// How an IUT answered a configuration.
 #[derive(Debug, Clone, PartialEq, Eq)]

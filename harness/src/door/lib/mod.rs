@@ -19,6 +19,9 @@ use crate::door::iut::{BuildError, InvalidFrame, Iut, Planned, Transmit};
 use crate::error::{IutCause, IutError};
 
 pub(crate) mod client;
+mod transport;
+
+pub use transport::{LibDoor, LibHost};
 
 /// A library's device behind the [`Iut`] trait.
 pub(crate) struct LibIut {
