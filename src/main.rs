@@ -49,7 +49,7 @@ use std::process::ExitCode;
 
 use canif_spec::Catalogue;
 
-use cli::{Cli, Command, ListCommand, SideArg};
+use cli::{Cli, Command, ListCommand};
 use commands::run;
 use commands::{certify, device, merge, plc_types, spec, tools};
 use stop::Stop;
@@ -89,13 +89,13 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, Stop> {
         Command::List {
             what: ListCommand::Scenarios { profile, side },
         } => match side {
-            SideArg::Device => run::list_scenarios(
+            canif_spec::Side::Device => run::list_scenarios(
                 &catalogue,
                 &profile,
                 canif_harness::device::Options::default(),
                 out,
             ),
-            SideArg::Plc => run::list_scenarios(
+            canif_spec::Side::Plc => run::list_scenarios(
                 &catalogue,
                 &profile,
                 canif_harness::client::suite::ClientOptions::new(1),

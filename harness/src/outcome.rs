@@ -98,6 +98,31 @@ impl ImageDiff {
 }
 
 impl Failure {
+    /// A failure with nothing before it to show: `what` was `actual`, not
+    /// `expected`, in a check that stops there (a refusal, a node's answer).
+    /// A cycle's history is added to it where there is one (`..Failure::stopped`).
+    pub fn stopped(
+        (requirements, scenario): (Vec<ReqId>, String),
+        what: String,
+        (expected, actual): (String, String),
+    ) -> Self {
+        Failure {
+            requirements,
+            scenario,
+            cycle: 0,
+            time: 0,
+            what,
+            expected,
+            actual,
+            context: Vec::new(),
+            timeline: Default::default(),
+            frames: None,
+            images: None,
+            rest: crate::verdict::Rest::Stopped,
+            further: Vec::new(),
+        }
+    }
+
     /// This breach and the later ones of the same scenario, each alone.
     pub fn breaches(&self) -> Vec<Failure> {
         let first = Failure {
@@ -252,6 +277,25 @@ pub struct ScenarioRun {
     pub iut_declares: crate::declare::Declares,
     /// What the documents allow but an author wants to know (PLC side).
     pub advisories: crate::advisory::Advisories,
+}
+
+impl ScenarioRun {
+    /// A run of `scenario` that ended as `outcome` before any cycle: an
+    /// error, a skip after what is under test broke, a check that counts
+    /// no cycles. What a run counts is added to it (`..ScenarioRun::ended`).
+    pub fn ended(scenario: String, covers: Vec<ReqId>, outcome: Outcome) -> Self {
+        ScenarioRun {
+            scenario,
+            covers,
+            outcome,
+            cycles: 0,
+            frames_checked: 0,
+            tolerated: 0,
+            elapsed: std::time::Duration::ZERO,
+            iut_declares: Default::default(),
+            advisories: Default::default(),
+        }
+    }
 }
 
 /// How one Gherkin scenario (or Examples row) ended.

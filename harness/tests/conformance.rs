@@ -10,13 +10,13 @@ use std::sync::{Arc, Mutex, OnceLock};
 
 use canif_harness::client::suite::{ClientKind, ClientOptions};
 use canif_harness::device::{IutKind, Options};
-use canif_harness::run::{run_profile, Side};
+use canif_harness::run::{run_profile, Cases};
 use canif_harness::Verdict;
-use canif_spec::{Catalogue, Profile, Side as SideName};
+use canif_spec::{Catalogue, Profile, Side};
 use libtest_mimic::{Arguments, Failed, Trial};
 
 type Verdicts = Arc<BTreeMap<String, Verdict>>;
-type Runs = Mutex<BTreeMap<(SideName, String), Verdicts>>;
+type Runs = Mutex<BTreeMap<(Side, String), Verdicts>>;
 
 fn device() -> (Options, IutKind) {
     let options = Options {
@@ -35,7 +35,7 @@ fn client() -> (ClientOptions, ClientKind) {
 }
 
 /// Every requirement some case of `side` exercises on `profile`.
-fn exercised<S: Side>(side: &S, profile: &Profile) -> BTreeSet<String> {
+fn exercised<S: Cases>(side: &S, profile: &Profile) -> BTreeSet<String> {
     side.cases(profile)
         .iter()
         .flat_map(|case| S::covers(case).iter().map(|id| id.to_string()))
@@ -43,7 +43,7 @@ fn exercised<S: Side>(side: &S, profile: &Profile) -> BTreeSet<String> {
 }
 
 /// Each side runs once on each profile, whichever of its trials comes first.
-fn verdicts<S: Side>(
+fn verdicts<S: Cases>(
     catalogue: &Catalogue,
     profile: &Profile,
     (side, under_test): (S, S::UnderTest),
@@ -84,13 +84,13 @@ fn main() {
     let catalogue = Arc::new(Catalogue::embedded().expect("the embedded catalogue loads"));
     let mut trials = Vec::new();
     for profile in &catalogue.profiles {
-        let exercised_by = |side: SideName| match side {
-            SideName::Device => exercised(&device().0, profile),
-            SideName::Plc => exercised(&client().0, profile),
+        let exercised_by = |side: Side| match side {
+            Side::Device => exercised(&device().0, profile),
+            Side::Plc => exercised(&client().0, profile),
         };
         let checked = [
-            (SideName::Device, exercised_by(SideName::Device)),
-            (SideName::Plc, exercised_by(SideName::Plc)),
+            (Side::Device, exercised_by(Side::Device)),
+            (Side::Plc, exercised_by(Side::Plc)),
         ];
         for requirement in catalogue.requirements() {
             let name = format!("{}::{}", profile.name, requirement.id);
@@ -122,8 +122,8 @@ fn main() {
                     .profile(&profile_name)
                     .expect("a catalogued profile");
                 let verdicts = match side {
-                    SideName::Device => verdicts(&catalogue, profile, device()),
-                    SideName::Plc => verdicts(&catalogue, profile, client()),
+                    Side::Device => verdicts(&catalogue, profile, device()),
+                    Side::Plc => verdicts(&catalogue, profile, client()),
                 };
                 judged(verdicts.get(&id))
             }));

@@ -38,7 +38,7 @@ fn report(profile: &str, faults: Vec<Fault>, seed: u64, gherkin: Vec<GherkinRun>
         |_| {},
     );
     let reach = Reach {
-        here: canif_harness::device::suite::checked_ids(&profile.model_capabilities(), &options)
+        here: canif_harness::device::suite::exercised(&profile.model_capabilities(), &options)
             .into_iter()
             .collect(),
         ..Reach::default()

@@ -30,12 +30,12 @@ pub use plan::Plan;
 pub use rerun::Rerun;
 
 use canif_harness::report::RunReport;
-use canif_harness::run::Side;
+use canif_harness::run::Cases;
 use canif_spec::Catalogue;
 
 /// A side of the suite as a whole run: what it checks before it starts and
 /// how its stages make one report.
-pub trait Campaign: Side<UnderTest: Sync> + Sync + Sized {
+pub trait Campaign: Cases<UnderTest: Sync> + Sync + Sized {
     /// What its cycles are called in progress lines (`None`: no cycles).
     const UNIT: Option<&'static str>;
 

@@ -9,7 +9,7 @@ use canif_features::{ScenarioInfo, UnderTest};
 use canif_harness::report::{
     Product, ProfilePart, ProfileReport, RunMeta, RunReport, ShardPart, PART_FORMAT,
 };
-use canif_harness::run::{run_profile, ProfileRun, Side};
+use canif_harness::run::{run_profile, Cases, ProfileRun};
 use canif_harness::verdict::NotRunReason;
 use canif_harness::{GherkinOutcome, GherkinRun};
 use canif_spec::{Catalogue, Profile, ReqId};
@@ -35,7 +35,7 @@ pub struct Plan<'c, S> {
     pub campaign: Vec<String>,
 }
 
-impl<'c, S: Side> Plan<'c, S> {
+impl<'c, S: Cases> Plan<'c, S> {
     /// The plan, or why the feature files do not parse.
     pub fn new(
         profiles: Vec<&'c Profile>,

@@ -11,8 +11,8 @@ mod run;
 mod spec;
 pub(crate) use plc::{CheckLayoutArgs, ExportArgs, FrameArg, InterfaceArgs, LanguageArg};
 pub(crate) use run::{
-    CampaignArgs, CanopenRunArgs, DeviceRunArgs, PlcRunArgs, RealTimeOptions, RunCommand,
-    RunCommon, RunSide, SideArg,
+    side_arg, CampaignArgs, CanopenRunArgs, DeviceRunArgs, PlcRunArgs, RealTimeOptions, RunCommand,
+    RunCommon, RunTarget,
 };
 pub(crate) use spec::SpecCommand;
 
@@ -200,8 +200,8 @@ pub(crate) enum Command {
         #[arg(long, default_value_t = 1)]
         seed: u64,
         /// Which side is under test: the device, or a PLC-side client.
-        #[arg(long, value_enum, default_value = "device")]
-        side: SideArg,
+        #[arg(long, value_parser = side_arg, default_value = "device")]
+        side: canif_spec::Side,
         /// Where to write certificate.json, .json.sig, .html and the run's reports.
         #[arg(long, default_value = "reports/certificate")]
         out: PathBuf,
@@ -429,8 +429,8 @@ pub(crate) enum ListCommand {
         #[arg(long, default_value = "all")]
         profile: Vec<String>,
         /// The device side's checks, or the PLC side's.
-        #[arg(long, value_enum, default_value = "device")]
-        side: SideArg,
+        #[arg(long, value_parser = side_arg, default_value = "device")]
+        side: canif_spec::Side,
     },
 }
 
@@ -468,10 +468,10 @@ mod tests {
     #[test]
     fn each_side_of_canif_run_takes_its_own_flags_only() {
         let side = |args: &[&str]| match Cli::try_parse_from(args).map(|cli| cli.command) {
-            Ok(Command::Run(run)) => Ok(match run.side() {
-                RunSide::Device(_) => "device",
-                RunSide::Plc(_) => "plc",
-                RunSide::Canopen(_) => "canopen",
+            Ok(Command::Run(run)) => Ok(match run.target() {
+                RunTarget::Device(_) => "device",
+                RunTarget::Plc(_) => "plc",
+                RunTarget::Canopen(_) => "canopen",
             }),
             Ok(_) => panic!("{args:?} is no run"),
             Err(error) => Err(error.kind()),

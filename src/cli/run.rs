@@ -35,13 +35,14 @@ pub(crate) struct RealTimeOptions {
     pub ethercat_soak_s: u64,
 }
 
-/// Which side of the interface is under test (`canif list scenarios`, `canif certify`).
-#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum SideArg {
-    /// The device (EL6751, FC51xx, CCAT, FC532x or what behaves like one).
-    Device,
-    /// The PLC-side client that fills and reads the image.
-    Plc,
+/// Which side of the interface is under test (`canif list scenarios`,
+/// `canif certify`): `device` or `plc`, the catalogue's own words.
+pub(crate) fn side_arg(text: &str) -> Result<canif_spec::Side, String> {
+    match text {
+        "device" => Ok(canif_spec::Side::Device),
+        "plc" => Ok(canif_spec::Side::Plc),
+        _ => Err("a side is `device` (the EL6751 or what behaves like one) or `plc` (the client that fills and reads the image)".into()),
+    }
 }
 
 /// `canif run`: a side of the interface, or the CANopen suite; with no side
@@ -50,22 +51,23 @@ pub(crate) enum SideArg {
 #[command(args_conflicts_with_subcommands = true)]
 pub(crate) struct RunCommand {
     #[command(subcommand)]
-    side: Option<RunSide>,
+    side: Option<RunTarget>,
     #[command(flatten)]
     device: DeviceRunArgs,
 }
 
 impl RunCommand {
     /// What is run: the side named, or the device.
-    pub(crate) fn side(self) -> RunSide {
-        self.side.unwrap_or(RunSide::Device(self.device))
+    pub(crate) fn target(self) -> RunTarget {
+        self.side.unwrap_or(RunTarget::Device(self.device))
     }
 }
 
+/// What `canif run` checks: a side of the interface, or a CANopen node.
 // Parsed once per process: the size of its largest variant costs nothing.
 #[allow(clippy::large_enum_variant)]
 #[derive(Subcommand)]
-pub(crate) enum RunSide {
+pub(crate) enum RunTarget {
     /// The device under test (EL6751, FC51xx, CCAT, FC532x or what behaves
     /// like one); canif plays the PLC and the other nodes. The default.
     Device(DeviceRunArgs),

@@ -15,7 +15,7 @@ use canif_harness::client::suite::ClientOptions;
 
 use super::run::{finish, profiles, Progress};
 use super::{declared, resolve_client, resolve_iut};
-use crate::cli::{CompareFormat, IutOptions, SideArg};
+use crate::cli::{CompareFormat, IutOptions};
 use canif_runner::Plan;
 
 /// How to check a certificate without canif, for the output and the docs.
@@ -32,7 +32,7 @@ fn ssh_keygen_command(certificate: &Path) -> String {
 pub(crate) struct CertifyRun<'a> {
     pub profile_names: &'a [String],
     pub iut: &'a IutOptions,
-    pub side: SideArg,
+    pub side: canif_spec::Side,
     pub product: Option<Product>,
     pub seed: u64,
 }
@@ -58,7 +58,7 @@ pub(crate) fn certify(
         }
     }
     let report = match side {
-        SideArg::Device => {
+        canif_spec::Side::Device => {
             let kind = resolve_iut(iut)?;
             // What the device declares on the command line: the certificate rests on it.
             let declared = declared(&iut.declare)?;
@@ -70,7 +70,7 @@ pub(crate) fn certify(
             let plan = Plan::new(profiles, options, product)?;
             plan.run(catalogue, &kind, &Progress::new(catalogue))?
         }
-        SideArg::Plc => {
+        canif_spec::Side::Plc => {
             let kind = resolve_client(iut)?;
             // What the client declares, on the command line and of itself.
             let declared = declared(&iut.declare)?;

@@ -214,7 +214,7 @@ pub(crate) fn spec_coverage(
         }
         outln!(out);
     }
-    let in_runs = canif_harness::device::suite::checked_ids(
+    let in_runs = canif_harness::device::suite::exercised(
         &canif_model::config::Capabilities::everything(),
         &Options::default(),
     );

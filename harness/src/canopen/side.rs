@@ -19,8 +19,8 @@ use super::checks::{check_node, NodeCheck};
 use super::CanNode;
 use crate::error::{IutCause, IutError, RunError};
 use crate::outcome::{Failure, Outcome, ScenarioRun};
-use crate::run::{Selection, Side};
-use crate::verdict::{Reach, Rest};
+use crate::run::{Cases, Selection};
+use crate::verdict::Reach;
 
 /// The node the checks are sent to.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -163,7 +163,7 @@ fn script_cases() -> Vec<NodeCase> {
         .collect()
 }
 
-impl Side for CanopenSide {
+impl Cases for CanopenSide {
     type UnderTest = NodeTarget;
     type Case = NodeCase;
     const UNDER_TEST: &'static str = "the node";
@@ -198,35 +198,18 @@ impl Side for CanopenSide {
                 ))),
                 Some(check) => match &check.outcome {
                     Ok(()) => Outcome::Pass,
-                    Err(why) => Outcome::Fail(Box::new(Failure {
-                        requirements: check.blamed.iter().map(|id| ReqId::new(id)).collect(),
-                        scenario: case.name.to_string(),
-                        cycle: 0,
-                        time: 0,
-                        what: "the node's answer".into(),
-                        expected: "what 002 and 004 say a node answers".into(),
-                        actual: why.clone(),
-                        context: Vec::new(),
-                        timeline: Default::default(),
-                        frames: None,
-                        images: None,
-                        rest: Rest::Stopped,
-                        further: Vec::new(),
-                    })),
+                    Err(why) => Outcome::Fail(Box::new(Failure::stopped(
+                        (
+                            check.blamed.iter().map(|id| ReqId::new(id)).collect(),
+                            case.name.to_string(),
+                        ),
+                        "the node's answer".into(),
+                        ("what 002 and 004 say a node answers".into(), why.clone()),
+                    ))),
                 },
             },
         };
-        ScenarioRun {
-            scenario: case.name.to_string(),
-            covers: case.covers,
-            outcome,
-            cycles: 0,
-            frames_checked: 0,
-            tolerated: 0,
-            elapsed: std::time::Duration::ZERO,
-            iut_declares: Default::default(),
-            advisories: Default::default(),
-        }
+        ScenarioRun::ended(case.name.to_string(), case.covers, outcome)
     }
 
     fn selection(&self) -> &Selection {

@@ -301,17 +301,13 @@ fn run_with(
         .filter(|id| record.declared.tells_sent != Some(false) || !TRANSACTION_NUMBERS.contains(id))
         .cloned()
         .collect();
-    let iut_declares = Declares::Client(record.declared.clone());
     let run = ScenarioRun {
-        iut_declares,
+        iut_declares: Declares::Client(record.declared.clone()),
         advisories: record.advisories,
-        scenario: name,
-        covers,
-        outcome,
         cycles: record.tasks,
         frames_checked: record.frames_checked,
-        tolerated: 0,
         elapsed: started.elapsed(),
+        ..ScenarioRun::ended(name, covers, outcome)
     };
     (run, record)
 }

@@ -21,7 +21,7 @@ use crate::door::Door;
 use crate::error::{IutCause, IutError, Refusal, RunError};
 use crate::outcome::{Outcome, ScenarioRun};
 
-use crate::run::{Selection, SelfCheck, Side as RunSide};
+use crate::run::{Cases, Selection, SelfCheck};
 use crate::verdict::{NotRunReason, Reach, Unobserved};
 
 /// The client under test, as the harness builds it.
@@ -312,15 +312,17 @@ pub fn run_name(scenario: &ClientScenario, master: Master) -> String {
 }
 
 /// Every client requirement a run on these capabilities exercises.
-pub fn checked_ids(caps: &Capabilities, options: &ClientOptions) -> Vec<String> {
-    let mut ids: Vec<String> = scenarios(caps, options)
+pub fn exercised(caps: &Capabilities, options: &ClientOptions) -> Vec<String> {
+    crate::run::checked_ids::<ClientOptions>(&client_cases(caps, options))
+}
+
+/// A client run's cases on these capabilities: every life cycle under
+/// every master model.
+fn client_cases(caps: &Capabilities, options: &ClientOptions) -> Vec<ClientCase> {
+    scenarios(caps, options)
         .into_iter()
-        .flat_map(|(s, _)| s.covers)
-        .map(|id| id.to_string())
-        .collect();
-    ids.sort();
-    ids.dedup();
-    ids
+        .map(|(scenario, master)| ClientCase { scenario, master })
+        .collect()
 }
 
 /// One case of a client's run: a life cycle under one master model.
@@ -330,7 +332,7 @@ pub struct ClientCase {
     pub master: Master,
 }
 
-impl RunSide for ClientOptions {
+impl Cases for ClientOptions {
     type UnderTest = ClientKind;
     type Case = ClientCase;
     const UNDER_TEST: &'static str = "the client";
@@ -343,10 +345,7 @@ impl RunSide for ClientOptions {
     }
 
     fn cases(&self, profile: &Profile) -> Vec<ClientCase> {
-        scenarios(&profile.model_capabilities(), self)
-            .into_iter()
-            .map(|(scenario, master)| ClientCase { scenario, master })
-            .collect()
+        client_cases(&profile.model_capabilities(), self)
     }
 
     fn name(case: &ClientCase) -> String {
@@ -365,17 +364,11 @@ impl RunSide for ClientOptions {
         (): &mut (),
     ) -> ScenarioRun {
         if let Err(error) = &self.declared {
-            return ScenarioRun {
-                iut_declares: Default::default(),
-                advisories: Default::default(),
-                scenario: run_name(&case.scenario, case.master),
-                covers: case.scenario.covers.clone(),
-                outcome: Outcome::Error(error.clone()),
-                cycles: 0,
-                frames_checked: 0,
-                tolerated: 0,
-                elapsed: Duration::ZERO,
-            };
+            return ScenarioRun::ended(
+                run_name(&case.scenario, case.master),
+                case.scenario.covers.clone(),
+                Outcome::Error(error.clone()),
+            );
         }
         let build = |layout| kind.build(&case.scenario.config, layout);
         let open = |caps: &Capabilities, config, rates| self.bus.open(caps, config, rates);
@@ -441,7 +434,7 @@ fn told_nothing_sent(runs: &[ScenarioRun]) -> bool {
 /// exercise. What only the interfaces, slot counts or direction the client
 /// declines would exercise is not applicable, the declaration the reason.
 pub fn reach(caps: &Capabilities, options: &ClientOptions) -> Reach {
-    let here: std::collections::BTreeSet<String> = checked_ids(caps, options).into_iter().collect();
+    let here: std::collections::BTreeSet<String> = exercised(caps, options).into_iter().collect();
     let not_served = not_served(caps, options);
     let undeclared = ClientOptions {
         declared: Ok(ClientDeclaration::default()),
@@ -452,7 +445,7 @@ pub fn reach(caps: &Capabilities, options: &ClientOptions) -> Reach {
         .map(|(what, why)| format!("{what}: {why}"))
         .collect::<Vec<_>>()
         .join("; ");
-    let not_applicable = checked_ids(caps, &undeclared)
+    let not_applicable = exercised(caps, &undeclared)
         .into_iter()
         .filter(|id| !here.contains(id))
         .map(|id| {

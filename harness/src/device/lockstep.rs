@@ -34,16 +34,11 @@ pub fn run_scenario(
     scenario: &Scenario,
     steps: impl Iterator<Item = Step>,
 ) -> ScenarioRun {
-    let run = |outcome, cycles, (frames, tolerated)| ScenarioRun {
-        scenario: scenario.name.clone(),
-        covers: scenario.covers.clone(),
-        outcome,
+    let run = |outcome, cycles, (frames_checked, tolerated)| ScenarioRun {
         cycles,
-        frames_checked: frames,
+        frames_checked,
         tolerated,
-        elapsed: std::time::Duration::ZERO,
-        iut_declares: Default::default(),
-        advisories: Default::default(),
+        ..ScenarioRun::ended(scenario.name.clone(), scenario.covers.clone(), outcome)
     };
     let bus = match scenario.bus.open(scenario.bit_rates, kind.owns_its_bus()) {
         Ok(bus) => bus,
@@ -71,7 +66,6 @@ pub fn run_scenario(
     covers.extend(judged_declared);
     ScenarioRun {
         iut_declares,
-        advisories: Default::default(),
         covers,
         ..run
     }

@@ -12,7 +12,7 @@ use crate::declare::choices::{Choice, Declared};
 use crate::declare::Declaration;
 use crate::error::RunError;
 use crate::outcome::Outcome;
-use crate::run::Side;
+use crate::run::Cases;
 
 /// One scenario that tells a choice's values apart, on one profile.
 #[derive(Debug, Clone)]

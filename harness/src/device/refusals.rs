@@ -50,20 +50,14 @@ const SLOT_COUNT_REFUSED: &[ReqId] = req_ids!["LAY-GEN-007", "PROF-011", "PROF-0
 /// of what the scenario covers not run, with the IUT's words.
 pub fn refused(scenario: &str, config: &InterfaceConfig, reason: String) -> Failure {
     let interface = describe(config);
+    let failure = Failure::stopped(
+        (OFFERED_REFUSED.to_vec(), scenario.into()),
+        format!("configuration {interface}, which the profile offers"),
+        ("accepted".into(), format!("refused: {reason}")),
+    );
     Failure {
-        requirements: OFFERED_REFUSED.to_vec(),
-        scenario: scenario.into(),
-        cycle: 0,
-        time: 0,
-        what: format!("configuration {interface}, which the profile offers"),
-        expected: "accepted".into(),
-        actual: format!("refused: {reason}"),
-        context: Vec::new(),
-        timeline: Default::default(),
-        frames: None,
-        images: None,
         rest: Rest::NotRun(NotRunReason::Refused { interface, reason }),
-        further: Vec::new(),
+        ..failure
     }
 }
 
@@ -222,15 +216,8 @@ pub fn check_refusals(kind: &IutKind, caps: &Capabilities) -> ScenarioRun {
         Outcome::Fail(Box::new(first))
     });
     ScenarioRun {
-        iut_declares: Default::default(),
-        advisories: Default::default(),
-        scenario: REFUSALS.into(),
-        covers: REFUSAL_IDS.to_vec(),
-        outcome,
         cycles: checked,
-        frames_checked: 0,
-        tolerated: 0,
-        elapsed: std::time::Duration::ZERO,
+        ..ScenarioRun::ended(REFUSALS.into(), REFUSAL_IDS.to_vec(), outcome)
     }
 }
 
@@ -244,27 +231,18 @@ fn mismatch(
         Ok(()) => "accepted".to_string(),
         Err(e) => format!("refused: {e}"),
     };
-    Failure {
-        requirements: match &expected {
-            Err(e) => refusal_ids(e).to_vec(),
-            Ok(()) => OFFERED_REFUSED.to_vec(),
-        },
-        scenario: REFUSALS.into(),
-        cycle: 0,
-        time: 0,
-        what: format!(
+    let requirements = match &expected {
+        Err(e) => refusal_ids(e).to_vec(),
+        Ok(()) => OFFERED_REFUSED.to_vec(),
+    };
+    Failure::stopped(
+        (requirements, REFUSALS.into()),
+        format!(
             "configuration {} with {} Tx and {} Rx slots",
             describe(config),
             config.tx_slots,
             config.rx_slots
         ),
-        expected: said(expected.map_err(|e| e.to_string())),
-        actual: said(actual),
-        context: Vec::new(),
-        timeline: Default::default(),
-        frames: None,
-        images: None,
-        rest: Rest::Stopped,
-        further: Vec::new(),
-    }
+        (said(expected.map_err(|e| e.to_string())), said(actual)),
+    )
 }

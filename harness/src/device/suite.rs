@@ -1,11 +1,11 @@
 //! One profile's run of a device: the configuration-refusal grid, then every
 //! scenario of every interface the profile offers, each in lockstep with the
-//! model. The device side of [`crate::run::Side`].
+//! model. The device side of [`crate::run::Cases`].
 
 use canif_model::config::{Capabilities, TxQueueAccounting};
 use canif_model::freedoms::Named;
 use canif_model::Nanos;
-use canif_spec::{Profile, ReqId, Scope, Side as SideName, Suite};
+use canif_spec::{Profile, ReqId, Scope, Side, Suite};
 
 use super::cases::{scenarios, Generation};
 use super::iut_kind::IutKind;
@@ -19,7 +19,7 @@ use crate::declare::{ChoiceEntry, ChoiceSource, Declaration};
 use crate::device::bus::BusChoice;
 use crate::error::{Refusal, RunError};
 use crate::outcome::{Outcome, ScenarioRun};
-use crate::run::{Selection, SelfCheck, Side};
+use crate::run::{Cases, Selection, SelfCheck};
 use crate::verdict::Reach;
 
 /// What to run.
@@ -259,22 +259,15 @@ pub enum DeviceCase {
     Scenario(Box<Scenario>),
 }
 
-impl Side for Options {
+impl Cases for Options {
     type UnderTest = IutKind;
     type Case = DeviceCase;
     const UNDER_TEST: &'static str = "the IUT";
-    const SIDE: SideName = SideName::Device;
+    const SIDE: Side = Side::Device;
     type Learned = Learned;
 
     fn cases(&self, profile: &Profile) -> Vec<DeviceCase> {
-        let scenarios = scenarios(&profile.model_capabilities(), &self.generation());
-        std::iter::once(DeviceCase::Refusals)
-            .chain(
-                scenarios
-                    .into_iter()
-                    .map(|s| DeviceCase::Scenario(Box::new(s))),
-            )
-            .collect()
+        device_cases(&profile.model_capabilities(), self)
     }
 
     fn name(case: &DeviceCase) -> String {
@@ -360,10 +353,10 @@ impl Side for Options {
     fn reach(&self, profile: &Profile, _: &[ScenarioRun]) -> Reach {
         Reach {
             scope: Scope {
-                side: SideName::Device,
+                side: Side::Device,
                 suite: Suite::Interface,
             },
-            here: checked_ids(&profile.model_capabilities(), self)
+            here: exercised(&profile.model_capabilities(), self)
                 .into_iter()
                 .collect(),
             left_out: self.selection.not_run(),
@@ -372,23 +365,28 @@ impl Side for Options {
     }
 }
 
-/// Every requirement the scenarios and checks of a run exercise on a device
-/// with these capabilities: exactly what `judge` can call pass or fail,
-/// whatever the selection.
-pub fn checked_ids(caps: &Capabilities, options: &Options) -> Vec<String> {
+/// A device run's cases on a device with these capabilities: the refusal
+/// grid, then every scenario.
+pub fn device_cases(caps: &Capabilities, options: &Options) -> Vec<DeviceCase> {
+    let scenarios = scenarios(caps, &options.generation());
+    std::iter::once(DeviceCase::Refusals)
+        .chain(
+            scenarios
+                .into_iter()
+                .map(|s| DeviceCase::Scenario(Box::new(s))),
+        )
+        .collect()
+}
+
+/// Every requirement a run exercises on a device with these capabilities
+/// (with at least one generated case): exactly what `judge` can call pass
+/// or fail, whatever the selection.
+pub fn exercised(caps: &Capabilities, options: &Options) -> Vec<String> {
     let everything = Options {
         cases: options.cases.max(1),
         ..options.clone()
     };
-    let mut ids: Vec<String> = scenarios(caps, &everything.generation())
-        .into_iter()
-        .flat_map(|s| s.covers)
-        .map(|id| id.to_string())
-        .collect();
-    ids.extend(REFUSAL_IDS.iter().map(|id| id.to_string()));
-    ids.sort();
-    ids.dedup();
-    ids
+    crate::run::checked_ids::<Options>(&device_cases(caps, &everything))
 }
 
 /// A profile that has the feature `fault` breaks, for tests that need one.

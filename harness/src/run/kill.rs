@@ -3,11 +3,11 @@
 
 use canif_spec::Catalogue;
 
-use super::{run_profile, Side};
+use super::{run_profile, Cases};
 
 /// A side with deliberate faults of its own implementation (the soft device,
 /// the soft client), to prove the suite catches each.
-pub trait SelfCheck: Side + Sized {
+pub trait SelfCheck: Cases + Sized {
     type Fault: Copy;
     /// Every fault, in the order the matrix lists them.
     fn faults() -> Vec<Self::Fault>;

@@ -3,7 +3,7 @@
 //! written here once.
 
 use std::collections::BTreeMap;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use canif_spec::{Catalogue, Profile, ReqId};
 
@@ -14,8 +14,8 @@ use crate::outcome::{Failure, Outcome, ScenarioRun};
 use crate::verdict::{self, Check, CheckResult, Evidence, Finding, Reach, Verdict, VerdictKind};
 
 /// A side of the interface under test: what its cases are and how one runs.
-/// The other side is played by the harness inside [`Side::run`].
-pub trait Side {
+/// The other side is played by the harness inside [`Cases::run`].
+pub trait Cases {
     /// What is under test: a device's IUT kind, a client's kind.
     type UnderTest;
     /// One case of a profile's run.
@@ -168,8 +168,21 @@ impl ProfileRun {
     }
 }
 
+/// Every requirement `cases` exercise, each once, in order: what a run of
+/// them can call pass or fail, whatever the selection (either side).
+pub fn checked_ids<S: Cases>(cases: &[S::Case]) -> Vec<String> {
+    let mut ids: Vec<String> = cases
+        .iter()
+        .flat_map(|case| S::covers(case))
+        .map(ReqId::to_string)
+        .collect();
+    ids.sort();
+    ids.dedup();
+    ids
+}
+
 /// Runs every selected case of a profile, in order, and says each to `progress`.
-pub fn run_profile<S: Side>(
+pub fn run_profile<S: Cases>(
     profile: &Profile,
     under_test: &S::UnderTest,
     side: &S,
@@ -191,17 +204,11 @@ pub fn run_profile<S: Side>(
             break;
         }
         let run = match &broken {
-            Some(after) => ScenarioRun {
-                iut_declares: Default::default(),
-                advisories: Default::default(),
-                scenario: name,
-                covers: S::covers(&case).to_vec(),
-                outcome: Outcome::Error(RunError::Skipped(Box::new(after.clone()))),
-                cycles: 0,
-                frames_checked: 0,
-                tolerated: 0,
-                elapsed: Duration::ZERO,
-            },
+            Some(after) => ScenarioRun::ended(
+                name,
+                S::covers(&case).to_vec(),
+                Outcome::Error(RunError::Skipped(Box::new(after.clone()))),
+            ),
             None => {
                 let started = Instant::now();
                 let mut run = side.run(under_test, profile, case, &mut learned);
@@ -224,7 +231,7 @@ pub fn run_profile<S: Side>(
 
 /// Where and how what is under test broke in `run`, if it did: what the
 /// profile's later cases are skipped after.
-fn broke_in<S: Side>(run: &ScenarioRun) -> Option<Broke> {
+fn broke_in<S: Cases>(run: &ScenarioRun) -> Option<Broke> {
     match &run.outcome {
         Outcome::Error(RunError::Iut(error)) => Some(Broke {
             under_test: S::UNDER_TEST,

@@ -12,7 +12,7 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use canif_features::ScenarioInfo;
-use canif_harness::run::Side;
+use canif_harness::run::Cases;
 use canif_spec::{Catalogue, Side as Role};
 
 use crate::stop::{stop, Stop};
@@ -99,7 +99,7 @@ impl<'c> TestPlan<'c> {
 }
 
 /// A side's cases, each once with every profile it runs on.
-fn add_cases<S: Side>(cases: &mut Vec<Case>, plan: Plan<'_, S>) {
+fn add_cases<S: Cases>(cases: &mut Vec<Case>, plan: Plan<'_, S>) {
     let gherkin: BTreeMap<String, &ScenarioInfo> =
         plan.gherkin.iter().map(|(_, s)| (s.id(), s)).collect();
     for (profile, name, covers) in plan.candidates() {

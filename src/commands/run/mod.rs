@@ -12,11 +12,11 @@ mod self_check;
 use std::path::Path;
 use std::process::ExitCode;
 
-use crate::cli::{CampaignArgs, RunCommand, RunCommon, RunSide};
+use crate::cli::{CampaignArgs, RunCommand, RunCommon, RunTarget};
 use crate::stop::{stop, Stop};
 
 use canif_harness::report::RunReport;
-use canif_harness::run::{Selection, Side};
+use canif_harness::run::{Cases, Selection};
 use canif_runner::{Campaign, Plan, Rerun};
 use canif_spec::{Catalogue, Profile};
 
@@ -25,10 +25,10 @@ pub(crate) use self_check::self_check;
 
 /// `canif run`: either side, or the CANopen suite, with its reports.
 pub(crate) fn command(catalogue: &Catalogue, args: RunCommand) -> Result<ExitCode, Stop> {
-    match args.side() {
-        RunSide::Device(args) => device::command(catalogue, args),
-        RunSide::Plc(args) => plc::command(catalogue, args),
-        RunSide::Canopen(args) => canopen::command(catalogue, args),
+    match args.target() {
+        RunTarget::Device(args) => device::command(catalogue, args),
+        RunTarget::Plc(args) => plc::command(catalogue, args),
+        RunTarget::Canopen(args) => canopen::command(catalogue, args),
     }
 }
 
@@ -84,7 +84,7 @@ fn selected(
 }
 
 /// The plan of a run over profiles, with the campaign's settings.
-fn campaign_plan<'c, S: Side>(
+fn campaign_plan<'c, S: Cases>(
     profiles: Vec<&'c Profile>,
     options: S,
     common: &RunCommon,
@@ -133,7 +133,7 @@ fn campaign_args(args: impl Iterator<Item = String>) -> Vec<String> {
 }
 
 /// `canif list scenarios`: every check a run of these profiles can select.
-pub(crate) fn list_scenarios<S: Side>(
+pub(crate) fn list_scenarios<S: Cases>(
     catalogue: &Catalogue,
     names: &[String],
     options: S,

@@ -125,7 +125,7 @@ pub fn marker() -> Frame {
 }
 
 /// Where the IUT sits on the kernel bus.
-enum Side {
+enum IutEnd {
     Attached(KernelSocket),
     Owned,
 }
@@ -138,7 +138,7 @@ struct InFlight {
 
 pub struct KernelBus {
     options: KernelBusOptions,
-    side: Side,
+    iut_end: IutEnd,
     tester: KernelSocket,
     /// CLOCK_REALTIME at scenario time 0.
     epoch: Nanos,
@@ -168,15 +168,15 @@ impl KernelBus {
     fn open_sockets(options: &KernelBusOptions, owned: bool) -> Result<Self, String> {
         canif_kernel::probe()?;
         let side = if owned {
-            Side::Owned
+            IutEnd::Owned
         } else {
-            Side::Attached(KernelSocket::open(&options.spec.iut, true)?)
+            IutEnd::Attached(KernelSocket::open(&options.spec.iut, true)?)
         };
         let tester = KernelSocket::open(&options.spec.tester, owned)?;
         match &side {
-            Side::Attached(iut) => synchronize(iut, &tester, options.timeout)?,
+            IutEnd::Attached(iut) => synchronize(iut, &tester, options.timeout)?,
             // Before the IUT opens its socket: a socket of the harness's own stands in.
-            Side::Owned => synchronize(
+            IutEnd::Owned => synchronize(
                 &KernelSocket::open(&options.spec.iut, false)?,
                 &tester,
                 options.timeout,
@@ -184,7 +184,7 @@ impl KernelBus {
         }
         Ok(KernelBus {
             options: options.clone(),
-            side,
+            iut_end: side,
             tester,
             epoch: canif_kernel::realtime_ns(),
             waiting: VecDeque::new(),
@@ -293,7 +293,7 @@ impl Bus for KernelBus {
     /// the other nodes' frames when due, hands the IUT what its socket gets,
     /// sends what it sends, and returns once everything written has arrived.
     fn run_until(&mut self, pair: &mut Pair, until: Nanos) -> Result<(), Outcome> {
-        let owned = matches!(self.side, Side::Owned);
+        let owned = matches!(self.iut_end, IutEnd::Owned);
         loop {
             pair.now = pair.now.max(self.now());
             if !owned && self.iut_in_flight.is_none() {
@@ -317,9 +317,9 @@ impl Bus for KernelBus {
             }
             let wait =
                 Duration::from_nanos(until.saturating_sub(self.now()).clamp(50_000, 1_000_000));
-            let result = match &self.side {
-                Side::Attached(iut) => KernelSocket::wait(&[iut, &self.tester], wait),
-                Side::Owned => KernelSocket::wait(&[&self.tester], wait),
+            let result = match &self.iut_end {
+                IutEnd::Attached(iut) => KernelSocket::wait(&[iut, &self.tester], wait),
+                IutEnd::Owned => KernelSocket::wait(&[&self.tester], wait),
             };
             if let Err(error) = result {
                 return Err(bus_error(format!("poll on the CAN sockets: {error}")));
@@ -348,7 +348,7 @@ impl Bus for KernelBus {
     }
 
     fn owned_bus(&self) -> Option<OwnedBus> {
-        matches!(self.side, Side::Owned).then(|| OwnedBus {
+        matches!(self.iut_end, IutEnd::Owned).then(|| OwnedBus {
             interface: self.options.spec.iut.clone(),
             epoch_ns: self.epoch,
         })
@@ -370,7 +370,7 @@ impl KernelBus {
     /// Writes the IUT's frame on its socket; a full queue (ENOBUFS) keeps it
     /// pending for the next turn, as for the other nodes.
     fn send_iut(&mut self, pair: &mut Pair, frame: Frame) -> Result<(), Outcome> {
-        let Side::Attached(socket) = &self.side else {
+        let IutEnd::Attached(socket) = &self.iut_end else {
             return Ok(());
         };
         match socket.send(&frame) {
@@ -428,7 +428,7 @@ impl KernelBus {
 
     /// The next thing a socket received: (on the IUT's socket, what).
     fn next_received(&self) -> Result<Option<(bool, Received)>, Outcome> {
-        if let Side::Attached(socket) = &self.side {
+        if let IutEnd::Attached(socket) = &self.iut_end {
             match socket.recv() {
                 Ok(Some(received)) => return Ok(Some((true, received))),
                 Ok(None) => {}
