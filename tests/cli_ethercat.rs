@@ -194,6 +194,11 @@ fn the_terminal_is_certified_across_a_veth_pair() {
 /// veth pair: what the script printed (it exited 0) and what the terminal
 /// served; `None` where this machine cannot (said as a skip).
 fn soem_against_the_terminal(test: &str, tag: u32, script: &str) -> Option<(String, String)> {
+    soem_script(test, tag, script, &[])
+}
+
+/// [`soem_against_the_terminal`] with arguments after the interface.
+fn soem_script(test: &str, tag: u32, script: &str, args: &[&str]) -> Option<(String, String)> {
     if !has_pysoem() {
         skip(test, "no Python package pysoem (.ci/run installs it)");
         return None;
@@ -204,6 +209,7 @@ fn soem_against_the_terminal(test: &str, tag: u32, script: &str) -> Option<(Stri
     let script = format!("{}/tests/python/{script}", env!("CARGO_MANIFEST_DIR"));
     let master = Command::new("timeout")
         .args(["60", "python3", &script, &pair.master])
+        .args(args)
         .output()
         .expect("python3 runs");
     // SIGINT: the terminal says what it served and exits.
@@ -261,6 +267,82 @@ fn a_real_start_up_list_configures_the_terminal() {
         served.contains("01234567#CA1F"),
         "the terminal's side: {served}"
     );
+}
+
+/// A master that never asks for OP gets nothing onto the CAN side: it
+/// configures the terminal, reaches SAFEOP and cycles 100 times with a batch
+/// handed over (ETG.1000.6: outputs stay safe until OP; issue 58).
+#[test]
+fn a_master_that_never_requests_op_sends_nothing() {
+    let test = "a_master_that_never_requests_op_sends_nothing";
+    let script = "pysoem_outputs_safe.py";
+    let Some((said, served)) = soem_script(test, 4, script, &["never-op"]) else {
+        return;
+    };
+    assert!(
+        said.contains("SAFEOP: 100 cycles, Inputs.TxCounter stays 0"),
+        "{said}"
+    );
+    // The terminal prints each CAN frame it sends on stdout (candump's format).
+    assert!(
+        !served.lines().any(|line| line.contains('#')),
+        "a frame went out before OP: {served}"
+    );
+}
+
+/// In OP every batch goes; after the master's fall back to SAFEOP and after
+/// the SM watchdog's, nothing new goes until OP again, and then it does.
+#[test]
+fn outputs_are_acted_on_in_op_only_also_after_a_fall_back() {
+    let test = "outputs_are_acted_on_in_op_only_also_after_a_fall_back";
+    let script = "pysoem_outputs_safe.py";
+    let Some((said, served)) = soem_script(test, 5, script, &["fallbacks"]) else {
+        return;
+    };
+    for step in [
+        "SAFEOP: 100 cycles, Inputs.TxCounter stays 0",
+        "OP: Inputs.TxCounter confirmed 1",
+        "SAFEOP again (the master's): 50 cycles, Inputs.TxCounter stays 2",
+        "OP again: Inputs.TxCounter confirmed 3",
+        "the SM watchdog: SAFEOP, AL status 0x001b",
+        "SAFEOP after the watchdog: 50 cycles, Inputs.TxCounter stays 3",
+        "OP after the watchdog: Inputs.TxCounter confirmed 4",
+    ] {
+        assert!(said.contains(step), "{step}: {said}");
+    }
+    // Each batch once, in the order handed over.
+    let at = |frame: &str| {
+        assert_eq!(served.matches(frame).count(), 1, "{frame}: {served}");
+        served.find(frame).unwrap()
+    };
+    let order = [
+        at(" 111#5AFE"),
+        at(" 222#0B0B"),
+        at(" 333#33"),
+        at(" 444#44"),
+    ];
+    assert!(order.windows(2).all(|w| w[0] < w[1]), "{served}");
+}
+
+/// Beckhoff's manual configures the CAN interface "with Complete Access or
+/// with consistency nesting": both give the same configuration, and a
+/// record left open keeps the terminal from SAFEOP.
+#[test]
+fn consistency_nesting_configures_the_terminal_as_complete_access_does() {
+    let test = "consistency_nesting_configures_the_terminal_as_complete_access_does";
+    let Some((said, served)) = soem_script(test, 6, "pysoem_nesting.py", &[]) else {
+        return;
+    };
+    for step in [
+        "complete access and nesting read back alike",
+        "0x8000:00 reads 0 while open",
+        "an open 0x8000 refuses SAFEOP with AL status 0x0026",
+        "mapped 166 output and 154 input bytes",
+        "Inputs.TxCounter confirmed 1, Inputs.TransactionNumber 0x42",
+    ] {
+        assert!(said.contains(step), "{step}: {said}");
+    }
+    assert!(served.contains("01234567#CA1F"), "{served}");
 }
 
 fn has_pysoem() -> bool {

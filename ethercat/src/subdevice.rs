@@ -43,6 +43,9 @@ pub mod al_status {
     pub const INVALID_OUTPUT_CONFIGURATION: u16 = 0x001D;
     pub const INVALID_INPUT_CONFIGURATION: u16 = 0x001E;
     pub const SYNC_MANAGER_WATCHDOG: u16 = 0x001B;
+    /// Settings that contradict each other (here: a record left open by
+    /// consistency nesting at PREOP → SAFEOP; the code is canif's reading).
+    pub const INCONSISTENT_SETTINGS: u16 = 0x0026;
     pub const INVALID_SYNC_CONFIGURATION: u16 = 0x0030;
     pub const INVALID_SYNC_CYCLE_TIME: u16 = 0x0035;
 }
@@ -105,6 +108,11 @@ pub struct SubDevice<A> {
     /// wrote to its end, which is all the application ever reads (a write
     /// that stops short of the end is not handed over, ETG.1000.4 §8.2.3).
     outputs_buffer: Vec<u8>,
+    /// The outputs the application last acted on in OP (zeros before):
+    /// what its cycle is handed outside OP. In SAFEOP a SubDevice delivers
+    /// inputs but keeps its outputs in their safe state (ETG.1000.6's state
+    /// machine): nothing the master writes then is acted on until OP.
+    acted_on: Vec<u8>,
     /// A firmware fault for canif's own tests: the cycle runs on the
     /// SyncManager 2 event also with Distributed Clocks (PDX-005 broken).
     pub cycles_on_frames: bool,
@@ -165,6 +173,7 @@ impl<A: Application> SubDevice<A> {
             telegrams: Telegrams::default(),
             sync0: None,
             outputs_buffer: Vec::new(),
+            acted_on: Vec::new(),
             cycles_on_frames: false,
             frame: Frame::EMPTY,
             answer: Vec::new(),
@@ -457,6 +466,7 @@ impl<A: Application> SubDevice<A> {
             synchronization,
         })?;
         self.outputs_buffer.clear();
+        self.acted_on.clear();
         if let Synchronization::DistributedClocks { sync0_cycle, .. } = synchronization {
             let now = self.esc.system_time_at(self.esc.local_time);
             let start = self.esc.get64(register::DC_START_TIME);
@@ -518,12 +528,18 @@ impl<A: Application> SubDevice<A> {
         }
     }
 
-    /// The application's cycle on the last complete outputs buffer (zeros
-    /// before the master wrote one).
+    /// The application's cycle: in OP on the last complete outputs buffer
+    /// (zeros before the master wrote one); in SAFEOP on the outputs it last
+    /// acted on, so that a batch handed over before OP goes out at OP's
+    /// first cycle if it is still in the outputs then, and not before.
     fn sync_manager_event(&mut self, now: u64) {
         let length = self.esc.sync_manager(OUTPUTS).range().len();
         self.outputs_buffer.resize(length, 0);
-        let inputs = self.application.cycle(&self.outputs_buffer, now);
+        if self.state == AlState::Op {
+            self.acted_on.clone_from(&self.outputs_buffer);
+        }
+        self.acted_on.resize(length, 0);
+        let inputs = self.application.cycle(&self.acted_on, now);
         let range = self.esc.sync_manager(INPUTS).range();
         let end = range.end.min(self.esc.memory.len()).max(range.start);
         if let Some(image) = self.esc.memory.get_mut(range.start..end) {

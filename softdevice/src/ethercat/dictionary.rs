@@ -5,6 +5,7 @@
 use canif_ethercat::mailbox::abort;
 use canif_ethercat::{Entry, ObjectDictionary};
 
+use super::nesting::{self, Step};
 use super::objects::{self, flags, interface, object, status, sync, FILTER_ROW, FILTER_ROWS};
 use super::Terminal;
 use crate::field::{header, info};
@@ -66,6 +67,14 @@ impl Terminal {
             out.push(Entry::new(n + 1, row, true));
         }
         out
+    }
+
+    /// A record's sub-index 0: its highest sub-index, written 0 and back by
+    /// consistency nesting (it reads 0 while the record is open).
+    fn record_sub0(&self, index: u16, writable: bool) -> Entry {
+        let open = self.nesting.as_ref().is_some_and(|n| n.index == index);
+        let highest = nesting::highest(index).unwrap_or(0);
+        Entry::new(0, vec![if open { 0 } else { highest }], writable)
     }
 
     /// `0x1C12`/`0x1C13`: the count, then two places.
@@ -420,7 +429,7 @@ impl ObjectDictionary for Terminal {
                     Entry::new(sub, value.to_le_bytes().to_vec(), configurable).named(name)
                 };
                 vec![
-                    ro(0, vec![interface::TX_QUEUE]),
+                    self.record_sub0(index, configurable),
                     rw(interface::FLAGS, self.flags(), "Flags"),
                     rw(interface::RX_SLOTS, u16::from(d.rx_slots), "Rx slots"),
                     rw(interface::TX_SLOTS, u16::from(d.tx_slots), "Tx slots"),
@@ -455,7 +464,7 @@ impl ObjectDictionary for Terminal {
             object::BUS_PARAMETERS => {
                 let d = &self.draft;
                 vec![
-                    ro(0, vec![2]),
+                    self.record_sub0(index, configurable),
                     Entry::new(1, d.nominal_timing.to_le_bytes().to_vec(), configurable)
                         .named("Nominal bit timing"),
                     Entry::new(2, d.data_timing.to_le_bytes().to_vec(), configurable)
@@ -472,7 +481,22 @@ impl ObjectDictionary for Terminal {
         if self.device.is_some() && !measurement {
             return Err(abort::DEVICE_STATE);
         }
-        self.configure(index, values)
+        match nesting::step(&mut self.nesting, index, values) {
+            Step::Direct => self.configure(index, values),
+            Step::Keep => Ok(()),
+            Step::Open { count_now: true } => self.configure(index, values),
+            Step::Open { count_now: false } => Ok(()),
+            Step::Close(all) => {
+                let closed_as_opened = match (nesting::highest(index), values) {
+                    (Some(highest), [(0, value)]) => value.first() == Some(&highest),
+                    _ => true,
+                };
+                match closed_as_opened {
+                    true => self.configure(index, &all),
+                    false => Err(abort::VALUE_RANGE),
+                }
+            }
+        }
     }
 
     fn indices(&self) -> Vec<u16> {

@@ -10,6 +10,7 @@
 //! device. The inputs are the interface's image, then the CAN status.
 
 mod dictionary;
+mod nesting;
 pub mod objects;
 
 use canif_ethercat::subdevice::al_status;
@@ -56,6 +57,8 @@ pub struct Terminal {
     device: Option<SoftDevice>,
     /// A firmware fault for the harness's tests: SAFEOP refused with this AL status code.
     refuses_start: Option<u16>,
+    /// The object a master opened by consistency nesting, not yet closed.
+    nesting: Option<nesting::Nesting>,
 }
 
 impl Terminal {
@@ -102,6 +105,7 @@ impl Terminal {
             last_outputs: Vec::new(),
             device: None,
             refuses_start: None,
+            nesting: None,
         }
     }
 
@@ -270,6 +274,14 @@ impl Application for Terminal {
         if let Some(code) = self.refuses_start {
             return Err(code);
         }
+        // A record opened by consistency nesting and never closed holds no
+        // configuration the terminal has judged.
+        if let Some(open) = &self.nesting {
+            if nesting::highest(open.index).is_some() {
+                return Err(al_status::INCONSISTENT_SETTINGS);
+            }
+        }
+        self.nesting = None;
         // The CAN interface's PDOs are mandatory in their assignments.
         if !self.rx_assign.contains(&object::RX_PDO_MAP) {
             return Err(al_status::INVALID_OUTPUT_CONFIGURATION);
