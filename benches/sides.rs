@@ -1,36 +1,47 @@
-//! The PLC side's default run must cost no more than the device side's: both
-//! README commands (`canif run` and `canif run plc`), three times each,
-//! in one run; prints the medians and their ratio. Plain main: asserts nothing.
+//! The PLC side's default run must cost no more than the device side's: the
+//! runs the README's two commands start (`canif run`, `canif run plc`),
+//! made as the library call they are (`canif_runner::Plan::run`), three
+//! times each in one run; prints the medians and their ratio. Plain main:
+//! asserts nothing.
 
-use std::process::Command;
 use std::time::{Duration, Instant};
 
-fn median_of_three(args: &[&str]) -> Duration {
-    let report = std::env::temp_dir().join(format!("canif-bench-sides-{}", std::process::id()));
+use canif_harness::client::suite::{ClientKind, ClientOptions};
+use canif_harness::device::{IutKind, Options};
+use canif_runner::{Campaign, Plan, Quiet};
+use canif_spec::Catalogue;
+
+fn median_of_three<S: Campaign>(
+    catalogue: &Catalogue,
+    options: impl Fn() -> S,
+    under_test: &S::UnderTest,
+) -> Duration {
     let mut times: Vec<Duration> = (0..3)
         .map(|_| {
+            let plan = Plan::new(catalogue.profiles.iter().collect(), options(), None)
+                .expect("the feature files parse");
             let started = Instant::now();
-            let status = Command::new(env!("CARGO_BIN_EXE_canif"))
-                .args(args)
-                .arg("--report")
-                .arg(&report)
-                .output()
-                .expect("canif runs")
-                .status;
-            assert!(status.success(), "canif {args:?} did not conform");
+            let report = plan
+                .run(catalogue, under_test, &Quiet)
+                .expect("the plan runs");
+            assert_eq!(report.exit_code(), 0, "{}", report.headline());
             started.elapsed()
         })
         .collect();
-    let _ = std::fs::remove_dir_all(report);
     times.sort();
     times[1]
 }
 
 fn main() {
-    let device = median_of_three(&["run"]);
-    let plc = median_of_three(&["run", "plc"]);
-    println!("canif run (device side, soft device):  {device:?}");
-    println!("canif run plc (reference client): {plc:?}");
+    let catalogue = Catalogue::embedded().expect("the embedded catalogue loads");
+    let soft_device = IutKind::SoftDevice {
+        faults: vec![],
+        choices: vec![],
+    };
+    let device = median_of_three(&catalogue, Options::default, &soft_device);
+    let plc = median_of_three(&catalogue, || ClientOptions::new(1), &ClientKind::Reference);
+    println!("device side, soft device (canif run):      {device:?}");
+    println!("PLC side, reference client (canif run plc): {plc:?}");
     println!(
         "ratio PLC side / device side: {:.2}",
         plc.as_secs_f64() / device.as_secs_f64()

@@ -105,7 +105,8 @@ fn run(cli: Cli, out: &mut String) -> Result<ExitCode, Stop> {
         Command::SelfCheck { seed } => run::self_check(&catalogue, seed),
         Command::Probe { iut, profile, out } => {
             let profiles = run::profiles(&catalogue, &profile)?;
-            tools::probe(&commands::resolve_iut(&iut)?, &profiles, &out)
+            let given = commands::declared(&iut.declare)?;
+            tools::probe(&commands::resolve_iut(&iut)?, &profiles, (given, &out))
         }
         Command::Compare {
             base,

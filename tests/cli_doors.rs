@@ -64,7 +64,56 @@ fn a_probe_of_a_broken_iut_is_an_error_and_writes_nothing() {
             .unwrap();
         let stderr = String::from_utf8_lossy(&output.stderr);
         assert_eq!(output.status.code(), Some(2), "{case}: {stderr}");
-        assert!(stderr.contains("the IUT broke"), "{case}: {stderr}");
+        // One that never answers cannot start: said before anything runs.
+        let says = match case {
+            "hangs" => "within 500 ms, the start limit",
+            _ => "the IUT broke",
+        };
+        assert!(stderr.contains(says), "{case}: {stderr}");
         assert!(!out.exists(), "{case}: a choices file was written");
+    }
+}
+
+/// Issue 52: an IUT that never answers its first request (a Python IUT that
+/// forgets to flush stdout) is started once, not once per profile or probe
+/// step: `canif run` on every profile and `canif probe` each end with one
+/// error naming the limit, how to raise it and the usual cause.
+#[test]
+fn an_iut_that_never_answers_is_started_once_and_said_once() {
+    for command in [&["run", "--report"][..], &["probe", "--out"]] {
+        let dir = scratch(&format!("never-answers-{}", command[0]));
+        let starts = dir.join("starts");
+        let iut = format!(
+            "exec:echo started >> '{}'; exec sleep 3600",
+            starts.display()
+        );
+        let output = Command::new(CANIF)
+            .args(command)
+            .arg(dir.join("out"))
+            .args([
+                "--timeout-ms",
+                "500",
+                "--start-timeout-ms",
+                "500",
+                "--iut",
+                &iut,
+            ])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{command:?}: {stderr}");
+        for words in [
+            "within 500 ms, the start limit",
+            "CANIF_START_TIMEOUT_MS",
+            "flush its stdout",
+        ] {
+            assert!(stderr.contains(words), "{command:?}: {stderr}");
+        }
+        let started = std::fs::read_to_string(&starts).unwrap_or_default();
+        assert_eq!(
+            started.lines().count(),
+            1,
+            "{command:?}: started {started:?}"
+        );
     }
 }

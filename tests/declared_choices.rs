@@ -86,9 +86,15 @@ fn a_declared_choice_is_judged_as_declared_and_breaking_it_fails() {
     assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
     let summary = std::fs::read_to_string(dir.join("summary.md")).unwrap();
     assert!(summary.contains("FAIL fc510x::HS-TX-"), "{summary}");
-    // And the soft device, which does not count it, fails when declared to.
+    // The built-in soft device, which does not count it, declares so
+    // itself: told otherwise, the run is refused, naming both (issue 52).
     let (out, _) = backpressure("soft-declared", "softdevice", &declare);
-    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("one of them is wrong"),
+        "{}",
+        stderr(&out)
+    );
 }
 
 #[test]
@@ -345,4 +351,77 @@ fn probe_finds_every_freedom_and_a_declaration_against_it_fails_on_its_requireme
             verdicts[requirement]
         );
     }
+}
+
+/// Issue 52: a declaration is never dropped. `canif probe` reads `--declare`
+/// as `canif run` does (a bad one exits 2 naming it; a good one is not probed
+/// and is in the file it writes), and a declaration that contradicts the
+/// built-in soft device's own choice is the same error on every route.
+#[test]
+fn a_declaration_is_never_dropped_and_a_contradiction_is_one_error_everywhere() {
+    let dir = scratch("never-dropped");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("choices.json");
+    let file_text = file.display().to_string();
+    for bad in ["foo", "warp-drive=on"] {
+        let out = canif(&[
+            "probe",
+            "--profile",
+            "fc510x",
+            "--declare",
+            bad,
+            "--out",
+            &file_text,
+        ]);
+        assert_eq!(out.status.code(), Some(2), "{bad}: {}", stderr(&out));
+        assert!(
+            stderr(&out).contains(bad.split('=').next().unwrap()),
+            "{}",
+            stderr(&out)
+        );
+        assert!(!file.exists(), "{bad}: a file was written");
+    }
+    let declared = "tx-queue-accounting=wire-in-queue";
+    let out = canif(&[
+        "probe",
+        "--profile",
+        "fc510x",
+        "--choice",
+        "counts-frame-on-wire",
+        "--declare",
+        declared,
+        "--out",
+        &file_text,
+    ]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("(declared, not probed)"));
+    let written: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+    assert_eq!(written["tx-queue-accounting"], "wire-in-queue");
+    // The soft device told to count the frame on the wire declares so
+    // itself: a command line that says otherwise is refused on every route.
+    let contradiction = [
+        "--choice",
+        "counts-frame-on-wire",
+        "--declare",
+        "tx-queue-accounting=wire-outside-queue",
+    ];
+    let report_dir = dir.join("run").display().to_string();
+    let certificate_dir = dir.join("certificate").display().to_string();
+    for route in [
+        &["run", "--profile", "fc510x", "--report", &report_dir][..],
+        &["probe", "--profile", "fc510x", "--out", &file_text],
+        &["certify", "--profile", "fc510x", "--out", &certificate_dir],
+    ] {
+        let out = canif(&[route, &contradiction[..]].concat());
+        assert_eq!(out.status.code(), Some(2), "{route:?}: {}", stderr(&out));
+        for words in [
+            "wire-in-queue",
+            "wire-outside-queue",
+            "one of them is wrong",
+        ] {
+            assert!(stderr(&out).contains(words), "{route:?}: {}", stderr(&out));
+        }
+    }
+    let _ = std::fs::remove_dir_all(dir);
 }

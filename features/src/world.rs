@@ -311,7 +311,7 @@ impl CanWorld {
             // The model accepts it, so the profile offers it: refusing it
             // is the scenario's failure, and what it needed is not run.
             Err(RunError::Configuration(Refusal::Iut(reason))) => {
-                let interface = canif_harness::device::cases::describe(&self.config);
+                let interface = self.config.describe();
                 REFUSED.with(|r| *r.borrow_mut() = Some((interface, reason.clone())));
                 reason
             }

@@ -12,7 +12,8 @@ use canif_model::frame::FrameError;
 /// the exchange with it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum IutCause {
-    /// It could not be started or loaded.
+    /// It could not be started or loaded, or never answered its first
+    /// request within the start limit: no run of it can judge anything.
     NotStarted,
     /// It exited, closed its output or its input, or died.
     Gone,

@@ -257,6 +257,36 @@ impl core::fmt::Display for ConfigError {
 impl std::error::Error for ConfigError {}
 
 impl InterfaceConfig {
+    /// The interface's short name, as every report and both sides name it:
+    /// its frame format, then what it adds (queue, transaction numbers, time
+    /// stamps, filters, Distributed Clocks), e.g. `11-bit, optimized, TN`.
+    pub fn describe(&self) -> String {
+        let mut parts = vec![match self.format {
+            FrameFormat::Base11 => "11-bit",
+            FrameFormat::Extended29 => "29-bit",
+            FrameFormat::Fd => "FD",
+        }];
+        match self.queue {
+            QueueMode::Standard => {}
+            QueueMode::Optimized => parts.push("optimized"),
+            QueueMode::Fast => parts.push("fast"),
+        }
+        // An FD image has both, always: naming them would say nothing.
+        if self.transaction_number && self.format != FrameFormat::Fd {
+            parts.push("TN");
+        }
+        if self.time_stamp && self.format != FrameFormat::Fd {
+            parts.push("TS");
+        }
+        if !self.filters.is_empty() {
+            parts.push("filters");
+        }
+        if let Synchronization::DistributedClocks { .. } = self.synchronization {
+            parts.push("DC");
+        }
+        parts.join(", ")
+    }
+
     /// Checks the configuration against what the device offers.
     pub fn validate(&self, caps: &Capabilities) -> Result<(), ConfigError> {
         use ConfigError::*;

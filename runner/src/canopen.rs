@@ -37,7 +37,8 @@ impl Campaign for CanopenSide {
             ..RunMeta::new(name, described(target), plan.options.seed, catalogue)
         };
         let checks = plan.run_profiles(target, Self::UNIT, observer);
-        let left_out = plan.selection_left_out();
+        let mut left_out = plan.selection_left_out();
+        left_out.extend(plan.never_started_left_out(&checks));
         plan.assemble(
             catalogue,
             (checks, Vec::new()),

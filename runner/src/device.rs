@@ -75,6 +75,7 @@ impl Campaign for Options {
             )
         });
         let mut left_out = plan.selection_left_out();
+        left_out.extend(plan.never_started_left_out(&lockstep));
         let gherkin = if canif_harness::interrupt::requested() {
             observer.event(Event::Interrupted(Stage::Gherkin));
             left_out.push("interrupted before the Gherkin scenarios".into());

@@ -19,6 +19,19 @@ use crate::event::{Event, Observer, Position, Stage};
 use crate::parallel::in_parallel;
 use crate::rerun::Rerun;
 
+/// The error of a profile's run whose implementation never started (it
+/// could not be started, or never answered within the start limit).
+fn never_started_in(run: &ProfileRun) -> Option<&canif_harness::IutError> {
+    run.runs.iter().find_map(|r| match &r.outcome {
+        canif_harness::Outcome::Error(canif_harness::RunError::Iut(error))
+            if error.cause == canif_harness::error::IutCause::NotStarted =>
+        {
+            Some(error)
+        }
+        _ => None,
+    })
+}
+
 /// A run of one side, checked before anything starts.
 #[derive(Clone)]
 pub struct Plan<'c, S> {
@@ -160,10 +173,16 @@ impl<'c, S: Cases> Plan<'c, S> {
         let count = self.profiles.len();
         let finished = AtomicUsize::new(0);
         let started = Instant::now();
+        // What never started on one profile starts on none: the profiles
+        // not begun are not run (issue 52), and the report says why.
+        let never_started = std::sync::atomic::AtomicBool::new(false);
         // One at a time, each case is told as it ends; beside others, only
         // each profile's end is.
         let serial = self.jobs <= 1 || count <= 1;
         let runs = in_parallel(&self.profiles, self.jobs, |index, profile| {
+            if never_started.load(Ordering::SeqCst) {
+                return None;
+            }
             let at = Position { index, count };
             if serial {
                 let cases = self.selected_cases(profile);
@@ -183,12 +202,27 @@ impl<'c, S: Cases> Plan<'c, S> {
                 elapsed: started.elapsed(),
                 unit,
             });
-            run
+            if never_started_in(&run).is_some() {
+                never_started.store(true, Ordering::SeqCst);
+            }
+            Some(run)
         });
         if canif_harness::interrupt::requested() {
             observer.event(Event::Interrupted(Stage::Profiles));
         }
-        runs.into_iter().map_while(|run| run).collect()
+        runs.into_iter().map_while(Option::flatten).collect()
+    }
+
+    /// The run's left-out line when what is under test never started on a
+    /// profile and the rest were not run, naming the error once.
+    pub(crate) fn never_started_left_out(&self, runs: &[ProfileRun]) -> Option<String> {
+        let error = runs.iter().find_map(never_started_in)?;
+        let not_run = self.profiles.len() - runs.len();
+        Some(format!(
+            "{} never started ({}); {not_run} profile(s) not run",
+            S::UNDER_TEST,
+            error.what
+        ))
     }
 
     /// The selected Gherkin scenarios against what is under test: (profile, run).

@@ -72,6 +72,7 @@ impl Campaign for ClientOptions {
             }
         }
         let mut left_out = plan.selection_left_out();
+        left_out.extend(plan.never_started_left_out(&lockstep));
         if !options.counter_wrap {
             left_out.push("the 65,600-cycle counter wrap (--no-counter-wrap)".to_string());
         }

@@ -62,6 +62,9 @@ pub(crate) fn certify(
             let kind = resolve_iut(iut)?;
             // What the device declares on the command line: the certificate rests on it.
             let declared = declared(&iut.declare)?;
+            if let Some(contradiction) = kind.contradicts(&declared) {
+                return Err(stop!("{contradiction}"));
+            }
             let options = Options {
                 seed,
                 declared,

@@ -148,11 +148,18 @@ pub(crate) fn frame_time(
 pub(crate) fn probe(
     kind: &canif_harness::device::IutKind,
     profiles: &[&canif_spec::Profile],
-    out: &std::path::Path,
+    (given, out): (canif_harness::declare::choices::Declared, &std::path::Path),
 ) -> Result<ExitCode, Stop> {
     use canif_harness::declare::choices::Choice;
     use canif_harness::device::probe::{declaration, finding, probe, Finding};
-    let options = canif_harness::device::Options::quick(1);
+    if let Some(contradiction) = kind.contradicts(&given) {
+        return Err(stop!("canif probe: {contradiction}"));
+    }
+    // What the command line declares is not probed, and is in the file.
+    let options = canif_harness::device::Options {
+        declared: given,
+        ..canif_harness::device::Options::quick(1)
+    };
     let mut probes = Vec::new();
     for profile in profiles {
         for probed in probe(kind, profile, &options) {
@@ -185,6 +192,10 @@ pub(crate) fn probe(
     }
     let mut code = ExitCode::SUCCESS;
     for choice in Choice::ALL.into_iter().filter(|c| c.settled_by().is_some()) {
+        if let Some(value) = given.value(choice) {
+            sayln!("{choice}={value} (declared, not probed)");
+            continue;
+        }
         let said = match finding(&probes, choice) {
             Finding::Takes(value) => format!("{choice}={value}"),
             Finding::Undecided => {
@@ -201,7 +212,7 @@ pub(crate) fn probe(
         };
         sayln!("{said}");
     }
-    let declared = (code == ExitCode::SUCCESS).then(|| declaration(&probes));
+    let declared = (code == ExitCode::SUCCESS).then(|| given.or(declaration(&probes)));
     if let Some(declared) = declared {
         let text = serde_json::to_string_pretty(&declared.entries()).expect("a JSON object") + "\n";
         if let Err(error) = std::fs::write(out, text) {

@@ -254,28 +254,15 @@ impl ClientScenario {
     }
 }
 
-/// The interface, as a scenario's name carries it.
+/// The interface and its slots, as a scenario's name carries it: the
+/// interface's one name ([`InterfaceConfig::describe`]) and the geometry a
+/// client runs it with.
 pub fn describe(config: &InterfaceConfig) -> String {
-    let format = match config.format {
-        FrameFormat::Base11 => "11-bit",
-        FrameFormat::Extended29 => "29-bit",
-        FrameFormat::Fd => "FD",
-    };
-    let queue = match config.queue {
-        QueueMode::Standard => "",
-        QueueMode::Optimized => ", optimized queue",
-        QueueMode::Fast => ", fast queue",
-    };
-    let tn = if config.transaction_number && config.format != FrameFormat::Fd {
-        ", transaction numbers"
-    } else {
-        ""
-    };
     let slots = match (config.tx_slots, config.rx_slots) {
         (tx, rx) if tx == rx => format!("{tx} slots"),
         (tx, rx) => format!("{tx} Tx and {rx} Rx slots"),
     };
-    format!("{format}{tn}{queue}, {slots}")
+    format!("{}, {slots}", config.describe())
 }
 
 /// Frames both ways, about half the bus, for a while.

@@ -10,20 +10,8 @@
 use std::collections::VecDeque;
 use std::fmt;
 
+use canif_model::exchange::ExchangeMode;
 use canif_model::image::{ImageLayout, MessageLayout};
-
-/// How the process data move between the task and the device.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Exchange {
-    /// One LRW telegram per task: the inputs it reads are the device's of the
-    /// cycle before (confirmation after two tasks).
-    Lrw,
-    /// LWR after the task, LRD just before the next (confirmation after one).
-    SeparateInputUpdate,
-    /// LRW with the task at half the CAN interface cycle: the device's cycle
-    /// runs on every second telegram.
-    HalfCycle,
-}
 
 /// What the output buffer holds when the master hands it to a task.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -40,7 +28,14 @@ pub enum OutputBuffer {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Master {
     pub name: &'static str,
-    pub exchange: Exchange,
+    /// The telegrams that carry the images (the model's one word for it):
+    /// one LRW (the inputs it reads are the device's of the cycle before,
+    /// confirmation after two tasks), or LWR after the task and LRD just
+    /// before the next (confirmation after one).
+    pub telegrams: ExchangeMode,
+    /// LRW with the task at half the CAN interface cycle: the device's cycle
+    /// runs on every second telegram.
+    pub half_cycle: bool,
     pub buffer: OutputBuffer,
     /// Every `n`-th task overruns: the client does not run, the telegram
     /// carries its last outputs.
@@ -57,10 +52,11 @@ impl fmt::Display for Master {
 }
 
 impl Master {
-    const fn new(name: &'static str, exchange: Exchange) -> Self {
+    const fn new(name: &'static str, telegrams: ExchangeMode) -> Self {
         Master {
             name,
-            exchange,
+            telegrams,
+            half_cycle: false,
             buffer: OutputBuffer::Persistent,
             overrun_every: None,
             distributed_clocks: false,
@@ -69,40 +65,46 @@ impl Master {
 
     /// Every master model a run uses, the plain LRW first.
     pub const ALL: [Master; 8] = [
-        Master::new("lrw", Exchange::Lrw),
-        Master::new("separate-input-update", Exchange::SeparateInputUpdate),
-        Master::new("half-cycle", Exchange::HalfCycle),
+        Master::new("lrw", ExchangeMode::Lrw),
+        Master::new("separate-input-update", ExchangeMode::SeparateInputUpdate),
+        Master {
+            half_cycle: true,
+            ..Master::new("half-cycle", ExchangeMode::Lrw)
+        },
         Master {
             buffer: OutputBuffer::Zeroed,
-            ..Master::new("lrw-zeroed-outputs", Exchange::Lrw)
+            ..Master::new("lrw-zeroed-outputs", ExchangeMode::Lrw)
         },
         Master {
             buffer: OutputBuffer::Rotating(3),
-            ..Master::new("lrw-triple-buffered", Exchange::Lrw)
+            ..Master::new("lrw-triple-buffered", ExchangeMode::Lrw)
         },
         Master {
             overrun_every: Some(5),
-            ..Master::new("lrw-overruns", Exchange::Lrw)
+            ..Master::new("lrw-overruns", ExchangeMode::Lrw)
         },
         Master {
             buffer: OutputBuffer::Rotating(3),
             ..Master::new(
                 "separate-input-update-triple-buffered",
-                Exchange::SeparateInputUpdate,
+                ExchangeMode::SeparateInputUpdate,
             )
         },
         Master {
             distributed_clocks: true,
-            ..Master::new("separate-input-update-dc", Exchange::SeparateInputUpdate)
+            ..Master::new(
+                "separate-input-update-dc",
+                ExchangeMode::SeparateInputUpdate,
+            )
         },
     ];
 
     /// What the model does, in one line.
     pub fn description(&self) -> String {
-        let exchange = match self.exchange {
-            Exchange::Lrw => "LRW (confirmation two tasks later)",
-            Exchange::SeparateInputUpdate => "separate input update (one task later)",
-            Exchange::HalfCycle => "LRW with the task at half the CAN cycle",
+        let exchange = match (self.telegrams, self.half_cycle) {
+            (_, true) => "LRW with the task at half the CAN cycle",
+            (ExchangeMode::Lrw, false) => "LRW (confirmation two tasks later)",
+            (ExchangeMode::SeparateInputUpdate, false) => "separate input update (one task later)",
         };
         let buffer = match self.buffer {
             OutputBuffer::Persistent => String::new(),
@@ -126,19 +128,18 @@ impl Master {
 
     /// Tasks per CAN interface cycle.
     pub fn tasks_per_cycle(&self) -> u64 {
-        match self.exchange {
-            Exchange::HalfCycle => 2,
-            Exchange::Lrw | Exchange::SeparateInputUpdate => 1,
+        match self.half_cycle {
+            true => 2,
+            false => 1,
         }
     }
 
     /// The most tasks from writing a TxCounter to seeing it confirmed, when
     /// the device accepts the batch in its next cycle.
     pub fn confirmation_tasks(&self) -> u64 {
-        match self.exchange {
-            Exchange::Lrw => 2,
-            Exchange::SeparateInputUpdate => 1,
-            Exchange::HalfCycle => 3,
+        match self.half_cycle {
+            true => 3,
+            false => u64::from(self.telegrams.confirmation_cycles()),
         }
     }
 }
@@ -268,14 +269,14 @@ impl MasterRun {
         device_cycle: impl FnOnce(&[u8]) -> Result<Vec<u8>, E>,
     ) -> Result<(), E> {
         let size = self.layout.input_size();
-        if self.master.exchange != Exchange::SeparateInputUpdate {
+        if self.master.telegrams != ExchangeMode::SeparateInputUpdate {
             // The LRW read the device's memory before its cycle.
             self.task_inputs[..size].copy_from_slice(&self.device_inputs);
         }
         if self.device_cycle_due() {
             self.device_inputs = device_cycle(&self.device_outputs)?;
         }
-        if self.master.exchange == Exchange::SeparateInputUpdate {
+        if self.master.telegrams == ExchangeMode::SeparateInputUpdate {
             self.task_inputs[..size].copy_from_slice(&self.device_inputs);
         }
         self.task += 1;

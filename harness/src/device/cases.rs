@@ -1,7 +1,7 @@
 //! The scenarios a device's profile runs: each interface it offers, with the
 //! scripted scenarios that fit it and generated ones from the seed.
 
-use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig, QueueMode, Synchronization};
+use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig, QueueMode};
 use canif_model::filter::FilterRow;
 
 use super::scenario::{self, Scenario};
@@ -141,35 +141,7 @@ pub fn scenarios(caps: &Capabilities, options: &Generation) -> Vec<Scenario> {
         generated(&mut list, &config, 5);
     }
     for scenario in &mut list {
-        scenario.name = format!("{} [{}]", scenario.name, describe(&scenario.interface));
+        scenario.name = format!("{} [{}]", scenario.name, scenario.interface.describe());
     }
     list
-}
-
-/// A short name for an interface configuration.
-pub fn describe(config: &InterfaceConfig) -> String {
-    let mut parts = vec![match config.format {
-        FrameFormat::Base11 => "11-bit",
-        FrameFormat::Extended29 => "29-bit",
-        FrameFormat::Fd => "FD",
-    }
-    .to_string()];
-    match config.queue {
-        QueueMode::Standard => {}
-        QueueMode::Optimized => parts.push("optimized".into()),
-        QueueMode::Fast => parts.push("fast".into()),
-    }
-    if config.transaction_number && config.format != FrameFormat::Fd {
-        parts.push("TN".into());
-    }
-    if config.time_stamp && config.format != FrameFormat::Fd {
-        parts.push("TS".into());
-    }
-    if !config.filters.is_empty() {
-        parts.push("filters".into());
-    }
-    if let Synchronization::DistributedClocks { .. } = config.synchronization {
-        parts.push("DC".into());
-    }
-    parts.join(", ")
 }

@@ -86,6 +86,19 @@ impl IutKind {
         matches!(self, IutKind::Door(door) if door.owns_its_bus())
     }
 
+    /// Where `told` (the command line's `--declare`) contradicts what this
+    /// IUT declares itself: the same words as for an IUT that declares it in
+    /// its `configured` answer, so that every route says it alike. A device
+    /// that declares nothing contradicts nothing here (its own answer is
+    /// checked when it gives it).
+    pub fn contradicts(&self, told: &Declared) -> Option<String> {
+        let (choice, said, declares) = told.contradiction(&self.declared())?;
+        Some(format!(
+            "{} declares `{choice}={declares}` itself, where canif was told `{choice}={said}` (--declare): one of them is wrong",
+            self.name()
+        ))
+    }
+
     /// What this IUT declares where the documents leave a choice. The soft
     /// device and the model know their own (the soft device's `--choice`); a
     /// device elsewhere declares on the command line, or not at all.

@@ -55,6 +55,10 @@ pub fn probe(kind: &IutKind, profile: &Profile, options: &Options) -> Vec<Probed
         let Some(settled_by) = choice.settled_by() else {
             continue;
         };
+        // What is declared is judged as declared, not probed.
+        if options.declared.value(choice).is_some() {
+            continue;
+        }
         let settling = cases.iter().filter(|case| match case {
             DeviceCase::Scenario(s) => tells_apart(choice, settled_by, s),
             DeviceCase::Refusals => false,

@@ -8,7 +8,6 @@ use canif_model::config::{
 use canif_model::filter::FilterRow;
 use canif_spec::{req_ids, ReqId};
 
-use super::cases::describe;
 use super::iut_kind::IutKind;
 use crate::door::iut::BuildError;
 use crate::outcome::{Failure, Outcome, ScenarioRun};
@@ -49,7 +48,7 @@ const SLOT_COUNT_REFUSED: &[ReqId] = req_ids!["LAY-GEN-007", "PROF-011", "PROF-0
 /// which the profile offers: a failure of [`OFFERED_REFUSED`], and the rest
 /// of what the scenario covers not run, with the IUT's words.
 pub fn refused(scenario: &str, config: &InterfaceConfig, reason: String) -> Failure {
-    let interface = describe(config);
+    let interface = config.describe();
     let failure = Failure::stopped(
         (OFFERED_REFUSED.to_vec(), scenario.into()),
         format!("configuration {interface}, which the profile offers"),
@@ -239,7 +238,7 @@ fn mismatch(
         (requirements, REFUSALS.into()),
         format!(
             "configuration {} with {} Tx and {} Rx slots",
-            describe(config),
+            config.describe(),
             config.tx_slots,
             config.rx_slots
         ),

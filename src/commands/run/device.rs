@@ -88,6 +88,9 @@ pub(crate) fn command(catalogue: &Catalogue, args: DeviceRunArgs) -> Result<Exit
         survey: pace(&real_time),
     };
     let plan = campaign_plan(profiles, options, &common, &campaign, selected.rerun)?;
+    if let Some(contradiction) = kind.contradicts(&plan.options.declared) {
+        return Err(stop!("{contradiction}"));
+    }
     starts(&kind)?;
     run_and_finish(catalogue, &plan, &kind, &common.report)
 }

@@ -424,6 +424,23 @@ impl AdapterProcess {
                     format!("{what} instead of answering `{}` (killed)", request.name()),
                 ));
             }
+            // Never answered its first request: it cannot start, and every
+            // later start would wait the same limit (issue 52). Said once,
+            // with how to raise the limit and the usual cause.
+            Line::Silent if !self.started => {
+                self.kill();
+                return Err(self.fail(
+                    IutCause::NotStarted,
+                    format!(
+                        "no answer to `{}` within {} ms, {which} (killed). Raise it with \
+                         --start-timeout-ms or {}; an IUT that never answers is most often \
+                         one that does not flush its stdout after each answer",
+                        request.name(),
+                        limit.as_millis(),
+                        crate::door::Timeouts::START_VARIABLE
+                    ),
+                ));
+            }
             Line::Silent => {
                 self.kill();
                 return Err(self.fail(
