@@ -66,7 +66,7 @@ fn the_counts_readme_states_are_the_trees() {
         })
         .count();
     let device_faults = canif_softdevice::Fault::ALL.len();
-    let client_faults = canif_harness::client::faulty::ClientFault::ALL.len();
+    let client_faults = canif_harness::client::soft_client::ClientFault::ALL.len();
     for (words, actual) in [
         (
             "statements of the five source documents",

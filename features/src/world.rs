@@ -9,8 +9,8 @@ use std::collections::VecDeque;
 
 use canif_harness::bus::sim::SimBus;
 use canif_harness::declare::choices::Declared;
-use canif_harness::device::bus::BusChoice;
 use canif_harness::device::lockstep::Lockstep;
+use canif_harness::device::medium::BusChoice;
 use canif_harness::device::scenario::{Judgement, Scenario, Step, Steps};
 use canif_harness::device::IutKind;
 use canif_harness::door::iut::BuildError;

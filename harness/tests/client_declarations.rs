@@ -5,7 +5,7 @@
 
 use std::collections::BTreeSet;
 
-use canif_harness::client::faulty::ClientShape;
+use canif_harness::client::soft_client::ClientShape;
 use canif_harness::client::suite::{ClientKind, ClientOptions};
 use canif_harness::client::ClientDeclaration;
 use canif_harness::run::run_profile;

@@ -3,9 +3,9 @@
 //! a faulty client's failing run shrinks to the least that shows its fault.
 
 use canif_harness::client::application::{ClientScenario, Event};
-use canif_harness::client::faulty::ClientFault;
 use canif_harness::client::master::Master;
 use canif_harness::client::rig;
+use canif_harness::client::soft_client::ClientFault;
 use canif_harness::client::suite::ClientKind;
 use canif_harness::Outcome;
 use canif_model::config::{Capabilities, FrameFormat, InterfaceConfig};

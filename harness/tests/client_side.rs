@@ -4,8 +4,8 @@
 
 use std::collections::BTreeSet;
 
-use canif_harness::client::faulty::ClientFault;
 use canif_harness::client::kill_table::KILL_TABLE;
+use canif_harness::client::soft_client::ClientFault;
 use canif_harness::client::suite::{ClientKind, ClientOptions};
 use canif_harness::run::{kill_matrix, run_profile, unreached};
 use canif_harness::Outcome;

@@ -74,7 +74,7 @@ fn scenario_of(cycles: &[Cycle]) -> Scenario {
         declared_lengths: Vec::new(),
         time_stamp_tolerance: 0,
         trace: None,
-        bus: canif_harness::device::bus::BusChoice::Sim,
+        bus: canif_harness::device::medium::BusChoice::Sim,
         judgement: canif_harness::device::scenario::Judgement::Exact,
         declared: Default::default(),
         steps: Steps::Scripted(steps),

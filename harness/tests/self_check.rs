@@ -9,7 +9,7 @@ use canif_harness::device::IutKind;
 use canif_harness::run::ProfileRun;
 use canif_harness::run::{run_profile, unreached};
 use canif_harness::{Outcome, VerdictKind};
-use canif_softdevice::{Choice, Fault};
+use canif_softdevice::{Fault, Freedom};
 use canif_spec::Catalogue;
 
 fn quick() -> Options {
@@ -193,7 +193,7 @@ fn the_device_requirements_no_fault_fails_are_those_listed() {
 #[test]
 fn every_choice_the_documents_leave_conforms() {
     let catalogue = Catalogue::embedded().unwrap();
-    let soft_device = |choices: Vec<Choice>| IutKind::SoftDevice {
+    let soft_device = |choices: Vec<Freedom>| IutKind::SoftDevice {
         faults: vec![],
         choices,
     };
@@ -209,7 +209,7 @@ fn every_choice_the_documents_leave_conforms() {
         .map(|profile| run(&soft_device(vec![]), &profile.name, &quick()))
         .collect();
     let mut failed = Vec::new();
-    for choice in Choice::ALL {
+    for choice in Freedom::ALL {
         let mut taken = false;
         for (profile, default) in catalogue.profiles.iter().zip(&defaults) {
             let result = run(&soft_device(vec![choice]), &profile.name, &quick());
@@ -259,14 +259,14 @@ fn every_choice_the_documents_leave_conforms() {
 
 /// The declaration that says the other of what `choice` does (the
 /// reference's value), and the requirement a device taking `choice` then breaks.
-fn declared_otherwise(choice: Choice) -> (&'static str, &'static str) {
+fn declared_otherwise(choice: Freedom) -> (&'static str, &'static str) {
     match choice {
-        Choice::ClearsRxCountWhenIdle => ("rx-idle-count=keeps-the-last", "HS-RX-009"),
-        Choice::KeepsStaleRxSlots => ("stale-rx-slots=zeroed", "HS-RX-008"),
-        Choice::RefusesOversizeBatch => ("oversize-batch=sends-the-slots", "HS-TX-010"),
-        Choice::DropsMessageWithBadLength => ("bad-tx-length=clamps", "LAY-GEN-008"),
-        Choice::Sync1Jitter => ("sync1-jitter-ns=100", "PDX-004"),
-        Choice::CountsFrameOnWire => ("tx-queue-accounting=wire-outside-queue", "HS-TX-012"),
+        Freedom::ClearsRxCountWhenIdle => ("rx-idle-count=keeps-the-last", "HS-RX-009"),
+        Freedom::KeepsStaleRxSlots => ("stale-rx-slots=zeroed", "HS-RX-008"),
+        Freedom::RefusesOversizeBatch => ("oversize-batch=sends-the-slots", "HS-TX-010"),
+        Freedom::DropsMessageWithBadLength => ("bad-tx-length=clamps", "LAY-GEN-008"),
+        Freedom::Sync1Jitter => ("sync1-jitter-ns=100", "PDX-004"),
+        Freedom::CountsFrameOnWire => ("tx-queue-accounting=wire-outside-queue", "HS-TX-012"),
     }
 }
 
@@ -279,7 +279,7 @@ fn all_the_choices_at_once_conform() {
     let catalogue = Catalogue::embedded().unwrap();
     let kind = IutKind::SoftDevice {
         faults: vec![],
-        choices: Choice::ALL.to_vec(),
+        choices: Freedom::ALL.to_vec(),
     };
     let failed: Vec<String> = catalogue
         .profiles
@@ -341,15 +341,15 @@ fn every_fault_and_choice_has_a_name_and_a_description_of_its_own() {
         .iter()
         .map(|f| (f.name(), f.description()))
         .collect();
-    let choices: Vec<(&str, &str)> = Choice::ALL
+    let choices: Vec<(&str, &str)> = Freedom::ALL
         .iter()
         .map(|c| (c.name(), c.description()))
         .collect();
     for fault in Fault::ALL {
         assert_eq!(Fault::from_name(fault.name()), Some(fault));
     }
-    for choice in Choice::ALL {
-        assert_eq!(Choice::from_name(choice.name()), Some(choice));
+    for choice in Freedom::ALL {
+        assert_eq!(Freedom::from_name(choice.name()), Some(choice));
     }
     let all: Vec<(&str, &str)> = faults.into_iter().chain(choices).collect();
     let names: std::collections::BTreeSet<&str> = all.iter().map(|(n, _)| *n).collect();
@@ -364,5 +364,5 @@ fn every_fault_and_choice_has_a_name_and_a_description_of_its_own() {
         );
     }
     assert_eq!(Fault::from_name("no-such-fault"), None);
-    assert_eq!(Choice::from_name("no-such-choice"), None);
+    assert_eq!(Freedom::from_name("no-such-choice"), None);
 }

@@ -3,8 +3,8 @@
 //! lockstep of one device scenario, the rig of one client scenario, and the
 //! door's one dispatch.
 
-use canif_harness::client::faulty::ClientFault;
 use canif_harness::client::rig;
+use canif_harness::client::soft_client::ClientFault;
 use canif_harness::client::suite::{scenarios as client_scenarios, ClientKind, ClientOptions};
 use canif_harness::declare::{ChoiceEntry, ChoiceSource};
 use canif_harness::device::cases::{scenarios as device_scenarios, Generation};

@@ -3,7 +3,7 @@
 //! then the Gherkin scenarios, judged once over all of them.
 
 use canif_harness::declare::Declaration;
-use canif_harness::device::bus::BusChoice;
+use canif_harness::device::medium::BusChoice;
 use canif_harness::device::{IutKind, Options};
 use canif_harness::report::{ChoiceEntry, ChoiceSource, RunMeta, RunReport, TerminalEntry};
 use canif_harness::run::ProfileRun;

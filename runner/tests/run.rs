@@ -149,7 +149,7 @@ fn a_plc_side_run_rejects_a_client_that_acknowledges_with_its_own_counter() {
     };
     let plan = Plan::new(profiles, options, None).expect("the plan");
     let faulty = ClientKind::Faulty(Some(
-        canif_harness::client::faulty::ClientFault::OwnRxCounter,
+        canif_harness::client::soft_client::ClientFault::OwnRxCounter,
     ));
     let report = plan
         .run(&catalogue, &faulty, &Quiet)

@@ -10,16 +10,16 @@
 
 #![forbid(unsafe_code)]
 
-mod choice;
 mod fault;
 pub mod field;
 mod frame;
+mod freedom;
 mod geometry;
 mod settings;
 
-pub use choice::Choice;
 pub use fault::Fault;
 pub use frame::CanFrame;
+pub use freedom::Freedom;
 pub use settings::{FilterRule, Format, Offer, Queue, Settings, SettingsError};
 
 use std::collections::VecDeque;
@@ -65,7 +65,7 @@ impl std::error::Error for ImageSizeError {}
 pub struct SoftDevice {
     settings: Settings,
     faults: Vec<Fault>,
-    choices: Vec<Choice>,
+    choices: Vec<Freedom>,
     tx_geo: MsgGeometry,
     /// The structure Tx slots are read with: `tx_geo` but for a fault.
     tx_read: MsgGeometry,
@@ -140,13 +140,13 @@ impl SoftDevice {
     }
 
     /// Takes one of the freedoms the documents leave (the device still conforms).
-    pub fn choose(&mut self, choice: Choice) {
+    pub fn choose(&mut self, choice: Freedom) {
         if !self.choices.contains(&choice) {
             self.choices.push(choice);
         }
     }
 
-    fn chose(&self, choice: Choice) -> bool {
+    fn chose(&self, choice: Freedom) -> bool {
         self.choices.contains(&choice)
     }
 
@@ -220,7 +220,7 @@ impl SoftDevice {
         let slots = usize::from(self.settings.tx_slots);
         let mut count = if self.has(Fault::TrustsNoOfTxMessages) {
             asked.min(64)
-        } else if asked > slots && self.chose(Choice::RefusesOversizeBatch) {
+        } else if asked > slots && self.chose(Freedom::RefusesOversizeBatch) {
             0
         } else {
             asked.min(slots)
@@ -269,7 +269,7 @@ impl SoftDevice {
     fn copy_batch_n(&mut self, output: &[u8], now: u64, count: usize) {
         let late = if self.has(Fault::Sync1Late) {
             2_000
-        } else if self.chose(Choice::Sync1Jitter) {
+        } else if self.chose(Freedom::Sync1Jitter) {
             400
         } else {
             0
@@ -301,7 +301,7 @@ impl SoftDevice {
     }
 
     /// The frame a Tx slot asks for; `None` when the device drops it (a
-    /// length out of range, with [`Choice::DropsMessageWithBadLength`]).
+    /// length out of range, with [`Freedom::DropsMessageWithBadLength`]).
     fn decode_tx(&self, slot: &[u8]) -> Option<CanFrame> {
         let g = self.tx_read;
         let mut frame = CanFrame::default();
@@ -340,7 +340,7 @@ impl SoftDevice {
         };
         frame.fd = flags & fd_mask != 0;
         let cap = if frame.fd { 64 } else { 8 };
-        if frame.len > cap && self.chose(Choice::DropsMessageWithBadLength) {
+        if frame.len > cap && self.chose(Freedom::DropsMessageWithBadLength) {
             return None;
         }
         if frame.fd {
@@ -400,7 +400,7 @@ impl SoftDevice {
             return;
         }
         if self.recv_fifo.is_empty() {
-            if !fast && self.chose(Choice::ClearsRxCountWhenIdle) {
+            if !fast && self.chose(Freedom::ClearsRxCountWhenIdle) {
                 put16(&mut self.input, header::NO_OF_MESSAGES, 0);
             }
             if self.has(Fault::RxCounterCountsEmptyCycles) {
@@ -427,7 +427,7 @@ impl SoftDevice {
             };
             let slot_bytes = match job {
                 Some(job) => self.encode_rx(&job),
-                None if self.chose(Choice::KeepsStaleRxSlots) => continue,
+                None if self.chose(Freedom::KeepsStaleRxSlots) => continue,
                 None => vec![0; size],
             };
             self.input[at..at + size].copy_from_slice(&slot_bytes[..size]);
@@ -589,7 +589,7 @@ impl SoftDevice {
     /// frames waiting, and the one on the wire where the device counts it
     /// (003 leaves it open; by default it has left the queue).
     fn queue_places_taken(&self) -> usize {
-        let on_wire = self.chose(Choice::CountsFrameOnWire) && self.on_wire.is_some();
+        let on_wire = self.chose(Freedom::CountsFrameOnWire) && self.on_wire.is_some();
         self.send_fifo.len() + usize::from(on_wire)
     }
 }

@@ -133,7 +133,8 @@ pub(crate) fn ethercat_terminal(
 fn serve_on_bus(build: &Build<'_>, bus: &str) -> Result<(), String> {
     let spec = canif_kernel::BusSpec::parse(bus).map_err(|e| format!("--bus {e}"))?;
     canif_kernel::probe().map_err(|e| format!("--bus {bus}: {e}"))?;
-    canif_harness::door::serve::bus::serve_on_bus(build, Some(&spec.iut)).map_err(|e| e.to_string())
+    canif_harness::door::serve::can_side::serve_on_bus(build, Some(&spec.iut))
+        .map_err(|e| e.to_string())
 }
 
 #[cfg(not(feature = "socketcan"))]

@@ -11,12 +11,12 @@ pub(crate) mod tools;
 
 use crate::stop::{stop, Stop};
 
-use canif_harness::client::faulty::{ClientFault, ClientShape};
+use canif_harness::client::soft_client::{ClientFault, ClientShape};
 use canif_harness::client::suite::ClientKind;
 use canif_harness::declare::Declaration;
 use canif_harness::device::IutKind;
 use canif_harness::door::{Door, Role, Settings};
-use canif_softdevice::{Choice, Fault};
+use canif_softdevice::{Fault, Freedom};
 
 use crate::cli::{IutArg, IutOptions};
 
@@ -50,12 +50,12 @@ pub(crate) fn soft_device_faults(names: &[String]) -> Result<Vec<Fault>, Stop> {
 }
 
 /// The soft-device choices named on the command line, or the exit code of a usage error.
-fn soft_device_choices(names: &[String]) -> Result<Vec<Choice>, Stop> {
+fn soft_device_choices(names: &[String]) -> Result<Vec<Freedom>, Stop> {
     names
         .iter()
         .map(|name| {
-            Choice::from_name(name).ok_or_else(|| {
-                let near = did_you_mean(name, Choice::ALL.iter().map(|c| c.name()));
+            Freedom::from_name(name).ok_or_else(|| {
+                let near = did_you_mean(name, Freedom::ALL.iter().map(|c| c.name()));
                 stop!("unknown choice `{name}`{near}; `canif faults` lists them")
             })
         })
@@ -127,7 +127,7 @@ pub(crate) fn iut_kind(iut: &IutOptions) -> Result<IutKind, Stop> {
 }
 
 /// How the command line asks a door's implementation to be run.
-fn settings(iut: &IutOptions, faults: Vec<Fault>, choices: Vec<Choice>) -> Settings {
+fn settings(iut: &IutOptions, faults: Vec<Fault>, choices: Vec<Freedom>) -> Settings {
     Settings {
         timeouts: iut.timeouts(),
         same_cpu: !iut.iut_cpu_free,

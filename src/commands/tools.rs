@@ -264,21 +264,21 @@ pub(crate) fn faults(out: &mut String) -> ExitCode {
         out,
         "\nchoices the documents leave (--choice; the device still conforms):"
     );
-    for choice in canif_softdevice::Choice::ALL {
+    for choice in canif_softdevice::Freedom::ALL {
         outln!(out, "{:<36} {}", choice.name(), choice.description());
     }
     outln!(
         out,
         "\nclient faults (canif run plc --fault; the soft client):"
     );
-    for fault in canif_harness::client::faulty::ClientFault::ALL {
+    for fault in canif_harness::client::soft_client::ClientFault::ALL {
         outln!(out, "{:<36} {}", fault.name(), fault.description());
     }
     outln!(
         out,
         "\nclient ways of working (canif run plc --choice; the soft client takes one and declares it):"
     );
-    for shape in canif_harness::client::faulty::ClientShape::ALL {
+    for shape in canif_harness::client::soft_client::ClientShape::ALL {
         outln!(out, "{:<36} declares {}", shape.name(), shape.declares());
     }
     outln!(out, "\nmaster models (canif run plc --master):");

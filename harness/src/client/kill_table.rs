@@ -2,7 +2,7 @@
 //! (`harness/tests/client_side.rs` holds every run to it; `canif spec plan`
 //! lists them as the faults that prove a check can fail).
 
-use super::faulty::ClientFault;
+use super::soft_client::ClientFault;
 
 /// What each faulty client must be caught on, over every profile.
 pub const KILL_TABLE: &[(ClientFault, &[&str])] = &[

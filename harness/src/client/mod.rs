@@ -11,12 +11,12 @@
 //! the faulty clients of `faulty`).
 
 pub mod application;
-pub mod faulty;
 mod judge;
 pub mod kill_table;
 pub mod master;
 pub mod played_device;
 pub mod rig;
+pub mod soft_client;
 pub mod suite;
 
 use canif_model::client::PlcClient;

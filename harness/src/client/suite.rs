@@ -2,6 +2,7 @@
 //! offers, every life cycle under every master, and a verdict per client
 //! requirement. The mirror of [`crate::device::suite`] for the other side.
 
+#[cfg(feature = "socketcan")]
 use std::time::Duration;
 
 use canif_model::config::{Capabilities, InterfaceConfig, QueueMode};
@@ -10,8 +11,8 @@ use canif_model::timing::BitRates;
 use canif_spec::{Profile, ReqId, Scope, Side, Suite};
 
 use super::application::{self, ClientScenario};
-use super::faulty::{ClientFault, ClientShape, FaultyClient};
 use super::master::Master;
+use super::soft_client::{ClientFault, ClientShape, FaultyClient};
 use super::{judge, rig, Client, ReferenceClient};
 use crate::client::played_device::PlayedDevice;
 use crate::declare::client::ClientDeclaration;

@@ -3,7 +3,7 @@
 
 use canif_model::config::{Capabilities, InterfaceConfig, TxQueueAccounting};
 use canif_model::device::Device;
-use canif_softdevice::{Choice, Fault, SoftDevice};
+use canif_softdevice::{Fault, Freedom, SoftDevice};
 
 use crate::declare::choices::Declared;
 use crate::door::adapter::protocol::OwnedBus;
@@ -18,7 +18,7 @@ pub enum IutKind {
     SoftDevice {
         faults: Vec<Fault>,
         /// Freedoms the documents leave: the device still conforms.
-        choices: Vec<Choice>,
+        choices: Vec<Freedom>,
     },
     Model,
     Door(Door),
@@ -103,10 +103,10 @@ impl IutKind {
     /// device and the model know their own (the soft device's `--choice`); a
     /// device elsewhere declares on the command line, or not at all.
     pub fn declared(&self) -> Declared {
-        let soft = |choices: &[Choice]| {
+        let soft = |choices: &[Freedom]| {
             let chose = |choice| choices.contains(&choice);
             Declared {
-                tx_queue_accounting: Some(if chose(Choice::CountsFrameOnWire) {
+                tx_queue_accounting: Some(if chose(Freedom::CountsFrameOnWire) {
                     TxQueueAccounting::WireInQueue
                 } else {
                     TxQueueAccounting::WireOutsideQueue
@@ -116,22 +116,22 @@ impl IutKind {
                 sync1_jitter: None,
                 // Its send queue is the profile's (it is built from the same).
                 tx_queue_depth: None,
-                oversize_batch: Some(if chose(Choice::RefusesOversizeBatch) {
+                oversize_batch: Some(if chose(Freedom::RefusesOversizeBatch) {
                     OversizeBatch::DropsTheBatch
                 } else {
                     OversizeBatch::SendsTheSlots
                 }),
-                bad_tx_length: Some(if chose(Choice::DropsMessageWithBadLength) {
+                bad_tx_length: Some(if chose(Freedom::DropsMessageWithBadLength) {
                     BadTxLength::DropsTheMessage
                 } else {
                     BadTxLength::Clamps
                 }),
-                rx_idle_count: Some(if chose(Choice::ClearsRxCountWhenIdle) {
+                rx_idle_count: Some(if chose(Freedom::ClearsRxCountWhenIdle) {
                     RxIdleCount::WritesZero
                 } else {
                     RxIdleCount::KeepsTheLast
                 }),
-                stale_rx_slots: Some(if chose(Choice::KeepsStaleRxSlots) {
+                stale_rx_slots: Some(if chose(Freedom::KeepsStaleRxSlots) {
                     StaleRxSlots::Kept
                 } else {
                     StaleRxSlots::Zeroed

@@ -12,13 +12,13 @@
 
 pub mod blame;
 mod bounds;
-pub mod bus;
 pub mod cases;
 pub mod diff;
 pub(crate) mod history;
 pub mod iut_kind;
 pub mod kill_table;
 pub mod lockstep;
+pub mod medium;
 pub(crate) mod pair;
 pub mod played_plc;
 pub mod probe;

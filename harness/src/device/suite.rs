@@ -16,7 +16,7 @@ use crate::declare::choices::{
     Choice, Declared, Observed, TX_QUEUE_ACCOUNTING_IDS, TX_QUEUE_ACCOUNTING_SETTLED_BY,
 };
 use crate::declare::{ChoiceEntry, ChoiceSource, Declaration};
-use crate::device::bus::BusChoice;
+use crate::device::medium::BusChoice;
 use crate::error::{Refusal, RunError};
 use crate::outcome::{Outcome, ScenarioRun};
 use crate::run::{Cases, Selection, SelfCheck};

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_model::image::ImageLayout;
-use canif_softdevice::{Choice, Fault};
+use canif_softdevice::{Fault, Freedom};
 use canif_spec::Profile;
 
 use super::adapter::protocol::OwnedBus;
@@ -31,7 +31,7 @@ pub struct Settings {
     /// The soft device's faults and choices, where the door has the soft
     /// device behind it (an emulated terminal).
     pub faults: Vec<Fault>,
-    pub choices: Vec<Choice>,
+    pub choices: Vec<Freedom>,
 }
 
 /// What a transport offers both roles; every door module has one.
@@ -112,7 +112,7 @@ pub trait Transport {
     }
 
     /// The soft device's choices, where the soft device is behind the door.
-    fn soft_device_choices(&self) -> Option<&[Choice]> {
+    fn soft_device_choices(&self) -> Option<&[Freedom]> {
         None
     }
 

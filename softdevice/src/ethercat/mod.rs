@@ -18,7 +18,7 @@ use canif_ethercat::{Application, Entry, Start, Synchronization};
 
 use crate::field::info;
 use crate::geometry::MsgGeometry;
-use crate::{Choice, Fault, Format, Offer, Queue, Settings, SoftDevice};
+use crate::{Fault, Format, Freedom, Offer, Queue, Settings, SoftDevice};
 use objects::{object, status};
 
 /// What `0x1018` says.
@@ -45,7 +45,7 @@ pub struct Terminal {
     name: String,
     draft: Settings,
     faults: Vec<Fault>,
-    choices: Vec<Choice>,
+    choices: Vec<Freedom>,
     /// `0x1C12` and `0x1C13`: the PDOs a master assigned.
     rx_assign: Vec<u16>,
     tx_assign: Vec<u16>,
@@ -113,7 +113,7 @@ impl Terminal {
         self.faults.push(fault);
     }
 
-    pub fn choose(&mut self, choice: Choice) {
+    pub fn choose(&mut self, choice: Freedom) {
         self.choices.push(choice);
     }
 

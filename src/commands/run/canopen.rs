@@ -11,7 +11,7 @@ use canif_spec::Catalogue;
 use super::run_and_finish;
 use crate::cli::{BusArg, CanopenRunArgs};
 use crate::commands::device::{coupler_fault, node_id};
-use crate::stop::{stop, Stop};
+use crate::stop::Stop;
 
 pub(crate) fn command(catalogue: &Catalogue, args: CanopenRunArgs) -> Result<ExitCode, Stop> {
     let target = target(&args)?;
@@ -37,7 +37,7 @@ fn target(args: &CanopenRunArgs) -> Result<NodeTarget, Stop> {
         #[cfg(feature = "socketcan")]
         BusArg::SocketCan(spec) => {
             if args.coupler_fault.is_some() {
-                return Err(stop!("--coupler-fault applies to the simulated coupler; on a SocketCAN bus, start `canif coupler --bus … --fault …` instead"));
+                return Err(crate::stop::stop!("--coupler-fault applies to the simulated coupler; on a SocketCAN bus, start `canif coupler --bus … --fault …` instead"));
             }
             NodeTarget::SocketCan {
                 interface: spec.tester.clone(),

@@ -6,8 +6,8 @@ use std::process::ExitCode;
 use crate::stop::{stop, Stop};
 
 #[cfg(feature = "socketcan")]
-use canif_harness::device::bus::kernel::KernelBusOptions;
-use canif_harness::device::bus::BusChoice;
+use canif_harness::device::medium::kernel::KernelBusOptions;
+use canif_harness::device::medium::BusChoice;
 use canif_harness::device::{IutKind, Options};
 use canif_harness::door::Pace;
 use canif_spec::Catalogue;

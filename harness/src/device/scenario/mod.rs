@@ -21,7 +21,7 @@ use canif_model::timing::BitRates;
 use canif_model::Nanos;
 use canif_spec::ReqId;
 
-use crate::device::bus::BusChoice;
+use crate::device::medium::BusChoice;
 pub use crate::device::played_plc::OutputEdit;
 
 /// One PLC task cycle of stimulus.

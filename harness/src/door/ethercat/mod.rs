@@ -31,7 +31,7 @@ use canif_model::frame::Frame;
 use canif_model::info_data::ControllerStatus;
 use canif_model::Nanos;
 use canif_softdevice::ethercat::{Terminal, TerminalIdentity};
-use canif_softdevice::{Choice, Fault, SoftDevice};
+use canif_softdevice::{Fault, Freedom, SoftDevice};
 use canif_spec::EthercatIdentity;
 use ethercrab::subdevice_group::Op;
 use ethercrab::{DefaultLock, SubDeviceGroup};
@@ -59,7 +59,7 @@ const SM3: u16 = canif_ethercat::register::SYNC_MANAGER_BASE + 3 * 8;
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Emulated {
     pub faults: Vec<Fault>,
-    pub choices: Vec<Choice>,
+    pub choices: Vec<Freedom>,
     /// A fault of the link or of the ESC, for canif's own tests.
     pub link_fault: Option<LinkFault>,
     /// The SyncManager layout its SII advertises: the real EL6751's, or a

@@ -15,7 +15,7 @@ use canif_kernel::{KernelError, PacketSocket};
 use canif_softdevice::ethercat::Terminal;
 
 use crate::door::iut::SoftDeviceIut;
-use crate::door::serve::bus::DeviceBus;
+use crate::door::serve::can_side::DeviceBus;
 use crate::error::BusError;
 
 /// How long one wait for a frame lasts: a batch's next CAN frame goes out

@@ -3,7 +3,7 @@
 
 use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_model::image::ImageLayout;
-use canif_softdevice::Choice;
+use canif_softdevice::Freedom;
 use canif_spec::{EthercatIdentity, Profile};
 
 use super::{build, preflight, survey, Configurer as TerminalConfigurer, EthercatLink};
@@ -126,7 +126,7 @@ impl Transport for EthercatDoor {
         preflight(&self.link, profiles, bus_is_sim, terminals)
     }
 
-    fn soft_device_choices(&self) -> Option<&[Choice]> {
+    fn soft_device_choices(&self) -> Option<&[Freedom]> {
         match &self.link {
             EthercatLink::Emulated(emulated) | EthercatLink::Veth { emulated, .. } => {
                 Some(&emulated.choices)

@@ -1,4 +1,7 @@
-//! Deliberately faulty clients, each breaking the client requirements the
+//! The soft client (`--iut softclient`): a PLC-side client written against
+//! the image views independently of the reference client, in the ways of
+//! working a client may declare (`ClientShape`), and with its deliberate
+//! faults (`ClientFault`), each breaking the client requirements the
 //! way code in the field does (000 §6's samples as printed, ruling R5; the
 //! variants the PLC side's issue names), so the suite proves it notices. A
 //! client here is written against the image views independently of the
