@@ -4,7 +4,7 @@
 //! a [`Plan`] of one side (the profiles, the selection, `--jobs`, a rerun,
 //! a shard), then [`Plan::run`], which checks the plan, runs every profile's
 //! cases and the Gherkin scenarios, and returns the
-//! [`RunReport`](canif_harness::report::RunReport), finished in one place.
+//! `RunReport`, finished in one place.
 //! While it works it tells an [`Observer`] typed [`Event`]s; what to print
 //! is the observer's business.
 //!

@@ -30,7 +30,7 @@ use crate::verdict::{NotRunReason, Reach, Unobserved};
 pub enum ClientKind {
     /// The reference client of 001 §6 (`canif_model::client`).
     Reference,
-    /// The independent client of [`super::faulty`], with at most one fault.
+    /// The independent client of [`super::soft_client`], with at most one fault.
     Faulty(Option<ClientFault>),
     /// The independent client taking a way of working the documents allow
     /// only where declared, declaring it or not.

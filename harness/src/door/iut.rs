@@ -172,7 +172,7 @@ impl Iut for ModelIut {
 }
 
 /// A device's answer that is well formed and breaks a requirement, seen
-/// where the lockstep does not look (see [`Iut::take_deviation`]).
+/// where the lockstep does not look (see [`Telegrams::take_deviation`]).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Deviation {
     /// What the device did; the device side blames it on its requirements.
