@@ -223,6 +223,18 @@ fn an_iut_whose_daemon_forgets_everything_leaves_no_process() {
     assert!(pids.lines().count() >= 2, "recorded: {pids}");
 }
 
+/// An IUT whose first process exits while a child it started lives on: the
+/// orphan comes to canif (a subreaper), which ends it with the run (issue
+/// 52: such a child outlived `canif run`).
+#[test]
+fn an_iut_that_exits_leaving_a_child_leaves_no_process() {
+    let iut = format!("exec:python3 {} exit-leaving-child", script("misbehave.py"));
+    let run = run("orphan", &iut, &[]);
+    run.is_an_error(&["exited"]);
+    let pids = std::fs::read_to_string(run.dir.join("pids")).unwrap();
+    assert!(pids.lines().count() >= 2, "recorded: {pids}");
+}
+
 #[test]
 fn time_that_does_not_advance_is_an_error() {
     let iut = format!("exec:python3 {} stuck-time", script("misbehave.py"));

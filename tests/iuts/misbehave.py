@@ -9,6 +9,8 @@ cycle with an empty input image) except for one misbehaviour, chosen by argv[1]:
   setsid-hang  the same with a child in a session of its own (out of the process group)
   daemon-hang  a daemon: double fork, setsid, stdio closed, exec with an empty
                environment (nothing marks it as the IUT's), then hangs
+  exit-leaving-child  starts a child that sleeps, records both pids, and exits
+               at the first cycle: the child, orphaned, lives on
 """
 import json
 import os
@@ -21,8 +23,11 @@ pids = os.environ.get("CANIF_TEST_PIDS")
 if pids:
     with open(pids, "a") as f:
         f.write(f"{os.getpid()}\n")
-if mode in ("fork-hang", "setsid-hang"):
-    child = subprocess.Popen(["sleep", "3600"], start_new_session=mode == "setsid-hang")
+if mode in ("fork-hang", "setsid-hang", "exit-leaving-child"):
+    # The orphan holds no end of the protocol: canif sees its parent exit.
+    quiet = subprocess.DEVNULL if mode == "exit-leaving-child" else None
+    child = subprocess.Popen(["sleep", "3600"], start_new_session=mode == "setsid-hang",
+                             stdin=quiet, stdout=quiet)
     if pids:
         with open(pids, "a") as f:
             f.write(f"{child.pid}\n")
@@ -51,6 +56,8 @@ for line in sys.stdin:
     elif kind == "cycle":
         if mode in ("fork-hang", "setsid-hang", "daemon-hang"):
             continue  # never answers: the harness's timeout must end both processes
+        if mode == "exit-leaving-child":
+            os._exit(3)  # the child, orphaned, is canif's to end
         answer = {"type": "inputs", "inputs": "00" * input_size}
     elif kind == "poll_transmit":
         frame = {"id": 0x123, "extended": False, "rtr": False, "fd": False, "brs": False,
