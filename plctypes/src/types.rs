@@ -6,6 +6,7 @@
 //! header's `field` ranges, [`ImageLayout`]'s slots), given the type the
 //! manual names for it (000/001 §6, §8.3).
 
+use canif_model::image::field::role;
 use canif_model::image::{field, flag, ImageLayout, LengthField, MessageLayout};
 
 /// IEC 61131-3 elementary types (the ones an image or a user's declaration of
@@ -177,20 +178,12 @@ impl ImageTypes {
         };
         types.add_message(layout.tx_message, Role::Tx);
         types.add_message(layout.rx_message, Role::Rx);
-        let header = |third: &str, comment| {
+        // Each counter described by its own image's role (000 §6): the
+        // same name is a request in one and its answer in the other.
+        let header = |(tx, rx): (&'static str, &'static str), third: &str, comment| {
             vec![
-                member(
-                    "TxCounter",
-                    field::TX_COUNTER.start,
-                    Elementary::Uint,
-                    "003: 0x700z:01 / 0x600z:01; +1 asks the device to send (000 §6)",
-                ),
-                member(
-                    "RxCounter",
-                    field::RX_COUNTER.start,
-                    Elementary::Uint,
-                    "003: 0x700z:02 / 0x600z:02; differs when new messages wait (000 §6)",
-                ),
+                member("TxCounter", field::TX_COUNTER.start, Elementary::Uint, tx),
+                member("RxCounter", field::RX_COUNTER.start, Elementary::Uint, rx),
                 member(
                     third,
                     field::NO_OF_MESSAGES.start,
@@ -200,8 +193,9 @@ impl ImageTypes {
             ]
         };
         let mut outputs = header(
+            (role::OUTPUTS_TX_COUNTER, role::OUTPUTS_RX_COUNTER),
             "NoOfTxMessages",
-            "003: 0x700z:03, messages to send from TxMessage[0]",
+            role::NO_OF_TX_MESSAGES,
         );
         outputs.push(slots(
             "TxMessage",
@@ -216,8 +210,9 @@ impl ImageTypes {
             comment: "Outputs: the PLC writes them (000 §6)".into(),
         });
         let mut inputs = header(
+            (role::INPUTS_TX_COUNTER, role::INPUTS_RX_COUNTER),
             "NoOfRxMessages",
-            "003: 0x600z:03, new messages from RxMessage[0]",
+            role::NO_OF_RX_MESSAGES,
         );
         if layout.transaction_number {
             inputs.push(member(

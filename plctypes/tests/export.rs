@@ -365,3 +365,64 @@ fn tempdir(what: &str) -> std::path::PathBuf {
     std::fs::create_dir_all(&dir).unwrap();
     dir
 }
+
+/// Issue 57: each counter is described by its own image's role in the
+/// handshake (000 §6), in every language: Outputs.TxCounter hands over a
+/// batch and Inputs.TxCounter confirms it; Inputs.RxCounter says new
+/// messages wait and Outputs.RxCounter acknowledges them.
+#[test]
+fn each_counter_is_described_by_its_direction_and_its_role_in_the_handshake() {
+    let config = InterfaceConfig::new(FrameFormat::Base11, 4);
+    let types = ImageTypes::of(
+        &ImageLayout::new(&config, false),
+        "one interface".to_string(),
+    );
+    let comment = |structure: &str, member: &str| {
+        let found = types.structs.iter().find(|s| s.name == structure).unwrap();
+        found
+            .members
+            .iter()
+            .find(|m| m.name == member)
+            .unwrap()
+            .comment
+    };
+    for (structure, member, says, never) in [
+        (OUTPUTS, "TxCounter", "the PLC adds 1", "confirmation"),
+        (
+            INPUTS,
+            "TxCounter",
+            "the device's confirmation",
+            "the PLC adds 1",
+        ),
+        (
+            OUTPUTS,
+            "RxCounter",
+            "the PLC's acknowledge",
+            "new messages wait",
+        ),
+        (INPUTS, "RxCounter", "new messages wait", "acknowledge"),
+    ] {
+        let text = comment(structure, member);
+        assert!(text.contains(says), "{structure}.{member}: {text}");
+        assert!(!text.contains(never), "{structure}.{member}: {text}");
+    }
+    // The generated declarations carry them, each in its own structure (the
+    // outputs are declared first, in every language).
+    for language in [Language::StructuredText, Language::C, Language::Rust] {
+        let text = export(&types, language, "test");
+        let inputs_begin = text
+            .find(INPUTS)
+            .unwrap_or_else(|| panic!("{language:?}: {text}"));
+        let (outputs, inputs) = text.split_at(inputs_begin);
+        assert!(outputs.contains("the PLC adds 1"), "{language:?}: {text}");
+        assert!(
+            !outputs.contains("the device's confirmation"),
+            "{language:?}: {text}"
+        );
+        assert!(
+            inputs.contains("the device's confirmation"),
+            "{language:?}: {text}"
+        );
+        assert!(!inputs.contains("the PLC adds 1"), "{language:?}: {text}");
+    }
+}

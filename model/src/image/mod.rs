@@ -47,6 +47,22 @@ pub mod field {
     pub const MESSAGES_AFTER_TRANSACTION_NUMBER: usize = 8;
     /// InfoData has 16 UDINT entries.
     pub const INFO_DATA_WORDS: usize = 16;
+
+    /// Each header member's role in the handshake, in its own image (000 §6,
+    /// 003's object entries): the PLC writes the outputs, the device the
+    /// inputs, so a counter of the same name means a different step in each.
+    pub mod role {
+        pub const OUTPUTS_TX_COUNTER: &str =
+            "003: 0x700z:01; the PLC adds 1 to hand over NoOfTxMessages messages (000 §6)";
+        pub const INPUTS_TX_COUNTER: &str =
+            "003: 0x600z:01; the device's confirmation: equals Outputs.TxCounter once it took the batch (000 §6)";
+        pub const OUTPUTS_RX_COUNTER: &str =
+            "003: 0x700z:02; the PLC's acknowledge: it copies Inputs.RxCounter once it read the messages (000 §6)";
+        pub const INPUTS_RX_COUNTER: &str =
+            "003: 0x600z:02; the device adds 1 when new messages wait in RxMessage (000 §6)";
+        pub const NO_OF_TX_MESSAGES: &str = "003: 0x700z:03, messages to send from TxMessage[0]";
+        pub const NO_OF_RX_MESSAGES: &str = "003: 0x600z:03, new messages from RxMessage[0]";
+    }
 }
 
 /// Which fields an interface's images have and how many message slots.
