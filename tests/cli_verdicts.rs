@@ -446,3 +446,33 @@ fn the_old_spelling_of_the_plc_side_still_runs_it_and_says_so() {
     assert_eq!(report["meta"]["side"], "plc");
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// Issue 57: a certificate that names a product names what it tested: with
+/// `--product` and no `--iut`, `canif certify` refuses, before any run.
+#[test]
+fn a_product_certificate_needs_the_iut_it_vouches_for() {
+    let dir = scratch("product-without-iut");
+    let out_dir = dir.display().to_string();
+    let args = [
+        "certify",
+        "--profile",
+        "fc510x",
+        "--product",
+        "My gateway",
+        "--product-version",
+        "1.2",
+        "--out",
+        &out_dir,
+    ];
+    let output = canif(&args);
+    let said = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{said}");
+    assert!(
+        said.contains("--iut") && said.contains("My gateway"),
+        "{said}"
+    );
+    assert!(
+        !dir.join("certificate.json").exists(),
+        "a certificate was written"
+    );
+}

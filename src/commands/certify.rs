@@ -50,6 +50,15 @@ pub(crate) fn certify(
         product,
         seed,
     } = run;
+    // A certificate vouches for a named product: it must name what it
+    // tested, never sign canif's own built-in implementation by default.
+    if let (Some(product), None) = (&product, &iut.iut) {
+        return Err(stop!(
+            "--product \"{}\" names what the certificate vouches for: say which implementation that is with --iut \
+             (exec:'COMMAND', lib:PATH, ethercat:…), or --iut softdevice / --iut reference to certify canif's own on purpose",
+            product.name
+        ));
+    }
     let profiles = profiles(catalogue, profile_names)?;
     if let Some(key) = key {
         // A key that cannot sign is found out before the run, not after it.
