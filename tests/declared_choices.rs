@@ -161,6 +161,10 @@ fn probe_finds_the_choice_and_run_takes_its_file() {
 fn a_declaration_that_cannot_be_read_is_a_usage_error_naming_it() {
     for (declare, says) in [
         ("wire-in-queue", "is not NAME=VALUE"),
+        (
+            "choices.json",
+            "a file of declarations is `--declare @choices.json`",
+        ),
         ("queue=deep", "`queue` is no choice"),
         (
             "tx-queue-accounting=maybe",

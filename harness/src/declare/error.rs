@@ -107,7 +107,14 @@ impl fmt::Display for ReadError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             ReadError::Malformed { origin, text } => {
-                write!(f, "{origin}: `{text}` is not NAME=VALUE")
+                write!(f, "{origin}: `{text}` is not NAME=VALUE")?;
+                // `--declare choices.json`: the `@` forgotten.
+                let names_a_file = !text.contains('=')
+                    && (text.ends_with(".json") || std::path::Path::new(text).is_file());
+                if *origin == Origin::Argument && names_a_file {
+                    write!(f, " (a file of declarations is `--declare @{text}`)")?;
+                }
+                Ok(())
             }
             ReadError::NotAFile { path, kind } => write!(
                 f,
