@@ -13,6 +13,10 @@ use crate::{Campaign, Plan};
 impl Campaign for CanopenSide {
     const UNIT: Option<&'static str> = None;
 
+    fn name_of(target: &NodeTarget) -> String {
+        target.describe()
+    }
+
     /// The node reached once to see that it can be: a missing interface is
     /// one line, not an error per check.
     fn preflight(_: &Plan<'_, Self>, _: &Catalogue, target: &NodeTarget) -> Result<(), PlanError> {

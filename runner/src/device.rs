@@ -17,14 +17,15 @@ use crate::{Campaign, Plan};
 impl Campaign for Options {
     const UNIT: Option<&'static str> = Some("cycles");
 
+    fn name_of(kind: &IutKind) -> String {
+        kind.name()
+    }
+
     fn preflight(
         plan: &Plan<'_, Self>,
         catalogue: &Catalogue,
         kind: &IutKind,
     ) -> Result<(), PlanError> {
-        if let Some(rerun) = &plan.rerun {
-            rerun.same_iut(&kind.name())?;
-        }
         if let IutKind::Door(door) = kind {
             door.transport()
                 .preflight(

@@ -39,6 +39,9 @@ pub trait Campaign: Cases<UnderTest: Sync> + Sync + Sized {
     /// What its cycles are called in progress lines (`None`: no cycles).
     const UNIT: Option<&'static str>;
 
+    /// What is under test, as reports and `--rerun-failed` name it.
+    fn name_of(under_test: &Self::UnderTest) -> String;
+
     /// What must hold before anything runs (a rerun of the same
     /// implementation, a door's or a bus's own conditions).
     fn preflight(
@@ -66,6 +69,10 @@ impl<S: Campaign> Plan<'_, S> {
         observer: &dyn Observer,
     ) -> Result<RunReport, PlanError> {
         self.check_selection(catalogue)?;
+        // A rerun is of the implementation the report was.
+        if let Some(rerun) = &self.rerun {
+            rerun.same_iut(&S::name_of(under_test))?;
+        }
         S::preflight(self, catalogue, under_test)?;
         Ok(S::execute(self, catalogue, under_test, observer))
     }

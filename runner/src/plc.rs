@@ -16,10 +16,13 @@ use crate::{Campaign, Plan};
 impl Campaign for ClientOptions {
     const UNIT: Option<&'static str> = Some("task cycles");
 
-    fn preflight(plan: &Plan<'_, Self>, _: &Catalogue, kind: &ClientKind) -> Result<(), PlanError> {
-        if let Some(rerun) = &plan.rerun {
-            rerun.same_iut(&kind.name())?;
-        }
+    fn name_of(kind: &ClientKind) -> String {
+        kind.name()
+    }
+
+    /// A client needs nothing before it runs but to start, which the
+    /// command line asks once.
+    fn preflight(_: &Plan<'_, Self>, _: &Catalogue, _: &ClientKind) -> Result<(), PlanError> {
         Ok(())
     }
 

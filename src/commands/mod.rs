@@ -23,17 +23,7 @@ use crate::cli::{IutArg, IutOptions};
 /// ` (did you mean `NAME`?)` with the known name nearest `name`, where a
 /// typo is likely; nothing otherwise.
 pub(crate) fn did_you_mean<'a>(name: &str, known: impl IntoIterator<Item = &'a str>) -> String {
-    known
-        .into_iter()
-        .map(|k| {
-            (
-                strsim::jaro_winkler(&name.to_lowercase(), &k.to_lowercase()),
-                k,
-            )
-        })
-        .filter(|(likeness, _)| *likeness > 0.85)
-        .max_by(|a, b| a.0.total_cmp(&b.0))
-        .map_or(String::new(), |(_, k)| format!(" (did you mean `{k}`?)"))
+    canif_runner::nearest(name, known).map_or(String::new(), |k| format!(" (did you mean `{k}`?)"))
 }
 
 /// The soft-device faults named on the command line, or the exit code of a usage error.
