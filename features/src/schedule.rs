@@ -220,6 +220,7 @@ pub fn failing_step(report: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use canif_harness::declare::Declaration;
 
     fn plc(name: &str) -> ScenarioInfo {
         crate::scenarios()

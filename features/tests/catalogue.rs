@@ -2,6 +2,7 @@
 //! the soft device caught by at least one scenario (the mutation self-check).
 
 use canif_features::{run_scenario, scenarios, ScenarioOutcome, Target};
+use canif_harness::declare::Declaration;
 use canif_harness::device::blame;
 use canif_harness::device::IutKind;
 use canif_harness::door::{Door, Timeouts};

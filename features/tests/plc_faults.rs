@@ -5,6 +5,7 @@
 use canif_features::{run_client_scenario, scenarios, ClientTarget, ScenarioOutcome};
 use canif_harness::client::soft_client::ClientFault;
 use canif_harness::client::suite::ClientKind;
+use canif_harness::declare::Declaration;
 use canif_model::config::Capabilities;
 use canif_spec::Side;
 

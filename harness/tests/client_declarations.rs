@@ -3,6 +3,7 @@
 //! undeclared by the requirement it then breaks; what a client does not
 //! serve is "not applicable" with the declaration as the reason.
 
+use canif_harness::declare::Declaration;
 use std::collections::BTreeSet;
 
 use canif_harness::client::soft_client::ClientShape;

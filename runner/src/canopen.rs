@@ -17,6 +17,11 @@ impl Campaign for CanopenSide {
         target.describe()
     }
 
+    /// One node, one run.
+    fn shared(_: &Plan<'_, Self>, _: &NodeTarget) -> Option<&'static str> {
+        Some("the CANopen suite: one node")
+    }
+
     /// The node reached once to see that it can be: a missing interface is
     /// one line, not an error per check.
     fn preflight(_: &Plan<'_, Self>, _: &Catalogue, target: &NodeTarget) -> Result<(), PlanError> {
@@ -40,9 +45,8 @@ impl Campaign for CanopenSide {
             suite: SuiteKind::Canopen,
             ..RunMeta::new(name, described(target), plan.options.seed, catalogue)
         };
-        let checks = plan.run_profiles(target, Self::UNIT, observer);
-        let mut left_out = plan.selection_left_out();
-        left_out.extend(plan.never_started_left_out(&checks));
+        let checks = plan.run_profiles(target, observer);
+        let left_out = plan.left_out(&checks);
         plan.assemble(
             catalogue,
             (checks, Vec::new()),

@@ -2,16 +2,16 @@
 //! the harness playing the PLC and the other nodes. Each profile's lockstep,
 //! then the Gherkin scenarios, judged once over all of them.
 
-use canif_harness::declare::Declaration;
 use canif_harness::device::medium::BusChoice;
 use canif_harness::device::{IutKind, Options};
-use canif_harness::report::{ChoiceEntry, ChoiceSource, RunMeta, RunReport, TerminalEntry};
+use canif_harness::door::Role;
+use canif_harness::report::{ChoiceEntry, RunMeta, RunReport, TerminalEntry};
 use canif_harness::run::ProfileRun;
 use canif_harness::{Outcome, RunError};
 use canif_spec::Catalogue;
 
 use crate::error::PlanError;
-use crate::event::{Event, Observer, Stage};
+use crate::event::{Event, Observer};
 use crate::{Campaign, Plan};
 
 impl Campaign for Options {
@@ -21,11 +21,24 @@ impl Campaign for Options {
         kind.name()
     }
 
+    fn shared(plan: &Plan<'_, Self>, kind: &IutKind) -> Option<&'static str> {
+        let door = match kind {
+            IutKind::Door(door) => door.transport().shared_between_profiles(),
+            _ => None,
+        };
+        door.or((!plan.options.bus.is_sim()).then_some(crate::socketcan::ONE_INTERFACE))
+    }
+
     fn preflight(
         plan: &Plan<'_, Self>,
         catalogue: &Catalogue,
         kind: &IutKind,
     ) -> Result<(), PlanError> {
+        // What the command line declares must agree with what the IUT
+        // declares itself, on every route that runs it.
+        if let Some(contradiction) = kind.contradicts(&plan.options.declared) {
+            return Err(PlanError::Preflight(contradiction));
+        }
         if let IutKind::Door(door) = kind {
             door.transport()
                 .preflight(
@@ -34,20 +47,12 @@ impl Campaign for Options {
                     &catalogue.terminal_names(),
                 )
                 .map_err(PlanError::Preflight)?;
+            door.starts(Role::Device).map_err(PlanError::not_started)?;
         }
         #[cfg(feature = "socketcan")]
         if let BusChoice::SocketCan(kernel) = &plan.options.bus {
-            // A bus that cannot be opened at all is one error, not one per scenario.
-            let opened = canif_kernel::probe().and_then(|()| {
-                canif_kernel::KernelSocket::open(&kernel.spec.iut, false)?;
-                canif_kernel::KernelSocket::open(&kernel.spec.tester, false).map(|_| ())
-            });
-            if let Err(error) = opened {
-                return Err(PlanError::Preflight(format!(
-                    "error: --bus {}: {error}",
-                    kernel.spec.describe()
-                )));
-            }
+            let spec = &kernel.spec;
+            crate::socketcan::opens(&spec.describe(), &[&spec.iut, &spec.tester])?;
         }
         Ok(())
     }
@@ -67,7 +72,7 @@ impl Campaign for Options {
             catalogue,
         );
         meta.terminals = survey_terminals(kind, plan, observer);
-        let lockstep = plan.run_profiles(kind, Self::UNIT, observer);
+        let lockstep = plan.run_profiles(kind, observer);
         meta.choices = judged_choices(options, kind, &lockstep);
         let iut_broke = lockstep.iter().flat_map(|p| &p.runs).any(|r| {
             matches!(
@@ -75,26 +80,17 @@ impl Campaign for Options {
                 Outcome::Error(RunError::Iut(_) | RunError::Skipped(_))
             )
         });
-        let mut left_out = plan.selection_left_out();
-        left_out.extend(plan.never_started_left_out(&lockstep));
-        let gherkin = if canif_harness::interrupt::requested() {
-            observer.event(Event::Interrupted(Stage::Gherkin));
-            left_out.push("interrupted before the Gherkin scenarios".into());
-            Vec::new()
-        } else if iut_broke && options.fail_fast {
-            left_out.push(
-                "Gherkin scenarios not run: the IUT broke (--no-fail-fast runs them anyway)".into(),
-            );
-            Vec::new()
-        } else if !options.bus.is_sim() {
-            left_out.push("Gherkin scenarios not run: they use the simulated bus".into());
-            Vec::new()
-        } else {
-            plan.run_gherkin(
-                &canif_features::UnderTest::Device(kind.clone(), options.declared_by(kind)),
-                observer,
-            )
+        let mut left_out = plan.left_out(&lockstep);
+        let skip = match () {
+            _ if iut_broke && options.fail_fast => {
+                Some("the IUT broke (--no-fail-fast runs them anyway)")
+            }
+            _ if !options.bus.is_sim() => Some("they use the simulated bus"),
+            _ => None,
         };
+        let under_test =
+            || canif_features::UnderTest::Device(kind.clone(), options.declared_by(kind));
+        let gherkin = plan.gherkin_stage(skip, under_test, &mut left_out, observer);
         plan.assemble(
             catalogue,
             (lockstep, gherkin),
@@ -141,15 +137,7 @@ fn survey_terminals(
 /// the IUT declared itself, what a scenario showed where it declared
 /// nothing), each once.
 fn judged_choices(options: &Options, kind: &IutKind, runs: &[ProfileRun]) -> Vec<ChoiceEntry> {
-    let mut choices: Vec<ChoiceEntry> = options
-        .declared_by(kind)
-        .lines()
-        .into_iter()
-        .map(|choice| ChoiceEntry {
-            choice,
-            how: ChoiceSource::Declared,
-        })
-        .collect();
+    let mut choices = ChoiceEntry::declared(&options.declared_by(kind));
     for learned in runs.iter().flat_map(|run| &run.choices) {
         if !choices.contains(learned) {
             choices.push(learned.clone());

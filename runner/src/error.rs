@@ -71,6 +71,15 @@ impl fmt::Display for PlanError {
 
 impl std::error::Error for PlanError {}
 
+impl PlanError {
+    /// What is under test cannot start at all (its command is not found,
+    /// its library is no file, it never answered within the start limit):
+    /// no run of it could judge anything.
+    pub fn not_started(error: canif_harness::IutError) -> Self {
+        PlanError::Preflight(format!("canif: {}", error.what))
+    }
+}
+
 impl From<RerunError> for PlanError {
     fn from(error: RerunError) -> Self {
         PlanError::Rerun(error)

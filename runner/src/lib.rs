@@ -22,6 +22,7 @@ mod parallel;
 mod plan;
 mod plc;
 mod rerun;
+mod socketcan;
 
 pub use canopen::node_profile;
 pub use error::{nearest, PlanError, RerunError};
@@ -42,8 +43,12 @@ pub trait Campaign: Cases<UnderTest: Sync> + Sync + Sized {
     /// What is under test, as reports and `--rerun-failed` name it.
     fn name_of(under_test: &Self::UnderTest) -> String;
 
-    /// What must hold before anything runs (a rerun of the same
-    /// implementation, a door's or a bus's own conditions).
+    /// What profiles run side by side (`--jobs`) would share that cannot
+    /// be shared (one link, one library in canif's process, one bus).
+    fn shared(plan: &Plan<'_, Self>, under_test: &Self::UnderTest) -> Option<&'static str>;
+
+    /// What must hold before anything runs (a door's or a bus's own
+    /// conditions, what is declared against what is under test).
     fn preflight(
         plan: &Plan<'_, Self>,
         catalogue: &Catalogue,
@@ -72,6 +77,12 @@ impl<S: Campaign> Plan<'_, S> {
         // A rerun is of the implementation the report was.
         if let Some(rerun) = &self.rerun {
             rerun.same_iut(&S::name_of(under_test))?;
+        }
+        if let Some(why) = S::shared(self, under_test).filter(|_| self.jobs > 1) {
+            return Err(PlanError::Preflight(format!(
+                "--jobs {}: the profiles would share {why}; run them one at a time",
+                self.jobs
+            )));
         }
         S::preflight(self, catalogue, under_test)?;
         Ok(S::execute(self, catalogue, under_test, observer))

@@ -18,6 +18,7 @@ use crate::error::{nearest, PlanError};
 use crate::event::{Event, Observer, Position, Stage};
 use crate::parallel::in_parallel;
 use crate::rerun::Rerun;
+use crate::Campaign;
 
 /// The error of a profile's run whose implementation never started (it
 /// could not be started, or never answered within the start limit).
@@ -155,74 +156,45 @@ impl<'c, S: Cases> Plan<'c, S> {
             .count()
     }
 
-    /// Each profile's cases against what is under test, on up to
-    /// [`Plan::jobs`] threads, one profile each at a time: the profiles are
-    /// independent (each case starts a fresh instance of what is under
-    /// test), so the runs, returned in the plan's order, are those of a
-    /// serial run. A profile a signal kept from starting is not run.
-    pub fn run_profiles(
-        &self,
-        under_test: &S::UnderTest,
-        unit: Option<&'static str>,
-        observer: &dyn Observer,
-    ) -> Vec<ProfileRun>
-    where
-        S: Sync,
-        S::UnderTest: Sync,
-    {
-        let count = self.profiles.len();
-        let finished = AtomicUsize::new(0);
-        let started = Instant::now();
-        // What never started on one profile starts on none: the profiles
-        // not begun are not run (issue 52), and the report says why.
-        let never_started = std::sync::atomic::AtomicBool::new(false);
-        // One at a time, each case is told as it ends; beside others, only
-        // each profile's end is.
-        let serial = self.jobs <= 1 || count <= 1;
-        let runs = in_parallel(&self.profiles, self.jobs, |index, profile| {
-            if never_started.load(Ordering::SeqCst) {
-                return None;
-            }
-            let at = Position { index, count };
-            if serial {
-                let cases = self.selected_cases(profile);
-                observer.event(Event::ProfileStarted { at, profile, cases });
-            }
-            let run = run_profile(profile, under_test, &self.options, |run| {
-                if serial {
-                    observer.event(Event::ScenarioFinished { at, profile, run });
-                }
-            });
-            let done = 1 + finished.fetch_add(1, Ordering::SeqCst);
-            observer.event(Event::ProfileFinished {
-                at,
-                profile,
-                run: &run,
-                done,
-                elapsed: started.elapsed(),
-                unit,
-            });
-            if never_started_in(&run).is_some() {
-                never_started.store(true, Ordering::SeqCst);
-            }
-            Some(run)
-        });
-        if canif_harness::interrupt::requested() {
-            observer.event(Event::Interrupted(Stage::Profiles));
+    /// What the run left out after its profiles: the selection, and the
+    /// profiles not run because what is under test never started (the
+    /// error named once).
+    pub(crate) fn left_out(&self, runs: &[ProfileRun]) -> Vec<String> {
+        let selection = self.options.selection();
+        let mut lines = Vec::new();
+        if !selection.is_everything() {
+            lines.push(selection.describe());
         }
-        runs.into_iter().map_while(Option::flatten).collect()
+        if let Some(error) = runs.iter().find_map(never_started_in) {
+            let not_run = self.profiles.len() - runs.len();
+            lines.push(format!(
+                "{} never started ({}); {not_run} profile(s) not run",
+                S::UNDER_TEST,
+                error.what
+            ));
+        }
+        lines
     }
 
-    /// The run's left-out line when what is under test never started on a
-    /// profile and the rest were not run, naming the error once.
-    pub(crate) fn never_started_left_out(&self, runs: &[ProfileRun]) -> Option<String> {
-        let error = runs.iter().find_map(never_started_in)?;
-        let not_run = self.profiles.len() - runs.len();
-        Some(format!(
-            "{} never started ({}); {not_run} profile(s) not run",
-            S::UNDER_TEST,
-            error.what
-        ))
+    /// The Gherkin stage, unless a signal came or `skip` says why the side
+    /// leaves it out (both said in `left_out`).
+    pub(crate) fn gherkin_stage(
+        &self,
+        skip: Option<&str>,
+        under_test: impl FnOnce() -> UnderTest,
+        left_out: &mut Vec<String>,
+        observer: &dyn Observer,
+    ) -> Vec<(String, GherkinRun)> {
+        if canif_harness::interrupt::requested() {
+            observer.event(Event::Interrupted(Stage::Gherkin));
+            left_out.push("interrupted before the Gherkin scenarios".into());
+            return Vec::new();
+        }
+        if let Some(why) = skip {
+            left_out.push(format!("Gherkin scenarios not run: {why}"));
+            return Vec::new();
+        }
+        self.run_gherkin(&under_test(), observer)
     }
 
     /// The selected Gherkin scenarios against what is under test: (profile, run).
@@ -355,14 +327,59 @@ impl<'c, S: Cases> Plan<'c, S> {
             .collect();
         ProfilePart::new(&report.profile, report.ran.clone(), &plan)
     }
+}
 
-    /// The selection as the run's first left-out line, when it leaves anything out.
-    pub(crate) fn selection_left_out(&self) -> Vec<String> {
-        let selection = self.options.selection();
-        if selection.is_everything() {
-            Vec::new()
-        } else {
-            vec![selection.describe()]
+impl<S: Campaign> Plan<'_, S> {
+    /// Each profile's cases against what is under test, on up to
+    /// [`Plan::jobs`] threads, one profile each at a time: the profiles are
+    /// independent (each case starts a fresh instance of what is under
+    /// test), so the runs, returned in the plan's order, are those of a
+    /// serial run. A profile a signal kept from starting is not run.
+    pub fn run_profiles(
+        &self,
+        under_test: &S::UnderTest,
+        observer: &dyn Observer,
+    ) -> Vec<ProfileRun> {
+        let count = self.profiles.len();
+        let finished = AtomicUsize::new(0);
+        let started = Instant::now();
+        // What never started on one profile starts on none: the profiles
+        // not begun are not run (issue 52), and the report says why.
+        let never_started = std::sync::atomic::AtomicBool::new(false);
+        // One at a time, each case is told as it ends; beside others, only
+        // each profile's end is.
+        let serial = self.jobs <= 1 || count <= 1;
+        let runs = in_parallel(&self.profiles, self.jobs, |index, profile| {
+            if never_started.load(Ordering::SeqCst) {
+                return None;
+            }
+            let at = Position { index, count };
+            if serial {
+                let cases = self.selected_cases(profile);
+                observer.event(Event::ProfileStarted { at, profile, cases });
+            }
+            let run = run_profile(profile, under_test, &self.options, |run| {
+                if serial {
+                    observer.event(Event::ScenarioFinished { at, profile, run });
+                }
+            });
+            let done = 1 + finished.fetch_add(1, Ordering::SeqCst);
+            observer.event(Event::ProfileFinished {
+                at,
+                profile,
+                run: &run,
+                done,
+                elapsed: started.elapsed(),
+                unit: S::UNIT,
+            });
+            if never_started_in(&run).is_some() {
+                never_started.store(true, Ordering::SeqCst);
+            }
+            Some(run)
+        });
+        if canif_harness::interrupt::requested() {
+            observer.event(Event::Interrupted(Stage::Profiles));
         }
+        runs.into_iter().map_while(Option::flatten).collect()
     }
 }

@@ -5,12 +5,12 @@
 use canif_features::schedule::declined_by_client;
 use canif_harness::client::master::Master;
 use canif_harness::client::suite::{ClientBus, ClientKind, ClientOptions};
-use canif_harness::declare::Declaration;
-use canif_harness::report::{ChoiceEntry, ChoiceSource, RunMeta, RunReport};
+use canif_harness::door::Role;
+use canif_harness::report::{ChoiceEntry, RunMeta, RunReport};
 use canif_spec::{Catalogue, Side};
 
 use crate::error::PlanError;
-use crate::event::{Event, Observer, Stage};
+use crate::event::Observer;
 use crate::{Campaign, Plan};
 
 impl Campaign for ClientOptions {
@@ -20,9 +20,21 @@ impl Campaign for ClientOptions {
         kind.name()
     }
 
-    /// A client needs nothing before it runs but to start, which the
-    /// command line asks once.
-    fn preflight(_: &Plan<'_, Self>, _: &Catalogue, _: &ClientKind) -> Result<(), PlanError> {
+    fn shared(plan: &Plan<'_, Self>, _: &ClientKind) -> Option<&'static str> {
+        (plan.options.bus != ClientBus::Sim).then_some(crate::socketcan::ONE_INTERFACE)
+    }
+
+    /// The client started once, and the bus the played device and the
+    /// other nodes share opened once.
+    #[cfg_attr(not(feature = "socketcan"), allow(unused_variables))]
+    fn preflight(plan: &Plan<'_, Self>, _: &Catalogue, kind: &ClientKind) -> Result<(), PlanError> {
+        if let ClientKind::Door(door) = kind {
+            door.starts(Role::Client).map_err(PlanError::not_started)?;
+        }
+        #[cfg(feature = "socketcan")]
+        if let ClientBus::SocketCan { interface, .. } = &plan.options.bus {
+            crate::socketcan::opens(&format!("socketcan:{interface}"), &[interface])?;
+        }
         Ok(())
     }
 
@@ -40,14 +52,7 @@ impl Campaign for ClientOptions {
             side: Side::Plc,
             masters: options.masters.iter().map(|m| m.name.to_string()).collect(),
             // What the client declares: the verdicts rest on it.
-            choices: declared
-                .lines()
-                .into_iter()
-                .map(|choice| ChoiceEntry {
-                    choice,
-                    how: ChoiceSource::Declared,
-                })
-                .collect(),
+            choices: ChoiceEntry::declared(&declared),
             ..RunMeta::new(kind.name(), options.bus.describe(), options.seed, catalogue)
         };
         // The Gherkin scenarios the client's declaration leaves out, with why.
@@ -64,7 +69,7 @@ impl Campaign for ClientOptions {
             gherkin,
             ..plan.clone()
         };
-        let mut lockstep = plan.run_profiles(kind, Self::UNIT, observer);
+        let mut lockstep = plan.run_profiles(kind, observer);
         for run in &mut lockstep {
             for target in declined.iter().filter(|(p, _)| *p == run.profile) {
                 if let Some(why) = declines(target) {
@@ -74,27 +79,16 @@ impl Campaign for ClientOptions {
                 }
             }
         }
-        let mut left_out = plan.selection_left_out();
-        left_out.extend(plan.never_started_left_out(&lockstep));
+        let mut left_out = plan.left_out(&lockstep);
         if !options.counter_wrap {
             left_out.push("the 65,600-cycle counter wrap (--no-counter-wrap)".to_string());
         }
         if options.masters.len() < Master::ALL.len() {
             left_out.push("master models left out by --master".to_string());
         }
-        let gherkin = if canif_harness::interrupt::requested() {
-            observer.event(Event::Interrupted(Stage::Gherkin));
-            left_out.push("interrupted before the Gherkin scenarios".into());
-            Vec::new()
-        } else if options.bus != ClientBus::Sim {
-            left_out.push("Gherkin scenarios not run: they use the simulated bus".into());
-            Vec::new()
-        } else {
-            plan.run_gherkin(
-                &canif_features::UnderTest::Client(kind.clone(), declared.clone()),
-                observer,
-            )
-        };
+        let skip = (options.bus != ClientBus::Sim).then_some("they use the simulated bus");
+        let under_test = || canif_features::UnderTest::Client(kind.clone(), declared.clone());
+        let gherkin = plan.gherkin_stage(skip, under_test, &mut left_out, observer);
         // Client processes kept for the next program have none left to run.
         canif_harness::door::Door::release_idle_clients();
         plan.assemble(

@@ -11,8 +11,8 @@ mod run;
 mod spec;
 pub(crate) use plc::{CheckLayoutArgs, ExportArgs, FrameArg, InterfaceArgs, LanguageArg};
 pub(crate) use run::{
-    side_arg, CampaignArgs, CanopenRunArgs, DeviceRunArgs, PlcRunArgs, RealTimeOptions, RunCommand,
-    RunCommon, RunTarget,
+    side_arg, CampaignArgs, CanopenRunArgs, DeviceRunArgs, FrameTimeout, PlcRunArgs,
+    RealTimeOptions, RunCommand, RunCommon, RunTarget,
 };
 pub(crate) use spec::SpecCommand;
 

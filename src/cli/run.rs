@@ -17,9 +17,8 @@ pub(crate) struct RealTimeOptions {
     /// On a SocketCAN bus: how far the IUT's receive time stamps may be from the harness's, in µs.
     #[arg(long, default_value_t = 1000, value_parser = clap::value_parser!(u64).range(0..=10_000_000))]
     pub time_stamp_tolerance_us: u64,
-    /// On a SocketCAN bus: how long a frame may take to cross the kernel, in ms.
-    #[arg(long, default_value_t = 2000, value_parser = clap::value_parser!(u64).range(1..=600_000))]
-    pub frame_timeout_ms: u64,
+    #[command(flatten)]
+    pub frame_timeout: FrameTimeout,
     /// On a SocketCAN bus: send the scenarios' remote frames as data frames
     /// (for controllers that cannot carry them, such as QEMU's SJA1000).
     #[arg(long)]
@@ -33,6 +32,20 @@ pub(crate) struct RealTimeOptions {
     /// their deadline and the worst one (0: 1,000 cycles, unpaced).
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u64).range(0..=86_400))]
     pub ethercat_soak_s: u64,
+}
+
+/// How long a frame may take to cross the kernel, on every side's SocketCAN bus.
+#[derive(Args, Debug, Clone, Copy)]
+pub(crate) struct FrameTimeout {
+    /// On a SocketCAN bus: how long a frame may take to cross the kernel, in ms.
+    #[arg(long, default_value_t = 2000, value_parser = clap::value_parser!(u64).range(1..=600_000))]
+    pub(crate) frame_timeout_ms: u64,
+}
+
+impl FrameTimeout {
+    pub(crate) fn duration(self) -> std::time::Duration {
+        std::time::Duration::from_millis(self.frame_timeout_ms)
+    }
 }
 
 /// Which side of the interface is under test (`canif list scenarios`,
@@ -183,9 +196,8 @@ pub(crate) struct PlcRunArgs {
     /// Linux SocketCAN interface the played device and the other nodes share).
     #[arg(long, default_value = "sim", value_parser = bus_arg)]
     pub(crate) bus: BusArg,
-    /// On a SocketCAN bus: how long a frame may take to cross the kernel, in ms.
-    #[arg(long, default_value_t = 2000, value_parser = clap::value_parser!(u64).range(1..=600_000))]
-    pub(crate) frame_timeout_ms: u64,
+    #[command(flatten)]
+    pub(crate) frame_timeout: FrameTimeout,
 }
 
 /// `canif run canopen`.
@@ -196,9 +208,8 @@ pub(crate) struct CanopenRunArgs {
     /// `sim` (the simulated coupler) or `socketcan:IFACE` (a node on that interface).
     #[arg(long, default_value = "sim", value_parser = bus_arg)]
     pub(crate) bus: BusArg,
-    /// On a SocketCAN bus: how long a frame may take to cross the kernel, in ms.
-    #[arg(long, default_value_t = 2000, value_parser = clap::value_parser!(u64).range(1..=600_000))]
-    pub(crate) frame_timeout_ms: u64,
+    #[command(flatten)]
+    pub(crate) frame_timeout: FrameTimeout,
     /// The node id to check.
     #[arg(long, default_value_t = 5)]
     pub(crate) node: u8,

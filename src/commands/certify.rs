@@ -14,7 +14,7 @@ use canif_spec::Catalogue;
 use canif_harness::client::suite::ClientOptions;
 
 use super::run::{finish, profiles, Progress};
-use super::{declared, resolve_client, resolve_iut};
+use super::{client_kind, declared, iut_kind};
 use crate::cli::{CompareFormat, IutOptions};
 use canif_runner::Plan;
 
@@ -68,12 +68,9 @@ pub(crate) fn certify(
     }
     let report = match side {
         canif_spec::Side::Device => {
-            let kind = resolve_iut(iut)?;
+            let kind = iut_kind(iut)?;
             // What the device declares on the command line: the certificate rests on it.
             let declared = declared(&iut.declare)?;
-            if let Some(contradiction) = kind.contradicts(&declared) {
-                return Err(stop!("{contradiction}"));
-            }
             let options = Options {
                 seed,
                 declared,
@@ -83,7 +80,7 @@ pub(crate) fn certify(
             plan.run(catalogue, &kind, &Progress::new(catalogue))?
         }
         canif_spec::Side::Plc => {
-            let kind = resolve_client(iut)?;
+            let kind = client_kind(iut)?;
             // What the client declares, on the command line and of itself.
             let declared = declared(&iut.declare)?;
             let options = ClientOptions {

@@ -15,7 +15,7 @@ use canif_harness::client::soft_client::{ClientFault, ClientShape};
 use canif_harness::client::suite::ClientKind;
 use canif_harness::declare::Declaration;
 use canif_harness::device::IutKind;
-use canif_harness::door::{Door, Role, Settings};
+use canif_harness::door::{Role, Settings};
 use canif_softdevice::{Fault, Freedom};
 
 use crate::cli::{IutArg, IutOptions};
@@ -53,61 +53,32 @@ fn soft_device_choices(names: &[String]) -> Result<Vec<Freedom>, Stop> {
 }
 
 /// The IUT named on the command line, started once to see that it can
-/// start, or the exit code of a usage error.
+/// start (what `canif probe` runs; a plan's run starts it in its preflight),
+/// or the exit code of a usage error.
 pub(crate) fn resolve_iut(iut: &IutOptions) -> Result<IutKind, Stop> {
     let kind = iut_kind(iut)?;
-    starts(&kind)?;
-    Ok(kind)
-}
-
-/// One line and exit 2 for a device behind a door that cannot start at all.
-pub(crate) fn starts(kind: &IutKind) -> Result<(), Stop> {
-    match kind {
-        IutKind::Door(door) => door_starts(door, Role::Device),
-        _ => Ok(()),
-    }
-}
-
-/// The client named on the command line for `canif run plc`, started once to
-/// see that it can start, or the exit code of a usage error.
-pub(crate) fn resolve_client(iut: &IutOptions) -> Result<ClientKind, Stop> {
-    let kind = client_kind(iut)?;
-    if let ClientKind::Door(door) = &kind {
-        door_starts(door, Role::Client)?;
+    if let IutKind::Door(door) = &kind {
+        door.starts(Role::Device)
+            .map_err(|error| Stop::from(canif_runner::PlanError::not_started(error)))?;
     }
     Ok(kind)
-}
-
-/// One line and exit 2 for an implementation that cannot start at all: a
-/// run of it would only repeat the shell's words for every requirement.
-fn door_starts(door: &Door, role: Role) -> Result<(), Stop> {
-    door.starts(role)
-        .map_err(|error| stop!("canif: {}", error.what))
 }
 
 /// The device `--iut` names.
 pub(crate) fn iut_kind(iut: &IutOptions) -> Result<IutKind, Stop> {
     let choices = soft_device_choices(&iut.choice)?;
     let faults = soft_device_faults(&iut.fault)?;
-    let not_soft = |what: &str| -> Result<(), Stop> {
-        match (faults.is_empty(), choices.is_empty()) {
-            (true, true) => Ok(()),
-            (false, _) => Err(stop!(
-                "--fault applies to the soft device only (pass it to {what})"
-            )),
-            (_, false) => Err(stop!("--choice applies to the soft device only")),
-        }
-    };
+    let settings = settings(iut, faults, choices);
     Ok(match iut.iut.clone().unwrap_or(IutArg::SoftDevice) {
-        IutArg::SoftDevice => IutKind::SoftDevice { faults, choices },
+        IutArg::SoftDevice => IutKind::SoftDevice {
+            faults: settings.faults,
+            choices: settings.choices,
+        },
         IutArg::Model => {
-            not_soft("the IUT's own command")?;
+            settings.no_soft_device().map_err(|why| stop!("{why}"))?;
             IutKind::Model
         }
-        IutArg::Door(door) => {
-            let settings = settings(iut, faults, choices);
-            IutKind::Door(door.settled(&settings).map_err(|why| stop!("{why}"))?)
-        }
+        IutArg::Door(door) => IutKind::Door(door.settled(&settings).map_err(|why| stop!("{why}"))?),
         IutArg::Reference | IutArg::SoftClient => {
             return Err(stop!(
                 "--iut reference and softclient are PLC-side clients: use `canif run plc`"
@@ -145,7 +116,7 @@ fn named<T>(
 
 /// The client `--iut` names for `canif run plc`. A fault without `--iut` picks
 /// the soft client.
-fn client_kind(iut: &IutOptions) -> Result<ClientKind, Stop> {
+pub(crate) fn client_kind(iut: &IutOptions) -> Result<ClientKind, Stop> {
     let faults = named(&iut.fault, ClientFault::from_name, "client fault")?;
     if faults.len() > 1 {
         return Err(stop!(
@@ -174,11 +145,7 @@ fn client_kind(iut: &IutOptions) -> Result<ClientKind, Stop> {
             Err(stop!("--fault applies to the soft client (--iut softclient), not the reference"))
         }
         (Some(IutArg::Door(door)), None) => {
-            // A client process is not pinned: it waits for the harness.
-            let settings = Settings {
-                same_cpu: true,
-                ..settings(iut, Vec::new(), Vec::new())
-            };
+            let settings = settings(iut, Vec::new(), Vec::new());
             let door = door.clone().settled(&settings).map_err(|why| stop!("{why}"))?;
             match door.transport().serves_clients() {
                 true => Ok(ClientKind::Door(door)),

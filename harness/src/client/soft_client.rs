@@ -7,6 +7,7 @@
 //! client here is written against the image views independently of the
 //! reference client; with no fault it must conform too.
 
+use crate::declare::Declaration;
 use std::collections::VecDeque;
 use std::fmt;
 

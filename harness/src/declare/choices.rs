@@ -331,7 +331,7 @@ mod tests {
             Some(TxQueueAccounting::WireInQueue)
         );
         assert_eq!(declared.lines(), ["tx-queue-accounting=wire-in-queue"]);
-        assert_eq!(Declared::from_lines(&declared.lines()), declared);
+        assert_eq!(Declared::parse(&declared.lines()), Ok(declared));
         assert_eq!(declared.entries()["tx-queue-accounting"], "wire-in-queue");
         let form = declared.declare("wire-in-queue").unwrap_err();
         assert_eq!(form.to_string(), "`wire-in-queue` is not NAME=VALUE");

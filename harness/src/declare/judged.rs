@@ -38,3 +38,18 @@ impl std::fmt::Display for ChoiceEntry {
         }
     }
 }
+
+impl ChoiceEntry {
+    /// Every choice `declaration` makes, each as declared: what either
+    /// side's report says its verdicts rest on.
+    pub fn declared(declaration: &impl super::Declaration) -> Vec<ChoiceEntry> {
+        declaration
+            .lines()
+            .into_iter()
+            .map(|choice| ChoiceEntry {
+                choice,
+                how: ChoiceSource::Declared,
+            })
+            .collect()
+    }
+}

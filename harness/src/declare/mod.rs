@@ -47,13 +47,14 @@ pub trait Declaration: Default + Clone + fmt::Debug {
         Ok(declared)
     }
 
-    /// What these lines declare, a line that declares nothing known left out.
-    fn from_lines<S: AsRef<str>>(lines: &[S]) -> Self {
+    /// What these lines declare (as an implementation gives them, or as
+    /// [`Declaration::lines`] wrote them); the first that cannot be taken refuses all.
+    fn parse<S: AsRef<str>>(lines: &[S]) -> Result<Self, DeclarationError> {
         let mut declared = Self::default();
         for line in lines {
-            let _ = declared.declare(line.as_ref());
+            declared.declare(line.as_ref())?;
         }
-        declared
+        Ok(declared)
     }
 }
 

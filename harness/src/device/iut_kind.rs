@@ -151,7 +151,7 @@ impl IutKind {
     /// This IUT for `profile` (a terminal is checked against the profile's identity).
     pub fn for_profile(&self, profile: &canif_spec::Profile) -> IutKind {
         match self {
-            IutKind::Door(door) => IutKind::Door(door.transport().for_profile(profile)),
+            IutKind::Door(door) => IutKind::Door(door.for_profile(profile)),
             other => other.clone(),
         }
     }

@@ -126,6 +126,13 @@ impl Door {
         self.transport().name()
     }
 
+    /// This door set for `profile` (a terminal checked against its identity).
+    pub fn for_profile(&self, profile: &canif_spec::Profile) -> Door {
+        self.transport()
+            .for_profile(profile)
+            .unwrap_or_else(|| self.clone())
+    }
+
     /// Whether the device's CAN controller is out of the harness's reach: it
     /// opens its own socket, or it is a terminal on a real bus.
     pub fn owns_its_bus(&self) -> bool {

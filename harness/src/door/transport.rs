@@ -72,8 +72,12 @@ pub trait Transport {
     /// apply behind this door.
     fn settle(&mut self, settings: &Settings) -> Result<(), String>;
 
-    /// This door for `profile` (a terminal is checked against its identity).
-    fn for_profile(&self, profile: &Profile) -> Door;
+    /// This door set for `profile` (a terminal is checked against its
+    /// identity); `None` where a door is the same for every profile.
+    fn for_profile(&self, profile: &Profile) -> Option<Door> {
+        let _ = profile;
+        None
+    }
 
     /// Whether a PLC-side client can be behind this door.
     fn serves_clients(&self) -> bool {
@@ -141,13 +145,22 @@ pub(super) fn starts_by_building(door: &dyn Transport, role: Role) -> Result<(),
     }
 }
 
-/// The refusal of a setting that applies only to the soft device.
-pub(super) fn no_soft_device(settings: &Settings) -> Result<(), String> {
-    match (settings.faults.is_empty(), settings.choices.is_empty()) {
-        (true, true) => Ok(()),
-        (false, _) => {
-            Err("--fault applies to the soft device only (pass it to the IUT's own command)".into())
+/// [`Transport::configurer`] for a door that answers each configuration
+/// by opening what is behind it afresh.
+pub(super) fn configurer_by_building(door: impl Transport + 'static) -> Configurer {
+    Box::new(move |caps, config| door.device(caps, config, None).map(|_| ()))
+}
+
+impl Settings {
+    /// The refusal of soft-device settings where no soft device is behind
+    /// what is run (a door's process, library or real terminal; the model).
+    pub fn no_soft_device(&self) -> Result<(), String> {
+        match (self.faults.is_empty(), self.choices.is_empty()) {
+            (true, true) => Ok(()),
+            (false, _) => Err(
+                "--fault applies to the soft device only (pass it to the IUT's own command)".into(),
+            ),
+            (_, false) => Err("--choice applies to the soft device only".into()),
         }
-        (_, false) => Err("--choice applies to the soft device only".into()),
     }
 }

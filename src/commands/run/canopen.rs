@@ -42,7 +42,9 @@ fn target(args: &CanopenRunArgs) -> Result<NodeTarget, Stop> {
             NodeTarget::SocketCan {
                 interface: spec.tester.clone(),
                 node,
-                answer_timeout: std::time::Duration::from_millis(args.frame_timeout_ms)
+                answer_timeout: args
+                    .frame_timeout
+                    .duration()
                     .min(std::time::Duration::from_millis(500)),
             }
         }

@@ -12,9 +12,9 @@ use canif_harness::device::{IutKind, Options};
 use canif_harness::door::Pace;
 use canif_spec::Catalogue;
 
-use super::{campaign_plan, one_at_a_time, profiles, run_and_finish, selected};
+use super::{campaign_plan, profiles, run_and_finish, selected};
 use crate::cli::{BusArg, DeviceRunArgs, RealTimeOptions};
-use crate::commands::{declared, iut_kind, starts};
+use crate::commands::{declared, iut_kind};
 
 pub(crate) fn command(catalogue: &Catalogue, args: DeviceRunArgs) -> Result<ExitCode, Stop> {
     let DeviceRunArgs {
@@ -38,12 +38,6 @@ pub(crate) fn command(catalogue: &Catalogue, args: DeviceRunArgs) -> Result<Exit
         IutKind::Door(door) => Some(door.transport()),
         _ => None,
     };
-    let shared = match door.and_then(|door| door.shared_between_profiles()) {
-        Some(why) => Some(why),
-        None if bus != BusChoice::Sim => Some("a SocketCAN bus: one interface"),
-        None => None,
-    };
-    one_at_a_time(campaign.jobs, shared)?;
     let mut profiles = profiles(catalogue, &selected.profiles)?;
     // A door that serves only some profiles (a terminal only terminal
     // profiles): `all` (the default) means all of those.
@@ -88,10 +82,6 @@ pub(crate) fn command(catalogue: &Catalogue, args: DeviceRunArgs) -> Result<Exit
         survey: pace(&real_time),
     };
     let plan = campaign_plan(profiles, options, &common, &campaign, selected.rerun)?;
-    if let Some(contradiction) = kind.contradicts(&plan.options.declared) {
-        return Err(stop!("{contradiction}"));
-    }
-    starts(&kind)?;
     run_and_finish(catalogue, &plan, &kind, &common.report)
 }
 
@@ -117,7 +107,7 @@ pub(crate) fn bus_choice(bus: &BusArg, real_time: &RealTimeOptions) -> BusChoice
             spec: spec.clone(),
             cycle_time: real_time.cycle_us * 1_000,
             time_stamp_tolerance: real_time.time_stamp_tolerance_us * 1_000,
-            timeout: std::time::Duration::from_millis(real_time.frame_timeout_ms),
+            timeout: real_time.frame_timeout.duration(),
             remote_frames: !real_time.no_remote_frames,
             esi_settable: !real_time.esi_from_controller,
         }),

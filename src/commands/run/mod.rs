@@ -98,17 +98,6 @@ fn campaign_plan<'c, S: Cases>(
     Ok(plan)
 }
 
-/// `--jobs N` where the profiles would share one thing that cannot be
-/// shared: `shared` names it.
-fn one_at_a_time(jobs: u16, shared: Option<&str>) -> Result<(), Stop> {
-    match shared {
-        Some(why) if jobs > 1 => Err(stop!(
-            "--jobs {jobs}: the profiles would share {why}; run them one at a time"
-        )),
-        _ => Ok(()),
-    }
-}
-
 /// The run's arguments as a campaign's shards must share them: without
 /// what may differ between shards (`--shard`, where the reports and traces
 /// go, `--jobs`), and in sorted order, so that the order flags were written

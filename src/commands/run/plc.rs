@@ -8,9 +8,9 @@ use canif_harness::client::master::Master;
 use canif_harness::client::suite::{ClientBus, ClientOptions};
 use canif_spec::Catalogue;
 
-use super::{campaign_plan, one_at_a_time, profiles, run_and_finish, selected};
-use crate::cli::{BusArg, PlcRunArgs};
-use crate::commands::{declared, resolve_client};
+use super::{campaign_plan, profiles, run_and_finish, selected};
+use crate::cli::{BusArg, FrameTimeout, PlcRunArgs};
+use crate::commands::{client_kind, declared};
 
 pub(crate) fn command(catalogue: &Catalogue, args: PlcRunArgs) -> Result<ExitCode, Stop> {
     let PlcRunArgs {
@@ -19,18 +19,14 @@ pub(crate) fn command(catalogue: &Catalogue, args: PlcRunArgs) -> Result<ExitCod
         campaign,
         master,
         bus,
-        frame_timeout_ms,
+        frame_timeout,
     } = args;
     let Some(selected) = selected(&common, &campaign, canif_spec::Side::Plc)? else {
         return Ok(ExitCode::SUCCESS);
     };
-    let bus = client_bus(&bus, frame_timeout_ms)?;
-    one_at_a_time(
-        campaign.jobs,
-        (bus != ClientBus::Sim).then_some("a SocketCAN bus: one interface"),
-    )?;
+    let bus = client_bus(&bus, frame_timeout)?;
     let profiles = profiles(catalogue, &selected.profiles)?;
-    let kind = resolve_client(&iut)?;
+    let kind = client_kind(&iut)?;
     let options = ClientOptions {
         seed: common.seed,
         bus,
@@ -64,7 +60,7 @@ pub(crate) fn masters(names: &[String]) -> Result<Vec<Master>, Stop> {
 /// The bus of `canif run plc`: the simulated one, or one SocketCAN interface
 /// that the played device's controller and the other nodes share.
 #[cfg_attr(not(feature = "socketcan"), allow(unused_variables))]
-fn client_bus(bus: &BusArg, frame_timeout_ms: u64) -> Result<ClientBus, Stop> {
+fn client_bus(bus: &BusArg, frame_timeout: FrameTimeout) -> Result<ClientBus, Stop> {
     match bus {
         BusArg::Sim => Ok(ClientBus::Sim),
         #[cfg(feature = "socketcan")]
@@ -72,14 +68,9 @@ fn client_bus(bus: &BusArg, frame_timeout_ms: u64) -> Result<ClientBus, Stop> {
             if spec.iut != spec.tester {
                 return Err(stop!("canif run plc: one interface (socketcan:IFACE); the device and the other nodes share it"));
             }
-            if let Err(error) = canif_kernel::probe()
-                .and_then(|()| canif_kernel::KernelSocket::open(&spec.iut, false).map(|_| ()))
-            {
-                return Err(stop!("error: --bus {}: {error}", spec.describe()));
-            }
             Ok(ClientBus::SocketCan {
                 interface: spec.iut.clone(),
-                timeout: std::time::Duration::from_millis(frame_timeout_ms),
+                timeout: frame_timeout.duration(),
             })
         }
     }

@@ -298,15 +298,6 @@ fn bad_value(item: Item, value: &str) -> DeclarationError {
 }
 
 impl ClientDeclaration {
-    /// The declaration these lines make, blank lines and `#` comments skipped.
-    pub fn parse<S: AsRef<str>>(lines: &[S]) -> Result<Self, DeclarationError> {
-        let mut declaration = ClientDeclaration::default();
-        for line in lines {
-            declaration.declare(line.as_ref())?;
-        }
-        Ok(declaration)
-    }
-
     /// This declaration and `other`'s lines together; a value declared two
     /// ways is an error naming both.
     pub fn merged(&self, other: &ClientDeclaration) -> Result<Self, DeclarationError> {

@@ -11,7 +11,7 @@ use super::{Pace, TerminalFacts};
 use crate::door::adapter::protocol::OwnedBus;
 use crate::door::client::Client;
 use crate::door::iut::{BuildError, Iut};
-use crate::door::transport::{Settings, Transport};
+use crate::door::transport::{configurer_by_building, Settings, Transport};
 use crate::door::{Configurer, Door, Role};
 use crate::error::{IutCause, IutError};
 
@@ -69,10 +69,7 @@ impl Transport for EthercatDoor {
                 let mut terminal = TerminalConfigurer::new(identity, self.link.clone());
                 Box::new(move |caps, config| terminal.offer(caps, config))
             }
-            None => {
-                let door = self.clone();
-                Box::new(move |caps, config| door.device(caps, config, None).map(|_| ()))
-            }
+            None => configurer_by_building(self.clone()),
         }
     }
 
@@ -93,15 +90,15 @@ impl Transport for EthercatDoor {
                 emulated.choices = settings.choices.clone();
                 Ok(())
             }
-            None => crate::door::transport::no_soft_device(settings),
+            None => settings.no_soft_device(),
         }
     }
 
-    fn for_profile(&self, profile: &Profile) -> Door {
-        Door::Ethercat(EthercatDoor {
+    fn for_profile(&self, profile: &Profile) -> Option<Door> {
+        Some(Door::Ethercat(EthercatDoor {
             identity: profile.ethercat,
             link: self.link.clone(),
-        })
+        }))
     }
 
     /// A terminal is a device.

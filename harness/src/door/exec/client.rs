@@ -3,6 +3,7 @@
 //! a PLC restart starts a new one. Whatever it does wrong — exit, hang,
 //! garbage, an image of the wrong size — is an error, never a failure.
 
+use crate::declare::Declaration;
 use canif_model::config::InterfaceConfig;
 use canif_model::image::{ImageLayout, MessageRepr};
 

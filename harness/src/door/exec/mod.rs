@@ -45,6 +45,20 @@ pub(crate) fn offer(
     }
 }
 
+/// A device process started with `command` on `channel` and offered a
+/// configuration: what the exec door and a hosted library both open.
+pub(crate) fn spawned_device(
+    (command, timeouts, same_cpu, channel): (&str, Timeouts, bool, Channel),
+    caps: &Capabilities,
+    config: &InterfaceConfig,
+    bus: Option<&OwnedBus>,
+) -> Result<Box<dyn crate::door::iut::Iut>, crate::door::iut::BuildError> {
+    let mut iut = ExecIut::spawn_on(command, timeouts, same_cpu, channel)
+        .map_err(crate::door::iut::BuildError::Failed)?;
+    offer(&mut iut, caps, config, bus)?;
+    Ok(Box::new(iut))
+}
+
 /// One process that answers configuration after configuration (the
 /// refusal grid): started at the first, kept for the rest.
 pub(crate) fn configurer(

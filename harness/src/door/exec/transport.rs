@@ -3,16 +3,14 @@
 
 use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_model::image::ImageLayout;
-use canif_spec::Profile;
 
 use super::client::ExecClient;
-use super::{offer, ExecIut};
 use crate::door::adapter::process::Channel;
 use crate::door::adapter::protocol::OwnedBus;
 use crate::door::client::Client;
 use crate::door::iut::{BuildError, Iut};
-use crate::door::transport::{no_soft_device, starts_by_building, Settings, Transport};
-use crate::door::{Configurer, Door, Role, Timeouts};
+use crate::door::transport::{starts_by_building, Settings, Transport};
+use crate::door::{Configurer, Role, Timeouts};
 
 /// `exec:COMMAND`: a process started with `sh -c COMMAND`.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -47,11 +45,8 @@ impl Transport for ExecDoor {
         config: &InterfaceConfig,
         bus: Option<&OwnedBus>,
     ) -> Result<Box<dyn Iut>, BuildError> {
-        let mut iut =
-            ExecIut::spawn_on(&self.command, self.timeouts, self.same_cpu, Channel::Stdio)
-                .map_err(BuildError::Failed)?;
-        offer(&mut iut, caps, config, bus)?;
-        Ok(Box::new(iut))
+        let process = (&*self.command, self.timeouts, self.same_cpu, Channel::Stdio);
+        super::spawned_device(process, caps, config, bus)
     }
 
     fn client(
@@ -84,13 +79,9 @@ impl Transport for ExecDoor {
     }
 
     fn settle(&mut self, settings: &Settings) -> Result<(), String> {
-        no_soft_device(settings)?;
+        settings.no_soft_device()?;
         self.timeouts = settings.timeouts;
         self.same_cpu = settings.same_cpu;
         Ok(())
-    }
-
-    fn for_profile(&self, _: &Profile) -> Door {
-        Door::Exec(self.clone())
     }
 }

@@ -4,6 +4,7 @@
 //! that reads or writes past its image touches the neighbour bytes the judge
 //! watches (CL-IMG-001). A PLC restart stops the program and starts another.
 
+use crate::declare::Declaration;
 use std::path::Path;
 
 use canif_cabi::guard::GuardedImage;

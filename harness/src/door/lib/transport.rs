@@ -6,7 +6,6 @@ use std::path::{Path, PathBuf};
 
 use canif_model::config::{Capabilities, InterfaceConfig};
 use canif_model::image::ImageLayout;
-use canif_spec::Profile;
 
 use super::client::LibClient;
 use crate::declare::client::ClientDeclaration;
@@ -14,10 +13,10 @@ use crate::door::adapter::process::Channel;
 use crate::door::adapter::protocol::OwnedBus;
 use crate::door::client::Client;
 use crate::door::exec::client::{declares_before_start, ExecClient};
-use crate::door::exec::{offer, ExecIut};
+use crate::door::exec::spawned_device;
 use crate::door::iut::{BuildError, Iut};
-use crate::door::transport::{no_soft_device, starts_by_building, Settings, Transport};
-use crate::door::{Configurer, Door, Role, Timeouts};
+use crate::door::transport::{configurer_by_building, starts_by_building, Settings, Transport};
+use crate::door::{Configurer, Role, Timeouts};
 use crate::error::{IutCause, IutError};
 
 /// The canif executable that hosts a library (`canif lib-host`), and how
@@ -81,12 +80,12 @@ impl Transport for LibDoor {
             // A host speaks protocol 3: on a CPU of its own, each side spins
             // a moment for the other's record instead of sleeping. Its CAN
             // side the harness drives through the protocol.
-            Some((command, timeouts)) => {
-                let mut iut = ExecIut::spawn_on(&command, timeouts, false, Channel::Control)
-                    .map_err(BuildError::Failed)?;
-                offer(&mut iut, caps, config, None)?;
-                Ok(Box::new(iut))
-            }
+            Some((command, timeouts)) => spawned_device(
+                (&command, timeouts, false, Channel::Control),
+                caps,
+                config,
+                None,
+            ),
             None => Ok(Box::new(super::build(&self.path, caps, config)?)),
         }
     }
@@ -113,10 +112,7 @@ impl Transport for LibDoor {
             Some((command, timeouts)) => {
                 crate::door::exec::configurer(command, timeouts, false, Channel::Control)
             }
-            None => {
-                let door = self.clone();
-                Box::new(move |caps, config| door.device(caps, config, None).map(|_| ()))
-            }
+            None => configurer_by_building(self.clone()),
         }
     }
 
@@ -140,16 +136,12 @@ impl Transport for LibDoor {
     }
 
     fn settle(&mut self, settings: &Settings) -> Result<(), String> {
-        no_soft_device(settings)?;
+        settings.no_soft_device()?;
         self.host = settings.host.clone().map(|canif| LibHost {
             canif,
             timeouts: settings.timeouts,
         });
         Ok(())
-    }
-
-    fn for_profile(&self, _: &Profile) -> Door {
-        Door::Lib(self.clone())
     }
 
     fn shared_between_profiles(&self) -> Option<&'static str> {
