@@ -13,7 +13,7 @@ import sys
 import time
 
 import pysoem
-from soem_steps import back_to_init, fail, map_and_start, patient
+from soem_steps import back_to_init, fail, map_and_start, patient, write_11bit_two_slots
 
 
 
@@ -31,11 +31,7 @@ def main(interface):
             fail(f"0x1018:01 says vendor {vendor:#x}, the SII {terminal.man:#x}")
         # 0xF800 bus parameters, 0x8000 interface (11-bit, 2 Tx and 2 Rx slots,
         # the terminal's own queue depths read back), 0x8001 no filters.
-        rx_depth = struct.unpack("<H", terminal.sdo_read(0x8000, 0x23))[0]
-        tx_depth = struct.unpack("<H", terminal.sdo_read(0x8000, 0x24))[0]
-        terminal.sdo_write(0xF800, 0, struct.pack("<BxII", 2, 0x01020304, 0), ca=True)
-        terminal.sdo_write(0x8000, 0, struct.pack("<BxHHHHH", 0x24, 0, 2, 2, rx_depth, tx_depth), ca=True)
-        terminal.sdo_write(0x8001, 0, bytes([0, 0]), ca=True)
+        write_11bit_two_slots(terminal)
         print("configured: 11-bit, 2 Tx and 2 Rx slots")
         # 6 header bytes + 2 x 10 (Tx); 6 + 2 x 10 (Rx), as 003 lays the
         # image out, then the 6 bytes of CAN status (0x1A85).

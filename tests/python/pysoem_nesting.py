@@ -15,7 +15,7 @@ import struct
 import sys
 
 import pysoem
-from soem_steps import back_to_init, fail, map_and_start, patient
+from soem_steps import back_to_init, exchange_29bit_message, fail, map_and_start, one_terminal
 
 U8, U16, U32 = "<B", "<H", "<I"
 
@@ -61,12 +61,7 @@ def something_else(terminal):
 
 
 def main(interface):
-    master = patient(pysoem.Master())
-    master.open(interface)
-    try:
-        if master.config_init() != 1:
-            fail("not exactly one SubDevice found")
-        terminal = master.slaves[0]
+    with one_terminal(interface) as (master, terminal):
         for index, entries in ((0x1C12, [0x1600]), (0x1C13, [0x1A00, 0x1A85])):
             nested(terminal, index, [(n + 1, struct.pack(U16, pdo)) for n, pdo in enumerate(entries)], len(entries))
         with_complete_access(terminal)
@@ -98,20 +93,8 @@ def main(interface):
         if master.state_check(pysoem.PREOP_STATE, 50_000) != pysoem.PREOP_STATE:
             fail("the refusal could not be acknowledged")
         map_and_start(master, terminal, (166, 154))
-        message = struct.pack("<HHI8s", 0x42, 2, 0x80000000 | 0x1234567, bytes([0xCA, 0x1F]))
-        terminal.output = struct.pack("<HHH", 1, 0, 1) + message + bytes(16 * 9)
-        for _ in range(50):
-            master.send_processdata()
-            master.receive_processdata(2000)
-            tx_counter, _, _, transaction = struct.unpack("<HHHH", bytes(terminal.input[0:8]))
-            if (tx_counter, transaction) == (1, 0x42):
-                break
-        else:
-            fail("Inputs.TxCounter/TransactionNumber never confirmed 1/0x42")
-        print("Inputs.TxCounter confirmed 1, Inputs.TransactionNumber 0x42")
+        exchange_29bit_message(master, terminal)
         back_to_init(master)
-    finally:
-        master.close()
 
 
 if __name__ == "__main__":

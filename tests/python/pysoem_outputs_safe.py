@@ -17,7 +17,7 @@ import sys
 import time
 
 import pysoem
-from soem_steps import back_to_init, fail, patient
+from soem_steps import back_to_init, fail, one_terminal, write_11bit_two_slots
 
 
 def batch(tx_counter, ident, data):
@@ -50,11 +50,7 @@ def request(master, terminal, state, what):
 
 
 def configure(master, terminal):
-    terminal.sdo_write(0xF800, 0, struct.pack("<BxII", 2, 0x01020304, 0), ca=True)
-    rx_depth = struct.unpack("<H", terminal.sdo_read(0x8000, 0x23))[0]
-    tx_depth = struct.unpack("<H", terminal.sdo_read(0x8000, 0x24))[0]
-    terminal.sdo_write(0x8000, 0, struct.pack("<BxHHHHH", 0x24, 0, 2, 2, rx_depth, tx_depth), ca=True)
-    terminal.sdo_write(0x8001, 0, bytes([0, 0]), ca=True)
+    write_11bit_two_slots(terminal)
     master.config_map()
     if (len(terminal.output), len(terminal.input)) != (26, 32):
         fail(f"mapped {len(terminal.output)} output and {len(terminal.input)} input bytes")
@@ -77,12 +73,7 @@ def taken(master, terminal, tx_counter, what):
 
 
 def main(interface, mode):
-    master = patient(pysoem.Master())
-    master.open(interface)
-    try:
-        if master.config_init() != 1:
-            fail("not exactly one SubDevice found")
-        terminal = master.slaves[0]
+    with one_terminal(interface) as (master, terminal):
         configure(master, terminal)
         terminal.output = batch(1, 0x111, b"\x5a\xfe")
         held(master, terminal, 100, 0, "SAFEOP")
@@ -114,8 +105,6 @@ def main(interface, mode):
         request(master, terminal, pysoem.OP_STATE, "OP")
         taken(master, terminal, 4, "OP after the watchdog")
         back_to_init(master)
-    finally:
-        master.close()
 
 
 if __name__ == "__main__":

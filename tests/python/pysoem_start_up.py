@@ -17,7 +17,7 @@ import struct
 import sys
 
 import pysoem
-from soem_steps import back_to_init, fail, map_and_start, patient
+from soem_steps import back_to_init, exchange_29bit_message, fail, map_and_start, patient
 
 U8, U16, U32 = "<B", "<H", "<I"
 
@@ -92,22 +92,7 @@ def main(interface):
 
         map_and_start(master, terminal, (166, 154))
 
-        # One 29-bit message with transaction number 0x42: TxCounter 1,
-        # RxCounter 0, NoOfTxMessages 1, then transaction number, length,
-        # COB ID (bit 31: extended) and the data.
-        message = struct.pack("<HHI8s", 0x42, 2, 0x80000000 | 0x1234567, bytes([0xCA, 0x1F]))
-        terminal.output = struct.pack("<HHH", 1, 0, 1) + message + bytes(16 * 9)
-        seen = None
-        for _ in range(50):
-            master.send_processdata()
-            master.receive_processdata(2000)
-            tx_counter, rx_counter, rx_messages, transaction = struct.unpack("<HHHH", bytes(terminal.input[0:8]))
-            seen = (tx_counter, rx_counter, rx_messages, transaction)
-            if tx_counter == 1 and transaction == 0x42:
-                break
-        else:
-            fail(f"Inputs.TxCounter/TransactionNumber never confirmed 1/0x42: {seen}")
-        print("Inputs.TxCounter confirmed 1, Inputs.TransactionNumber 0x42")
+        exchange_29bit_message(master, terminal)
         # The image objects read what the last cycle left (0x7001:01 the
         # TxCounter written, 0x6001:04 the transaction number confirmed).
         tx_counter = struct.unpack(U16, terminal.sdo_read(0x7001, 0x01))[0]
